@@ -1,0 +1,23 @@
+// Helpers shared by the test suites.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace medspring::testing {
+
+/// The real-anatomy data folder: $MEDSPRING_DATA if set, else the configured default
+/// (../shared/data beside the source tree). Empty path if neither exists.
+std::filesystem::path data_dir();
+
+/// Path of a file in data_dir(); GTEST_SKIP is the caller's choice when it is missing, but CI always
+/// has the data, so tests on real anatomy use require_data_file which fails instead.
+std::filesystem::path data_file(const std::string& name);
+
+/// Like data_file, but fails the current test (ADD_FAILURE) when the file does not exist.
+std::filesystem::path require_data_file(const std::string& name);
+
+/// A fresh, empty temporary folder for one test (removed at exit of the process).
+std::filesystem::path temp_dir(const std::string& tag);
+
+}  // namespace medspring::testing
