@@ -33,7 +33,8 @@ SurfaceMesh tube(Index rings, Index spokes, double spacing, double radius) {
     for (Index j = 0; j < spokes; ++j) {
       // frame u = e_z x t = +y, v = t x u = +z (ALGORITHMS.md §5.5 rest start for t = +x)
       const double th = 2.0 * std::numbers::pi * static_cast<double>(j) / static_cast<double>(spokes);
-      m.V.row(i * spokes + j) << spacing * static_cast<double>(i), radius * std::cos(th), radius * std::sin(th);
+      m.V.row(i * spokes + j) << spacing * static_cast<double>(i), radius * std::cos(th),
+          radius * std::sin(th);
     }
   return m;
 }
@@ -53,7 +54,8 @@ SurfaceMesh kidney_phantom() {
     const double psi = pi * static_cast<double>(k + 1) / 20.0;
     for (Index j = 0; j < per; ++j) {
       const double phi = 2.0 * pi * static_cast<double>(j) / static_cast<double>(per);
-      const Vec3 q(-s.a * std::cos(psi), s.b * std::sin(psi) * std::cos(phi), s.c * std::sin(psi) * std::sin(phi));
+      const Vec3 q(-s.a * std::cos(psi), s.b * std::sin(psi) * std::cos(phi),
+                   s.c * std::sin(psi) * std::sin(phi));
       m.V.row(1 + per * k + j) = kidney_bend(q, s.bend_radius);
     }
   }
@@ -74,15 +76,16 @@ SurfaceMesh kidney_phantom() {
 }
 
 SurfaceMesh icosphere(int subdivisions, double radius) {
-  require(subdivisions >= 0 && subdivisions <= 8, "icosphere: subdivisions must be in [0, 8] (got ", subdivisions, ")");
+  require(subdivisions >= 0 && subdivisions <= 8, "icosphere: subdivisions must be in [0, 8] (got ",
+          subdivisions, ")");
   require_positive(radius, "icosphere: radius");
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3> V = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<std::array<Index, 3>> F = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11},
-                                         {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                         {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8}, {3, 8, 9},
-                                         {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  std::vector<Vec3> V = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<Index, 3>> F = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                         {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                         {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                         {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
   for (auto& v : V) v.normalize();
   for (int s = 0; s < subdivisions; ++s) {
     std::map<std::pair<Index, Index>, Index> mid;

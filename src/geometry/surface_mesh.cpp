@@ -65,7 +65,8 @@ MeshReport validate_mesh(const SurfaceMesh& mesh) {
   for (Index i = 0; i < nv; ++i) {
     if (!mesh.V.row(i).allFinite()) {
       if (r.nonfinite_vertices == 0)
-        note(cat("vertex ", i, ": coordinates must be finite (got ", mesh.V(i, 0), ", ", mesh.V(i, 1), ", ", mesh.V(i, 2), ")"));
+        note(cat("vertex ", i, ": coordinates must be finite (got ", mesh.V(i, 0), ", ", mesh.V(i, 1), ", ",
+                 mesh.V(i, 2), ")"));
       ++r.nonfinite_vertices;
     }
   }
@@ -116,7 +117,8 @@ MeshReport validate_mesh(const SurfaceMesh& mesh) {
   {
     std::vector<Index> order(sorted_faces.size());
     std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](Index x, Index y) { return sorted_faces[x] < sorted_faces[y]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](Index x, Index y) { return sorted_faces[x] < sorted_faces[y]; });
     for (std::size_t k = 1; k < order.size(); ++k) {
       if (sorted_faces[order[k]] == sorted_faces[order[k - 1]]) {
         if (r.duplicate_faces == 0)
@@ -127,12 +129,14 @@ MeshReport validate_mesh(const SurfaceMesh& mesh) {
   }
   r.edges = static_cast<Index>(edges.size());
   std::vector<std::pair<std::uint64_t, EdgeUse>> sorted_edges(edges.begin(), edges.end());
-  std::sort(sorted_edges.begin(), sorted_edges.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::sort(sorted_edges.begin(), sorted_edges.end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
   for (const auto& [key, e] : sorted_edges) {
     const Index lo = static_cast<Index>(key >> 32), hi = static_cast<Index>(key & 0xffffffffu);
     if (e.faces == 1) ++r.boundary_edges;
     if (e.faces > 2) {
-      if (r.nonmanifold_edges == 0) note(cat("edge (", lo, ", ", hi, "): non-manifold, shared by ", e.faces, " faces"));
+      if (r.nonmanifold_edges == 0)
+        note(cat("edge (", lo, ", ", hi, "): non-manifold, shared by ", e.faces, " faces"));
       ++r.nonmanifold_edges;
     }
     if (e.faces == 2 && e.forward != 1) ++r.inconsistent_edges;
@@ -162,13 +166,15 @@ MeshReport require_valid_mesh(const SurfaceMesh& mesh, const std::string& what, 
   if (req.manifold && r.nonmanifold_edges > 0) ok = false;
   if (!ok) throw InvalidInput(cat(what, ": ", r.first_problem));
   if (req.closed && r.boundary_edges > 0)
-    throw InvalidInput(cat(what, ": mesh is open (", r.boundary_edges, " boundary edges); a closed surface is required"));
+    throw InvalidInput(
+        cat(what, ": mesh is open (", r.boundary_edges, " boundary edges); a closed surface is required"));
   return r;
 }
 
 Index weld_vertices(SurfaceMesh& mesh, double tol, std::vector<Index>* old_to_new) {
   const Index nv = mesh.num_vertices();
-  require(first_nonfinite_row(mesh.V) < 0, "weld_vertices: vertex ", first_nonfinite_row(mesh.V), " is not finite");
+  require(first_nonfinite_row(mesh.V) < 0, "weld_vertices: vertex ", first_nonfinite_row(mesh.V),
+          " is not finite");
   if (tol < 0) {
     const auto b = bounds(mesh.V);
     tol = 1e-9 * (b.row(1) - b.row(0)).norm();
@@ -252,7 +258,8 @@ void vertex_normals(const MatX3& V, const MatX3i& F, MatX3& N) {
 MatX3 face_normals(const MatX3& V, const MatX3i& F) {
   MatX3 N(F.rows(), 3);
   for (Index f = 0; f < F.rows(); ++f) {
-    const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).transpose().cross((V.row(F(f, 2)) - V.row(F(f, 0))).transpose());
+    const Vec3 n =
+        (V.row(F(f, 1)) - V.row(F(f, 0))).transpose().cross((V.row(F(f, 2)) - V.row(F(f, 0))).transpose());
     const double l = n.norm();
     N.row(f) = l > 0 ? Vec3(n / l) : Vec3::Zero();
   }
@@ -261,8 +268,7 @@ MatX3 face_normals(const MatX3& V, const MatX3i& F) {
 
 double signed_volume(const MatX3& V, const MatX3i& F) {
   double vol = 0;
-  for (Index f = 0; f < F.rows(); ++f)
-    vol += V.row(F(f, 0)).dot(V.row(F(f, 1)).cross(V.row(F(f, 2))));
+  for (Index f = 0; f < F.rows(); ++f) vol += V.row(F(f, 0)).dot(V.row(F(f, 1)).cross(V.row(F(f, 2))));
   return vol / 6.0;
 }
 

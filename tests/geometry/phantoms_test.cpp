@@ -1,7 +1,8 @@
+#include "medspring/geometry/phantoms.hpp"
+
 #include <gtest/gtest.h>
 
 #include "medspring/core/error.hpp"
-#include "medspring/geometry/phantoms.hpp"
 #include "medspring/geometry/topology.hpp"
 
 namespace medspring {

@@ -1,7 +1,8 @@
+#include "medspring/geometry/polyline.hpp"
+
 #include <gtest/gtest.h>
 
 #include "medspring/core/error.hpp"
-#include "medspring/geometry/polyline.hpp"
 
 namespace medspring {
 namespace {

@@ -1,8 +1,9 @@
+#include "medspring/geometry/topology.hpp"
+
 #include <gtest/gtest.h>
 
 #include "medspring/core/error.hpp"
 #include "medspring/geometry/phantoms.hpp"
-#include "medspring/geometry/topology.hpp"
 
 namespace medspring {
 namespace {

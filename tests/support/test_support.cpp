@@ -12,7 +12,9 @@ std::filesystem::path data_dir() {
   return MEDSPRING_DEFAULT_DATA_DIR;
 }
 
-std::filesystem::path data_file(const std::string& name) { return data_dir() / name; }
+std::filesystem::path data_file(const std::string& name) {
+  return data_dir() / name;
+}
 
 std::filesystem::path require_data_file(const std::string& name) {
   auto p = data_file(name);

@@ -23,7 +23,11 @@ using MatX3i = Eigen::Matrix<Index, Eigen::Dynamic, 3, Eigen::RowMajor>;
 using MatX2i = Eigen::Matrix<Index, Eigen::Dynamic, 2, Eigen::RowMajor>;
 
 /// A flat 3N view of a #N by 3 point list.
-inline Eigen::Map<VecX> flat(MatX3& P) { return {P.data(), P.size()}; }
-inline Eigen::Map<const VecX> flat(const MatX3& P) { return {P.data(), P.size()}; }
+inline Eigen::Map<VecX> flat(MatX3& P) {
+  return {P.data(), P.size()};
+}
+inline Eigen::Map<const VecX> flat(const MatX3& P) {
+  return {P.data(), P.size()};
+}
 
 }  // namespace medspring

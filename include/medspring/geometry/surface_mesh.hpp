@@ -20,27 +20,27 @@ struct SurfaceMesh {
 /// What validate_mesh found. Counts are exact; the *_example fields name the first offender.
 struct MeshReport {
   Index vertices = 0, faces = 0, edges = 0;
-  Index nonfinite_vertices = 0;   // rows of V with NaN/Inf
-  Index bad_indices = 0;          // faces with an index outside [0, #V)
-  Index degenerate_faces = 0;     // repeated index or zero area (area < 1e-12 * bbox_diag^2)
-  Index duplicate_faces = 0;      // same vertex set as an earlier face
-  Index boundary_edges = 0;       // edges with one incident face (open surface)
-  Index nonmanifold_edges = 0;    // edges with more than two incident faces
-  Index inconsistent_edges = 0;   // interior edges traversed twice in the same direction
-  Index isolated_vertices = 0;    // vertices in no face
-  Index components = 0;           // connected components (by faces)
-  Index euler_characteristic = 0; // V - E + F (2 for a closed genus-0 surface)
-  double bbox_diagonal = 0.0;     // mm
-  double signed_volume = 0.0;     // mm^3, > 0 when normals point outward (closed meshes)
-  std::string first_problem;      // e.g. "face 17: index 5002 out of range [0, 5002)"
+  Index nonfinite_vertices = 0;    // rows of V with NaN/Inf
+  Index bad_indices = 0;           // faces with an index outside [0, #V)
+  Index degenerate_faces = 0;      // repeated index or zero area (area < 1e-12 * bbox_diag^2)
+  Index duplicate_faces = 0;       // same vertex set as an earlier face
+  Index boundary_edges = 0;        // edges with one incident face (open surface)
+  Index nonmanifold_edges = 0;     // edges with more than two incident faces
+  Index inconsistent_edges = 0;    // interior edges traversed twice in the same direction
+  Index isolated_vertices = 0;     // vertices in no face
+  Index components = 0;            // connected components (by faces)
+  Index euler_characteristic = 0;  // V - E + F (2 for a closed genus-0 surface)
+  double bbox_diagonal = 0.0;      // mm
+  double signed_volume = 0.0;      // mm^3, > 0 when normals point outward (closed meshes)
+  std::string first_problem;       // e.g. "face 17: index 5002 out of range [0, 5002)"
 
   bool closed() const { return boundary_edges == 0; }
   bool manifold() const { return nonmanifold_edges == 0; }
   /// True when the mesh is usable for simulation: finite, indices valid, no degenerate,
   /// duplicate or non-manifold faces. Open boundaries are allowed (reported).
   bool valid() const {
-    return nonfinite_vertices == 0 && bad_indices == 0 && degenerate_faces == 0 &&
-           duplicate_faces == 0 && nonmanifold_edges == 0 && vertices > 0 && faces > 0;
+    return nonfinite_vertices == 0 && bad_indices == 0 && degenerate_faces == 0 && duplicate_faces == 0 &&
+           nonmanifold_edges == 0 && vertices > 0 && faces > 0;
   }
   /// One line summary, e.g. "5002 vertices, 10000 faces, closed, manifold, 1 component".
   std::string summary() const;
@@ -50,8 +50,8 @@ struct MeshReport {
 MeshReport validate_mesh(const SurfaceMesh& mesh);
 
 struct MeshRequirements {
-  bool closed = false;     // reject open boundaries
-  bool manifold = true;    // reject non-manifold edges
+  bool closed = false;   // reject open boundaries
+  bool manifold = true;  // reject non-manifold edges
 };
 
 /// Throws InvalidInput("<what>: <first problem>") unless the mesh is valid (and closed/manifold if

@@ -21,7 +21,9 @@ struct VolumeT {
 
   std::size_t size() const { return static_cast<std::size_t>(dims[0]) * dims[1] * dims[2]; }
   std::size_t index(Index i, Index j, Index k) const {
-    return static_cast<std::size_t>(i) + static_cast<std::size_t>(dims[0]) * (static_cast<std::size_t>(j) + static_cast<std::size_t>(dims[1]) * k);
+    return static_cast<std::size_t>(i) +
+           static_cast<std::size_t>(dims[0]) *
+               (static_cast<std::size_t>(j) + static_cast<std::size_t>(dims[1]) * k);
   }
   T& at(Index i, Index j, Index k) { return data[index(i, j, k)]; }
   const T& at(Index i, Index j, Index k) const { return data[index(i, j, k)]; }
@@ -31,9 +33,7 @@ struct VolumeT {
   /// World position (mm) of a continuous voxel coordinate.
   Vec3 to_world(const Vec3& ijk) const { return origin + direction * spacing.cwiseProduct(ijk); }
   /// Continuous voxel coordinate of a world position (mm).
-  Vec3 to_index(const Vec3& p) const {
-    return (direction.transpose() * (p - origin)).cwiseQuotient(spacing);
-  }
+  Vec3 to_index(const Vec3& p) const { return (direction.transpose() * (p - origin)).cwiseQuotient(spacing); }
 };
 
 using LabelVolume = VolumeT<std::int32_t>;  // label image (0 = background)
