@@ -1,0 +1,111 @@
+// The immutable physics model: nodes, springs, return springs, pins (ALGORITHMS.md §1).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "medspring/core/types.hpp"
+#include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/physics/spring_law.hpp"
+
+namespace medspring {
+
+/// Springs as a struct of arrays; spring s joins nodes i[s] and j[s].
+struct Springs {
+  std::vector<Index> i, j;  // end nodes (#S)
+  VecX L0;                  // rest length (#S), mm
+  VecX k;                   // linear stiffness (#S), N/mm, >= 0
+  VecX kp;                  // cubic stiffness k' (#S), N/mm^3 (0: linear; > 0 hard; < 0 soft)
+
+  Index size() const { return static_cast<Index>(i.size()); }
+  void reserve(Index n);
+  /// Appends a spring; returns its index.
+  Index add(Index a, Index b, double rest_length, double stiffness, double cubic = 0.0);
+};
+
+/// Optional discrete bending springs of a chain (§5.2): E_b = k_b/2 |D_i - D_i^0|^2 with
+/// D_i = x_a - 2 x_b + x_c.
+struct BendingTerms {
+  std::vector<Index> a, b, c;  // (#B) triples, b is the middle node
+  VecX kb;                     // (#B) N/mm
+  MatX3 D0;                    // (#B x 3) rest second differences, mm
+  Index size() const { return static_cast<Index>(a.size()); }
+};
+
+/// Everything that does not change while simulating. Build with ModelBuilder or fill the fields and
+/// call finalize(), which validates the model and computes the derived quantities.
+struct Model {
+  std::string name = "model";
+  MatX3 x0;                         // rest positions (#N x 3), mm
+  VecX mass;                        // (#N) g, > 0
+  VecX damping;                     // (#N) absolute damping d_i, g/ms (= N ms/mm), >= 0
+  VecX kr;                          // (#N) return-spring stiffness, N/mm, >= 0 (D-2: always linear)
+  std::vector<std::uint8_t> fixed;  // (#N) 1 = pinned at x0
+  Springs springs;
+  BendingTerms bending;
+
+  // Derived by finalize():
+  VecX inv_k;  // (#S) 1/k (0 when k = 0), for the run-time stability estimate
+  std::vector<Index> free_nodes;
+  double omega_rest = 0.0;        // power-iteration estimate of omega_max at rest x 1.05 (rad/ms)
+  double omega_gershgorin = 0.0;  // Gershgorin bound at rest (rad/ms)
+  bool has_soft_springs = false;
+  bool finalized = false;
+
+  Index num_nodes() const { return static_cast<Index>(x0.rows()); }
+  Index num_springs() const { return springs.size(); }
+  /// 0.8 * 2 / omega_rest: the stable step at rest (ms). See stability.hpp for the run-time bound.
+  double dt_safe_rest(double safety = 0.8) const { return safety * 2.0 / omega_rest; }
+};
+
+/// Validates every field (sizes, finiteness, signs, index ranges, self-springs, zero rest lengths)
+/// and computes the derived quantities. Throws InvalidInput naming the model and the element,
+/// e.g. "kidney: springs[12].k: must be >= 0 (got -1)".
+void finalize(Model& model);
+
+/// Per-node parameters used by builders.
+struct NodeParams {
+  double mass = 0.3;       // g
+  double beta = 0.5;       // mass-proportional damping, d = beta m (1/ms)
+  double return_k = 0.02;  // N/mm
+};
+
+/// Incremental construction of a Model.
+class ModelBuilder {
+ public:
+  explicit ModelBuilder(std::string name = "model");
+  /// Adds a node at rest position p; returns its index.
+  Index add_node(const Vec3& p, const NodeParams& params);
+  Index add_node(const Vec3& p, double mass, double damping, double return_k, bool fixed = false);
+  /// Adds a spring between existing nodes with rest length = rest distance and k' from the Duffing settings.
+  Index add_spring(Index a, Index b, double k, const DuffingSettings& duffing);
+  /// Adds a spring with explicit rest length and k'.
+  Index add_spring(Index a, Index b, double k, double kp, double rest_length);
+  void set_fixed(Index node, bool fixed = true);
+  void add_bending(Index a, Index b, Index c, double kb);
+  Index num_nodes() const { return static_cast<Index>(nodes_.size()); }
+  const Vec3& position(Index i) const { return nodes_[i]; }
+  /// Validates and returns the finished model.
+  Model build();
+
+ private:
+  std::string name_;
+  std::vector<Vec3> nodes_;
+  std::vector<double> mass_, damping_, kr_;
+  std::vector<std::uint8_t> fixed_;
+  Springs springs_;
+  BendingTerms bending_;
+};
+
+/// A surface mass-spring body from a triangle mesh: one spring per unique edge (D-1), uniform nodes.
+struct SurfaceBodyParams {
+  NodeParams node{};          // kidney defaults of §9: 0.3 g, beta 0.5, k_r 0.02
+  double k = 0.05;            // surface spring stiffness, N/mm
+  DuffingSettings duffing{};  // Strain (D-3) by default
+  std::vector<Index> fixed;   // pinned nodes
+};
+Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& params,
+                         const std::string& name = "surface");
+
+}  // namespace medspring

@@ -1,0 +1,20 @@
+// Stable time-step estimates for the explicit integrator (ALGORITHMS.md §2.2).
+#pragma once
+
+#include "medspring/physics/model.hpp"
+
+namespace medspring {
+
+/// Gershgorin bound on omega_max (rad/ms) of M^-1 K_t at positions x (cheap, conservative).
+double gershgorin_omega(const Model& model, const MatX3& x);
+
+/// Power-iteration estimate of omega_max (rad/ms) at positions x: `iterations` steps of the
+/// symmetrised M^-1/2 K_t M^-1/2, Rayleigh quotient, times `safety` (default 1.05). Deterministic.
+double power_iteration_omega(const Model& model, const MatX3& x, int iterations = 30, double safety = 1.05);
+
+/// The run-time stable step: safety * 2 / (omega_rest * sqrt(stiffening)) (ms).
+inline double dt_safe(const Model& model, double stiffening, double safety = 0.8) {
+  return safety * 2.0 / (model.omega_rest * std::sqrt(stiffening < 1.0 ? 1.0 : stiffening));
+}
+
+}  // namespace medspring

@@ -1,0 +1,162 @@
+#include "medspring/physics/forces.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "medspring/core/check.hpp"
+
+namespace medspring {
+
+namespace {
+
+constexpr double kMinLength = 1e-9;  // §1.3: springs shorter than this are skipped
+
+// Spring pass of the force evaluation (vector form of eqs. 1 and 5, §1.3). Returns max kappa_s/k_s.
+template <bool Soft>
+double spring_forces(const Springs& S, const VecX& inv_k, const double* x, double* f) {
+  const Index ns = S.size();
+  const Index* I = S.i.data();
+  const Index* J = S.j.data();
+  const double* L0 = S.L0.data();
+  const double* K = S.k.data();
+  const double* KP = S.kp.data();
+  const double* IK = inv_k.data();
+  double stiff = 1.0;
+  for (Index s = 0; s < ns; ++s) {
+    const Index a = 3 * I[s], b = 3 * J[s];
+    const double ex = x[b] - x[a], ey = x[b + 1] - x[a + 1], ez = x[b + 2] - x[a + 2];
+    const double L2 = ex * ex + ey * ey + ez * ez;
+    if (L2 < kMinLength * kMinLength) continue;
+    const double L = std::sqrt(L2);
+    const double inv = 1.0 / L;
+    const double d = L - L0[s];
+    const double k = K[s], kp = KP[s];
+    double phi, dphi;
+    if (Soft) {
+      phi = spring_tension(k, kp, d);
+      dphi = spring_tension_derivative(k, kp, d);
+    } else {
+      const double kp_d2 = kp * d * d;
+      phi = d * (k + kp_d2);  // eq. (5)
+      dphi = k + 3.0 * kp_d2;
+    }
+    const double t = phi * inv;  // phi / L
+    stiff = std::max(stiff, std::max(dphi, std::abs(t)) * IK[s]);
+    const double fx = t * ex, fy = t * ey, fz = t * ez;
+    f[a] += fx;
+    f[a + 1] += fy;
+    f[a + 2] += fz;
+    f[b] -= fx;
+    f[b + 1] -= fy;
+    f[b + 2] -= fz;
+  }
+  return stiff;
+}
+
+// §5.2 bending option: g = k_b (D - D0), f_a -= g, f_b += 2 g, f_c -= g.
+void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
+  for (Index t = 0; t < B.size(); ++t) {
+    const Vec3 D = (x.row(B.a[t]) - 2.0 * x.row(B.b[t]) + x.row(B.c[t])).transpose();
+    const Vec3 g = B.kb[t] * (D - B.D0.row(t).transpose());
+    f.row(B.a[t]) -= g.transpose();
+    f.row(B.b[t]) += 2.0 * g.transpose();
+    f.row(B.c[t]) -= g.transpose();
+  }
+}
+
+}  // namespace
+
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f) {
+  const Index n = m.num_nodes();
+  const double* X = x.data();
+  const double* X0 = m.x0.data();
+  const double* FE = f_ext.data();
+  const double* KR = m.kr.data();
+  double* Fo = f.data();
+  for (Index a = 0; a < n; ++a) {  // external force and return springs (§1.4)
+    const double kr = KR[a];
+    const Index q = 3 * a;
+    Fo[q] = FE[q] - kr * (X[q] - X0[q]);
+    Fo[q + 1] = FE[q + 1] - kr * (X[q + 1] - X0[q + 1]);
+    Fo[q + 2] = FE[q + 2] - kr * (X[q + 2] - X0[q + 2]);
+  }
+  const double stiff = m.has_soft_springs ? spring_forces<true>(m.springs, m.inv_k, X, Fo)
+                                          : spring_forces<false>(m.springs, m.inv_k, X, Fo);
+  if (m.bending.size() > 0) bending_forces(m.bending, x, f);
+  return stiff;
+}
+
+double potential_energy(const Model& m, const MatX3& x) {
+  double e = 0;
+  for (Index a = 0; a < m.num_nodes(); ++a) e += 0.5 * m.kr[a] * (x.row(a) - m.x0.row(a)).squaredNorm();
+  const Springs& S = m.springs;
+  for (Index s = 0; s < S.size(); ++s) {
+    const double L = (x.row(S.j[s]) - x.row(S.i[s])).norm();
+    if (L < kMinLength) continue;
+    e += spring_energy(S.k[s], S.kp[s], L - S.L0[s]);
+  }
+  const BendingTerms& B = m.bending;
+  for (Index t = 0; t < B.size(); ++t) {
+    const Vec3 D = (x.row(B.a[t]) - 2.0 * x.row(B.b[t]) + x.row(B.c[t])).transpose();
+    e += 0.5 * B.kb[t] * (D - B.D0.row(t).transpose()).squaredNorm();
+  }
+  return e;
+}
+
+double total_energy(const Model& m, const MatX3& x, const MatX3& v) {
+  double e = potential_energy(m, x);
+  for (Index a = 0; a < m.num_nodes(); ++a) e += 0.5 * m.mass[a] * v.row(a).squaredNorm();
+  return e;
+}
+
+Eigen::SparseMatrix<double> tangent_stiffness(const Model& m, const MatX3& x, const StiffnessOptions& opt) {
+  const Index n = m.num_nodes();
+  std::vector<Eigen::Triplet<double>> T;
+  T.reserve(static_cast<std::size_t>(m.num_springs()) * 36 + static_cast<std::size_t>(n) * 3 +
+            static_cast<std::size_t>(m.bending.size()) * 81);
+  auto block = [&](Index r, Index c, const Mat3& B) {
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q) T.emplace_back(3 * r + p, 3 * c + q, B(p, q));
+  };
+  if (opt.include_return)
+    for (Index a = 0; a < n; ++a)
+      for (int p = 0; p < 3; ++p) T.emplace_back(3 * a + p, 3 * a + p, m.kr[a]);
+  const Springs& S = m.springs;
+  for (Index s = 0; s < S.size(); ++s) {
+    const Vec3 e = (x.row(S.j[s]) - x.row(S.i[s])).transpose();
+    const double L = e.norm();
+    if (L < kMinLength) continue;
+    const Vec3 nh = e / L;
+    const double d = L - S.L0[s];
+    const double phi = spring_tension(S.k[s], S.kp[s], d);
+    const double dphi = spring_tension_derivative(S.k[s], S.kp[s], d);
+    double tr = phi / L;
+    if (opt.clamp_transverse) tr = std::max(tr, 0.0);
+    const Mat3 nn = nh * nh.transpose();
+    const Mat3 Ks = dphi * nn + tr * (Mat3::Identity() - nn);  // §1.3
+    block(S.i[s], S.i[s], Ks);
+    block(S.j[s], S.j[s], Ks);
+    block(S.i[s], S.j[s], -Ks);
+    block(S.j[s], S.i[s], -Ks);
+  }
+  const BendingTerms& B = m.bending;
+  for (Index t = 0; t < B.size(); ++t) {
+    const Index idx[3] = {B.a[t], B.b[t], B.c[t]};
+    const double w[3] = {1.0, -2.0, 1.0};
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q) block(idx[p], idx[q], B.kb[t] * w[p] * w[q] * Mat3::Identity());
+  }
+  Eigen::SparseMatrix<double> K(3 * n, 3 * n);
+  K.setFromTriplets(T.begin(), T.end());
+  return K;
+}
+
+double max_residual(const Model& m, const MatX3& x, const MatX3& f_ext) {
+  MatX3 f(m.num_nodes(), 3);
+  internal_forces(m, x, f_ext, f);
+  double r = 0;
+  for (Index a : m.free_nodes) r = std::max(r, f.row(a).norm());
+  return r;
+}
+
+}  // namespace medspring

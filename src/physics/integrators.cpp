@@ -1,0 +1,338 @@
+#include "medspring/physics/integrators.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "medspring/core/check.hpp"
+#include "medspring/physics/forces.hpp"
+#include "medspring/physics/stability.hpp"
+
+namespace medspring {
+
+Integrator parse_integrator(const std::string& text) {
+  if (text == "symplectic_euler" || text == "symplectic" || text == "SymplecticEuler")
+    return Integrator::SymplecticEuler;
+  if (text == "implicit_euler" || text == "implicit" || text == "ImplicitEuler")
+    return Integrator::ImplicitEuler;
+  throw InvalidInput(
+      cat("integrator: unknown value '", text, "' (expected symplectic_euler or implicit_euler)"));
+}
+
+std::string to_string(Integrator integrator) {
+  return integrator == Integrator::ImplicitEuler ? "implicit_euler" : "symplectic_euler";
+}
+
+void validate_step_settings(const Model& model, const StepSettings& s) {
+  require_positive(s.dt, "step.dt");
+  require(s.safety > 0 && s.safety <= 1, "step.safety: must be in (0, 1] (got ", s.safety, ")");
+  require(s.max_substeps >= 1, "step.max_substeps: must be >= 1 (got ", s.max_substeps, ")");
+  require_positive(s.v_max, "step.v_max");
+  require(s.max_rollbacks >= 0, "step.max_rollbacks: must be >= 0");
+  require_positive(s.cg_tolerance, "step.cg_tolerance");
+  require(s.cg_max_iterations >= 1, "step.cg_max_iterations: must be >= 1");
+  require(s.newton_iterations >= 1, "step.newton_iterations: must be >= 1");
+  if (!s.substep && s.integrator == Integrator::SymplecticEuler) {
+    const double bound = model.dt_safe_rest(s.safety);
+    require(s.dt <= bound, "step.dt: ", s.dt, " ms is above the stable step ", bound, " ms of model '",
+            model.name, "' (sub-stepping is off; enable it or use a smaller dt)");
+  }
+}
+
+namespace {
+
+// One symplectic Euler substep with implicit diagonal damping (§2.1). Returns false (and restores the
+// previous positions and velocities of the nodes already advanced) if a velocity became non-finite
+// or exceeded v_max.
+template <bool Guard>
+bool symplectic_substep(const Model& m, State& st, double h, double vmax2) {
+  if (st.step_coef_h != h) {
+    for (Index a = 0; a < m.num_nodes(); ++a) st.step_coef[a] = 1.0 / (m.mass[a] + h * m.damping[a]);
+    st.step_coef_h = h;
+  }
+  const double* G = st.f.data();
+  const double* Mv = m.mass.data();
+  const double* C = st.step_coef.data();
+  double* X = st.x.data();
+  double* V = st.v.data();
+  const Index* fr = m.free_nodes.data();
+  const Index nf = static_cast<Index>(m.free_nodes.size());
+  for (Index k = 0; k < nf; ++k) {
+    const Index a = fr[k], q = 3 * a;
+    const double mass = Mv[a], c = C[a];
+    const double vx = (mass * V[q] + h * G[q]) * c;
+    const double vy = (mass * V[q + 1] + h * G[q + 1]) * c;
+    const double vz = (mass * V[q + 2] + h * G[q + 2]) * c;
+    if constexpr (Guard) {
+      if (!(vx * vx + vy * vy + vz * vz <= vmax2)) {  // also catches NaN
+        for (Index r = 0; r < k; ++r) {               // undo: x_old = x - h v, v_old = (v / c - h g) / m
+          const Index b = fr[r], p = 3 * b;
+          for (int d = 0; d < 3; ++d) {
+            X[p + d] -= h * V[p + d];
+            V[p + d] = (V[p + d] / C[b] - h * G[p + d]) / Mv[b];
+          }
+        }
+        return false;
+      }
+    }
+    V[q] = vx;
+    V[q + 1] = vy;
+    V[q + 2] = vz;
+    X[q] += h * vx;
+    X[q + 1] += h * vy;
+    X[q + 2] += h * vz;
+  }
+  return true;
+}
+
+// Per-spring coefficients of K_s = a n n^T + b I at x with the transverse clamp (§2.3).
+void spring_coefficients(const Model& m, const MatX3& x, State& st) {
+  const Springs& S = m.springs;
+  for (Index s = 0; s < S.size(); ++s) {
+    const Vec3 e = (x.row(S.j[s]) - x.row(S.i[s])).transpose();
+    const double L = e.norm();
+    if (L < 1e-9) {
+      st.spring_a[s] = st.spring_b[s] = 0.0;
+      st.spring_n.row(s).setZero();
+      continue;
+    }
+    const double d = L - S.L0[s];
+    const double b = std::max(spring_tension(S.k[s], S.kp[s], d) / L, 0.0);
+    st.spring_a[s] = spring_tension_derivative(S.k[s], S.kp[s], d) - b;
+    st.spring_b[s] = b;
+    st.spring_n.row(s) = (e / L).transpose();
+  }
+}
+
+// y = K p (springs + bending + return springs), matrix-free.
+void apply_stiffness(const Model& m, const State& st, const VecX& p, VecX& y) {
+  const Index n = m.num_nodes();
+  for (Index a = 0; a < n; ++a) y.segment<3>(3 * a) = m.kr[a] * p.segment<3>(3 * a);
+  const Springs& S = m.springs;
+  for (Index s = 0; s < S.size(); ++s) {
+    const Index i = 3 * S.i[s], j = 3 * S.j[s];
+    const Vec3 dp = p.segment<3>(i) - p.segment<3>(j);
+    const Vec3 nh = st.spring_n.row(s).transpose();
+    const Vec3 kd = st.spring_a[s] * nh * nh.dot(dp) + st.spring_b[s] * dp;
+    y.segment<3>(i) += kd;
+    y.segment<3>(j) -= kd;
+  }
+  const BendingTerms& B = m.bending;
+  for (Index t = 0; t < B.size(); ++t) {
+    const Vec3 g =
+        B.kb[t] * (p.segment<3>(3 * B.a[t]) - 2.0 * p.segment<3>(3 * B.b[t]) + p.segment<3>(3 * B.c[t]));
+    y.segment<3>(3 * B.a[t]) += g;
+    y.segment<3>(3 * B.b[t]) -= 2.0 * g;
+    y.segment<3>(3 * B.c[t]) += g;
+  }
+}
+
+// y = (M + h D + h^2 K) p on free DOFs, 0 on fixed DOFs.
+void apply_system(const Model& m, const State& st, double h, const VecX& p, VecX& y) {
+  apply_stiffness(m, st, p, y);
+  for (Index a = 0; a < m.num_nodes(); ++a) {
+    if (m.fixed[a]) {
+      y.segment<3>(3 * a).setZero();
+      continue;
+    }
+    y.segment<3>(3 * a) = (m.mass[a] + h * m.damping[a]) * p.segment<3>(3 * a) + h * h * y.segment<3>(3 * a);
+  }
+}
+
+void jacobi_diagonal(const Model& m, State& st, double h) {
+  VecX& dg = st.jacobi;
+  for (Index a = 0; a < m.num_nodes(); ++a) dg.segment<3>(3 * a).setConstant(m.kr[a]);
+  const Springs& S = m.springs;
+  for (Index s = 0; s < S.size(); ++s) {
+    const Vec3 nh = st.spring_n.row(s).transpose();
+    const Vec3 d = st.spring_a[s] * nh.cwiseProduct(nh) + Vec3::Constant(st.spring_b[s]);
+    dg.segment<3>(3 * S.i[s]) += d;
+    dg.segment<3>(3 * S.j[s]) += d;
+  }
+  const BendingTerms& B = m.bending;
+  for (Index t = 0; t < B.size(); ++t) {
+    dg.segment<3>(3 * B.a[t]).array() += B.kb[t];
+    dg.segment<3>(3 * B.b[t]).array() += 4 * B.kb[t];
+    dg.segment<3>(3 * B.c[t]).array() += B.kb[t];
+  }
+  for (Index a = 0; a < m.num_nodes(); ++a)
+    dg.segment<3>(3 * a) = ((m.mass[a] + h * m.damping[a]) + h * h * dg.segment<3>(3 * a).array()).matrix();
+}
+
+// Preconditioned CG on the free DOFs; x holds the warm start on entry. Returns iterations.
+int conjugate_gradient(const Model& m, State& st, double h, const VecX& b, VecX& x, double tol, int max_it,
+                       bool& converged) {
+  VecX& r = st.cg_r;
+  VecX& z = st.cg_z;
+  VecX& p = st.cg_p;
+  VecX& q = st.cg_q;
+  for (Index a = 0; a < m.num_nodes(); ++a)
+    if (m.fixed[a]) x.segment<3>(3 * a).setZero();
+  apply_system(m, st, h, x, q);
+  r = b - q;
+  const double bn = b.norm();
+  converged = true;
+  if (bn == 0) {
+    x.setZero();
+    return 0;
+  }
+  z = r.cwiseQuotient(st.jacobi);
+  p = z;
+  double rz = r.dot(z);
+  for (int it = 0; it < max_it; ++it) {
+    if (r.norm() <= tol * bn) return it;
+    apply_system(m, st, h, p, q);
+    const double pq = p.dot(q);
+    if (!(pq > 0)) break;
+    const double alpha = rz / pq;
+    x += alpha * p;
+    r -= alpha * q;
+    z = r.cwiseQuotient(st.jacobi);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  converged = r.norm() <= tol * bn;
+  return max_it;
+}
+
+bool state_ok(const Model& m, const State& st, double vmax2) {
+  for (Index a : m.free_nodes) {
+    const double v2 = st.v.row(a).squaredNorm();
+    if (!(v2 <= vmax2) || !st.x.row(a).allFinite()) return false;
+  }
+  return true;
+}
+
+// One linearly implicit Euler substep (§2.3), optionally followed by Newton iterations on
+// R(v) = M (v - v^n) - h f(x^n + h v, v). Returns false if the result is not finite / too fast.
+bool implicit_substep(const Model& m, State& st, const StepSettings& s, double h, double vmax2, int& cg_its) {
+  st.x_save = st.x;
+  st.v_save = st.v;
+  st.stiffening = internal_forces(m, st.x, st.f_ext, st.f);
+  spring_coefficients(m, st.x, st);
+  jacobi_diagonal(m, st, h);
+  // rhs = h (g - D v - h K v)
+  apply_stiffness(m, st, flat(st.v), st.cg_q);
+  for (Index a = 0; a < m.num_nodes(); ++a) {
+    if (m.fixed[a]) {
+      st.rhs.segment<3>(3 * a).setZero();
+      continue;
+    }
+    st.rhs.segment<3>(3 * a) = h * (st.f.row(a).transpose() - m.damping[a] * st.v.row(a).transpose() -
+                                    h * st.cg_q.segment<3>(3 * a));
+  }
+  bool conv = true;
+  cg_its += conjugate_gradient(m, st, h, st.rhs, st.dv, s.cg_tolerance, s.cg_max_iterations, conv);
+  if (!conv) ++st.warnings.cg_not_converged;
+  for (Index a : m.free_nodes) st.v.row(a) += st.dv.segment<3>(3 * a).transpose();
+  // Full Newton (option): iterate on R(v) with backtracking on |R|.
+  auto residual =
+      [&](VecX& R) {  // R = M (v - v^n) - h (g(x^n + h v) - D v), free DOFs; leaves forces in st.f
+        for (Index a = 0; a < m.num_nodes(); ++a)
+          st.x_trial.row(a) = st.x_save.row(a) + (m.fixed[a] ? 0.0 : h) * st.v.row(a);
+        st.stiffening = internal_forces(m, st.x_trial, st.f_ext, st.f);
+        double rmax = 0;
+        for (Index a = 0; a < m.num_nodes(); ++a) {
+          if (m.fixed[a]) {
+            R.segment<3>(3 * a).setZero();
+            continue;
+          }
+          R.segment<3>(3 * a) = m.mass[a] * (st.v.row(a) - st.v_save.row(a)).transpose() -
+                                h * (st.f.row(a).transpose() - m.damping[a] * st.v.row(a).transpose());
+          rmax = std::max(rmax, R.segment<3>(3 * a).norm());
+        }
+        return rmax;
+      };
+  if (s.newton_iterations > 1) {
+    double rn = residual(st.rhs);
+    for (int it = 1; it < s.newton_iterations && rn > 1e-10; ++it) {
+      spring_coefficients(m, st.x_trial, st);
+      jacobi_diagonal(m, st, h);
+      st.rhs = -st.rhs;
+      st.dv.setZero();
+      cg_its += conjugate_gradient(m, st, h, st.rhs, st.dv, s.cg_tolerance, s.cg_max_iterations, conv);
+      if (!conv) ++st.warnings.cg_not_converged;
+      double alpha = 1.0;
+      st.cg_p = flat(st.v);  // v_k
+      for (int bt = 0; bt < 30; ++bt) {
+        for (Index a : m.free_nodes)
+          st.v.row(a) = st.cg_p.segment<3>(3 * a).transpose() + alpha * st.dv.segment<3>(3 * a).transpose();
+        const double rt = residual(st.rhs);
+        if (rt < rn || bt == 29) {
+          rn = rt;
+          break;
+        }
+        alpha *= 0.5;
+      }
+    }
+  }
+  for (Index a : m.free_nodes) st.x.row(a) = st.x_save.row(a) + h * st.v.row(a);
+  if (!state_ok(m, st, vmax2)) {
+    st.x = st.x_save;
+    st.v = st.v_save;
+    st.dv.setZero();
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vector<PointLoad>* loads) {
+  StepStatus status;
+  const double T = s.dt;
+  const double vmax2 = s.v_max * s.v_max;
+  long subs = 1;
+  if (s.integrator == Integrator::SymplecticEuler) {
+    const double hs = dt_safe(m, st.stiffening, s.safety);
+    if (T > hs * (1.0 + 1e-12)) {
+      if (!s.substep) {
+        ++st.warnings.unstable_refused;
+        status.code = StepCode::Refused;
+        return status;
+      }
+      const double need = std::ceil(T / hs);
+      if (need > s.max_substeps) ++st.warnings.substeps_capped;
+      subs = static_cast<long>(std::min<double>(need, s.max_substeps));
+    }
+  }
+  const double t0 = st.t;
+  double h = T / static_cast<double>(subs);
+  double t = t0;
+  long left = subs;
+  int rollbacks = 0;
+  while (left > 0) {
+    if (loads) accumulate_loads(*loads, t, st.f_ext);
+    bool ok;
+    if (s.integrator == Integrator::SymplecticEuler) {
+      st.stiffening = internal_forces(m, st.x, st.f_ext, st.f);
+      ok = s.guard ? symplectic_substep<true>(m, st, h, vmax2) : symplectic_substep<false>(m, st, h, vmax2);
+    } else {
+      ok = implicit_substep(m, st, s, h, s.guard ? vmax2 : std::numeric_limits<double>::infinity(),
+                            status.cg_iterations);
+    }
+    if (!ok) {
+      ++st.warnings.velocity_limit;
+      ++st.warnings.rollbacks;
+      if (++rollbacks > s.max_rollbacks) {
+        ++st.warnings.failed;
+        status.code = StepCode::Failed;
+        st.t = t;
+        return status;
+      }
+      status.code = StepCode::RolledBack;
+      left *= 2;  // halve the step for the rest of the frame (§2.5 failure guard)
+      h *= 0.5;
+      continue;
+    }
+    --left;
+    ++status.substeps;
+    ++st.substeps;
+    t += h;
+  }
+  st.t = t0 + T;
+  ++st.frames;
+  return status;
+}
+
+}  // namespace medspring
