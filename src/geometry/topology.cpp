@@ -30,8 +30,8 @@ Adjacency vertex_adjacency(Index n, const MatX2i& edges) {
   std::vector<std::vector<Index>> nb(static_cast<std::size_t>(n));
   for (Index s = 0; s < edges.rows(); ++s) {
     const Index a = edges(s, 0), b = edges(s, 1);
-    require_index(a, n, cat("edges[", s, "][0]"));
-    require_index(b, n, cat("edges[", s, "][1]"));
+    require_index(a, n, "edges[", s, "][0]");
+    require_index(b, n, "edges[", s, "][1]");
     if (a == b) continue;
     nb[a].push_back(b);
     nb[b].push_back(a);

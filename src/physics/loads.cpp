@@ -21,10 +21,10 @@ void validate_loads(const std::vector<PointLoad>& loads, Index n) {
   for (std::size_t k = 0; k < loads.size(); ++k) {
     const PointLoad& L = loads[k];
     const std::string p = cat("loads[", k, "]");
-    require_index(L.node, n, cat(p, ".node"));
+    require_index(L.node, n, p, ".node");
     require(L.force.allFinite(), p, ".force: must be finite");
-    require_finite(L.t_on, cat(p, ".t_on"));
-    require_nonnegative(L.t_ramp, cat(p, ".t_ramp"));
+    require_finite(L.t_on, p, ".t_on");
+    require_nonnegative(L.t_ramp, p, ".t_ramp");
     require(!std::isnan(L.t_release), p, ".t_release: must not be NaN");
     require(L.t_release >= L.t_on, p, ".t_release: must be >= t_on (", L.t_release, " < ", L.t_on, ")");
   }

@@ -55,20 +55,17 @@ std::string to_string(DuffingMode mode) {
 }
 
 void Springs::reserve(Index n) {
-  i.reserve(static_cast<std::size_t>(n));
-  j.reserve(static_cast<std::size_t>(n));
+  for (auto* v : {&i, &j}) v->reserve(static_cast<std::size_t>(n));
+  for (auto* v : {&L0, &k, &kp}) v->reserve(static_cast<std::size_t>(n));
 }
 
 Index Springs::add(Index a, Index b, double rest_length, double stiffness, double cubic) {
   const Index s = size();
   i.push_back(a);
   j.push_back(b);
-  L0.conservativeResize(s + 1);
-  k.conservativeResize(s + 1);
-  kp.conservativeResize(s + 1);
-  L0[s] = rest_length;
-  k[s] = stiffness;
-  kp[s] = cubic;
+  L0.push_back(rest_length);
+  k.push_back(stiffness);
+  kp.push_back(cubic);
   return s;
 }
 
@@ -84,23 +81,24 @@ void finalize(Model& m) {
           n);
   require_finite_points(m.x0, cat(w, ": x0"));
   for (Index a = 0; a < n; ++a) {
-    require_positive(m.mass[a], cat(w, ": nodes[", a, "].mass"));
-    require_nonnegative(m.damping[a], cat(w, ": nodes[", a, "].damping"));
-    require_nonnegative(m.kr[a], cat(w, ": nodes[", a, "].kr"));
+    require_positive(m.mass[a], w, ": nodes[", a, "].mass");
+    require_nonnegative(m.damping[a], w, ": nodes[", a, "].damping");
+    require_nonnegative(m.kr[a], w, ": nodes[", a, "].kr");
   }
   const Springs& S = m.springs;
   const Index ns = S.size();
-  require(static_cast<Index>(S.j.size()) == ns && S.L0.size() == ns && S.k.size() == ns && S.kp.size() == ns,
-          w, ": springs arrays have inconsistent sizes");
+  const auto nss = static_cast<std::size_t>(ns);
+  require(S.j.size() == nss && S.L0.size() == nss && S.k.size() == nss && S.kp.size() == nss, w,
+          ": springs arrays have inconsistent sizes");
   m.has_soft_springs = false;
   m.inv_k.resize(ns);
   for (Index s = 0; s < ns; ++s) {
-    require_index(S.i[s], n, cat(w, ": springs[", s, "].i"));
-    require_index(S.j[s], n, cat(w, ": springs[", s, "].j"));
+    require_index(S.i[s], n, w, ": springs[", s, "].i");
+    require_index(S.j[s], n, w, ": springs[", s, "].j");
     require(S.i[s] != S.j[s], w, ": springs[", s, "]: joins node ", S.i[s], " to itself");
-    require_nonnegative(S.k[s], cat(w, ": springs[", s, "].k"));
-    require_finite(S.kp[s], cat(w, ": springs[", s, "].kp"));
-    require_nonnegative(S.L0[s], cat(w, ": springs[", s, "].L0"));
+    require_nonnegative(S.k[s], w, ": springs[", s, "].k");
+    require_finite(S.kp[s], w, ": springs[", s, "].kp");
+    require_nonnegative(S.L0[s], w, ": springs[", s, "].L0");
     require(S.L0[s] >= 1e-9, w, ": springs[", s, "].L0: zero-length spring between nodes ", S.i[s], " and ",
             S.j[s], " (rest length ", S.L0[s], " mm < 1e-9 mm)");
     if (S.kp[s] < 0) {
@@ -111,10 +109,10 @@ void finalize(Model& m) {
   }
   const BendingTerms& B = m.bending;
   for (Index t = 0; t < B.size(); ++t) {
-    require_index(B.a[t], n, cat(w, ": bending[", t, "].a"));
-    require_index(B.b[t], n, cat(w, ": bending[", t, "].b"));
-    require_index(B.c[t], n, cat(w, ": bending[", t, "].c"));
-    require_nonnegative(B.kb[t], cat(w, ": bending[", t, "].kb"));
+    require_index(B.a[t], n, w, ": bending[", t, "].a");
+    require_index(B.b[t], n, w, ": bending[", t, "].b");
+    require_index(B.c[t], n, w, ": bending[", t, "].c");
+    require_nonnegative(B.kb[t], w, ": bending[", t, "].kb");
   }
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
@@ -141,8 +139,8 @@ Index ModelBuilder::add_node(const Vec3& p, double mass, double damping, double 
 }
 
 Index ModelBuilder::add_spring(Index a, Index b, double k, const DuffingSettings& duffing) {
-  require_index(a, num_nodes(), cat(name_, ": spring end a"));
-  require_index(b, num_nodes(), cat(name_, ": spring end b"));
+  require_index(a, num_nodes(), name_, ": spring end a");
+  require_index(b, num_nodes(), name_, ": spring end b");
   const double L0 = (nodes_[b] - nodes_[a]).norm();
   return springs_.add(a, b, L0, k, L0 > 0 ? duffing_coefficient(k, L0, duffing) : 0.0);
 }
@@ -152,7 +150,7 @@ Index ModelBuilder::add_spring(Index a, Index b, double k, double kp, double res
 }
 
 void ModelBuilder::set_fixed(Index node, bool fixed) {
-  require_index(node, num_nodes(), cat(name_, ": fixed node"));
+  require_index(node, num_nodes(), name_, ": fixed node");
   fixed_[node] = fixed ? 1 : 0;
 }
 
@@ -164,9 +162,9 @@ void ModelBuilder::add_bending(Index a, Index b, Index c, double kb) {
   bending_.kb.conservativeResize(t + 1);
   bending_.kb[t] = kb;
   bending_.D0.conservativeResize(t + 1, 3);
-  require_index(a, num_nodes(), cat(name_, ": bending[", t, "].a"));
-  require_index(b, num_nodes(), cat(name_, ": bending[", t, "].b"));
-  require_index(c, num_nodes(), cat(name_, ": bending[", t, "].c"));
+  require_index(a, num_nodes(), name_, ": bending[", t, "].a");
+  require_index(b, num_nodes(), name_, ": bending[", t, "].b");
+  require_index(c, num_nodes(), name_, ": bending[", t, "].c");
   bending_.D0.row(t) = (nodes_[a] - 2.0 * nodes_[b] + nodes_[c]).transpose();
 }
 
@@ -196,13 +194,14 @@ Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& p, co
   ModelBuilder b(name);
   for (Index a = 0; a < mesh.num_vertices(); ++a) b.add_node(mesh.V.row(a).transpose(), p.node);
   const MatX2i E = unique_edges(mesh.F);
+  b.reserve_springs(static_cast<Index>(E.rows()));
   for (Index s = 0; s < E.rows(); ++s) {
     const double L0 = (mesh.V.row(E(s, 1)) - mesh.V.row(E(s, 0))).norm();
     if (L0 < 1e-9) continue;  // §1.1: drop edges shorter than 1e-9 mm
     b.add_spring(E(s, 0), E(s, 1), p.k, p.duffing);
   }
   for (std::size_t q = 0; q < p.fixed.size(); ++q) {
-    require_index(p.fixed[q], mesh.num_vertices(), cat(name, ": fixed[", q, "]"));
+    require_index(p.fixed[q], mesh.num_vertices(), name, ": fixed[", q, "]");
     b.set_fixed(p.fixed[q]);
   }
   return b.build();

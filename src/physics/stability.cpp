@@ -44,8 +44,45 @@ double gershgorin_omega(const Model& m, const MatX3& x) {
 double power_iteration_omega(const Model& m, const MatX3& x, int iterations, double safety) {
   const Index n = m.num_nodes();
   if (m.free_nodes.empty()) return 0.0;
-  const Eigen::SparseMatrix<double> K =
-      tangent_stiffness(m, x, {.clamp_transverse = false, .include_return = true});
+  // Matrix-free K_t z (springs + return springs + bending), so that million-node models need no
+  // assembled matrix.
+  const Springs& S = m.springs;
+  const Index ns = S.size();
+  MatX3 nh(ns, 3);
+  VecX ca(ns), cb(ns);
+  for (Index q = 0; q < ns; ++q) {
+    const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
+    const double L = e.norm();
+    if (L < 1e-9) {
+      ca[q] = cb[q] = 0;
+      nh.row(q).setZero();
+      continue;
+    }
+    const double d = L - S.L0[q];
+    cb[q] = spring_tension(S.k[q], S.kp[q], d) / L;
+    ca[q] = spring_tension_derivative(S.k[q], S.kp[q], d) - cb[q];
+    nh.row(q) = (e / L).transpose();
+  }
+  auto apply_K = [&](const VecX& p, VecX& y) {
+    for (Index a = 0; a < n; ++a) y.segment<3>(3 * a) = m.kr[a] * p.segment<3>(3 * a);
+    for (Index q = 0; q < ns; ++q) {
+      const Index i = 3 * S.i[q], j = 3 * S.j[q];
+      const Vec3 dp = p.segment<3>(i) - p.segment<3>(j);
+      const Vec3 nq = nh.row(q).transpose();
+      const Vec3 kd = ca[q] * nq * nq.dot(dp) + cb[q] * dp;
+      y.segment<3>(i) += kd;
+      y.segment<3>(j) -= kd;
+    }
+    const BendingTerms& B = m.bending;
+    for (Index t = 0; t < B.size(); ++t) {
+      const Vec3 g =
+          B.kb[t] * (p.segment<3>(3 * B.a[t]) - 2.0 * p.segment<3>(3 * B.b[t]) + p.segment<3>(3 * B.c[t]));
+      y.segment<3>(3 * B.a[t]) += g;
+      y.segment<3>(3 * B.b[t]) -= 2.0 * g;
+      y.segment<3>(3 * B.c[t]) += g;
+    }
+  };
+  VecX y(3 * n), w(3 * n);
   VecX s(3 * n);  // M^-1/2 scaling, zero on fixed DOFs (removed from the system, §1.5)
   for (Index a = 0; a < n; ++a)
     s.segment<3>(3 * a).setConstant(m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]));
@@ -60,7 +97,9 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
     const double nz = z.norm();
     if (nz == 0) return 0.0;
     z /= nz;
-    const VecX y = s.cwiseProduct(K * s.cwiseProduct(z));
+    w = s.cwiseProduct(z);
+    apply_K(w, y);
+    y = s.cwiseProduct(y);
     lambda = z.dot(y);
     z = y;
   }

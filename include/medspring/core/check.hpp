@@ -27,17 +27,23 @@ void require(bool cond, const Args&... args) {
   if (!cond) throw InvalidInput(cat(args...));
 }
 
-inline void require_finite(double x, std::string_view what) {
-  if (!std::isfinite(x)) throw InvalidInput(cat(what, ": must be finite (got ", x, ")"));
+// The `what` arguments below are concatenated with cat() only when the check fails, so a check in
+// a loop over a million elements costs a comparison, not a string.
+template <class... What>
+void require_finite(double x, const What&... what) {
+  if (!std::isfinite(x)) throw InvalidInput(cat(what..., ": must be finite (got ", x, ")"));
 }
-inline void require_positive(double x, std::string_view what) {
-  if (!(std::isfinite(x) && x > 0)) throw InvalidInput(cat(what, ": must be > 0 (got ", x, ")"));
+template <class... What>
+void require_positive(double x, const What&... what) {
+  if (!(std::isfinite(x) && x > 0)) throw InvalidInput(cat(what..., ": must be > 0 (got ", x, ")"));
 }
-inline void require_nonnegative(double x, std::string_view what) {
-  if (!(std::isfinite(x) && x >= 0)) throw InvalidInput(cat(what, ": must be >= 0 (got ", x, ")"));
+template <class... What>
+void require_nonnegative(double x, const What&... what) {
+  if (!(std::isfinite(x) && x >= 0)) throw InvalidInput(cat(what..., ": must be >= 0 (got ", x, ")"));
 }
-inline void require_index(Index i, Index n, std::string_view what) {
-  if (i < 0 || i >= n) throw InvalidInput(cat(what, ": index ", i, " out of range [0, ", n, ")"));
+template <class... What>
+void require_index(Index i, Index n, const What&... what) {
+  if (i < 0 || i >= n) throw InvalidInput(cat(what..., ": index ", i, " out of range [0, ", n, ")"));
 }
 
 /// First row of P holding a NaN/Inf, or -1.

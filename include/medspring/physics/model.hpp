@@ -14,9 +14,9 @@ namespace medspring {
 /// Springs as a struct of arrays; spring s joins nodes i[s] and j[s].
 struct Springs {
   std::vector<Index> i, j;  // end nodes (#S)
-  VecX L0;                  // rest length (#S), mm
-  VecX k;                   // linear stiffness (#S), N/mm, >= 0
-  VecX kp;                  // cubic stiffness k' (#S), N/mm^3 (0: linear; > 0 hard; < 0 soft)
+  std::vector<double> L0;   // rest length (#S), mm
+  std::vector<double> k;    // linear stiffness (#S), N/mm, >= 0
+  std::vector<double> kp;   // cubic stiffness k' (#S), N/mm^3 (0: linear; > 0 hard; < 0 soft)
 
   Index size() const { return static_cast<Index>(i.size()); }
   void reserve(Index n);
@@ -83,6 +83,7 @@ class ModelBuilder {
   /// Adds a spring with explicit rest length and k'.
   Index add_spring(Index a, Index b, double k, double kp, double rest_length);
   void set_fixed(Index node, bool fixed = true);
+  void reserve_springs(Index n) { springs_.reserve(n); }
   void add_bending(Index a, Index b, Index c, double kb);
   Index num_nodes() const { return static_cast<Index>(nodes_.size()); }
   const Vec3& position(Index i) const { return nodes_[i]; }
