@@ -52,11 +52,12 @@ inline Index first_nonfinite_row(const MatX3& P) {
     if (!P.row(r).allFinite()) return r;
   return -1;
 }
-inline void require_finite_points(const MatX3& P, std::string_view what) {
+template <class... What>
+void require_finite_points(const MatX3& P, const What&... what) {
   const Index r = first_nonfinite_row(P);
   if (r >= 0)
-    throw InvalidInput(
-        cat(what, "[", r, "]: coordinates must be finite (got ", P(r, 0), ", ", P(r, 1), ", ", P(r, 2), ")"));
+    throw InvalidInput(cat(what..., "[", r, "]: coordinates must be finite (got ", P(r, 0), ", ", P(r, 1),
+                           ", ", P(r, 2), ")"));
 }
 
 }  // namespace medspring

@@ -1,0 +1,82 @@
+// The hybrid kidney (ALGORITHMS.md §4): a surface mass-spring body and a centerline skeleton of
+// medial atoms, tied by spokes and integrated together as one system. Model kind "hybrid".
+//
+//   HybridKidney kidney = hybrid_kidney_phantom();          // 458 surface + 42 atoms, §4.1
+//   State s = make_state(kidney.model());
+//   kidney.transfer_force(223, F, s.f_ext);                 // a force on a surface node
+//   step(kidney.model(), s, {.dt = 0.5});
+#pragma once
+
+#include <vector>
+
+#include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/models/body.hpp"
+
+namespace medspring {
+
+/// Parameters of the hybrid kidney; defaults are the kidney column of ALGORITHMS.md §9.
+struct HybridSettings {
+  NodeParams surface_node{0.3, 0.5, 0.02};  // mass g, beta 1/ms, k_r N/mm of surface nodes
+  NodeParams atom_node{0.3, 0.5, 0.02};     // same for centerline atoms
+  double k_surf = 0.05;                     // surface springs, N/mm
+  double k_spoke = 0.05;                    // spokes, N/mm
+  double k_cl = 0.1;                        // centerline springs, N/mm
+  bool nonlinear = true;                    // D-4: every inter-node spring Duffing (else all linear)
+  DuffingSettings duffing{};                // Strain, eta = 1 (D-3)
+  Index spokes_per_atom = 8;                // K_a of the union rule (D-9)
+  std::vector<Index> fixed;                 // pinned surface nodes (default none)
+};
+
+/// Spokes by the union rule of D-9: (a) every surface node to its nearest atom (ties: lower atom);
+/// (b) every atom to its K nearest surface nodes; duplicates removed. Rows (surface node, atom),
+/// sorted by atom then node.
+MatX2i union_spokes(const MatX3& surface, const MatX3& atoms, Index spokes_per_atom);
+
+/// Statistics of a hybrid model for build summaries and tests.
+struct HybridStats {
+  Index surface_nodes = 0, atoms = 0, surface_springs = 0, centerline_springs = 0, spokes = 0;
+  Index min_spokes_per_atom = 0, max_spokes_per_atom = 0;
+  Index surface_nodes_without_spoke = 0;
+};
+
+class HybridKidney final : public Body {
+ public:
+  /// surface: closed organ surface (mm); atoms: #A x 3 centerline atoms (mm) in order along the skeleton.
+  HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const HybridSettings& settings = {},
+               std::string name = "kidney");
+
+  std::string kind() const override { return "hybrid"; }
+  const Model& model() const override { return model_; }
+  const MatX3i& faces() const override { return F_; }
+  const MatX3& rest_surface() const override { return rest_surface_; }
+  void map_to_surface(const State& state, MatX3& surface) const override;
+  void transfer_force(Index node, const Vec3& F, MatX3& f_dof) const override;
+  double local_stiffness() const override { return settings_.k_surf; }
+  std::vector<std::uint8_t> fixed_surface_nodes() const override;
+  double spoke_length(Index node) const override { return spoke_length_[node]; }
+
+  Index num_atoms() const { return num_atoms_; }
+  /// DOF index of atom a (atoms follow the surface nodes).
+  Index atom_dof(Index a) const { return num_surface_nodes() + a; }
+  const MatX2i& spokes() const { return spokes_; }
+  const HybridSettings& settings() const { return settings_; }
+  HybridStats stats() const { return stats_; }
+
+ private:
+  Model model_;
+  MatX3i F_;
+  MatX3 rest_surface_;
+  MatX2i spokes_;
+  VecX spoke_length_;
+  HybridSettings settings_;
+  HybridStats stats_;
+  Index num_atoms_ = 0;
+};
+
+/// The atoms of the kidney phantom (§4.1): A_k = B((-0.85 a + 1.7 a k / (n-1), 0, 0)), n = 42.
+MatX3 kidney_phantom_atoms(Index count = 42);
+
+/// The hybrid kidney phantom: kidney_phantom() + kidney_phantom_atoms() (458 + 42 masses).
+HybridKidney hybrid_kidney_phantom(const HybridSettings& settings = {});
+
+}  // namespace medspring
