@@ -1,0 +1,86 @@
+// One simulated organ over time: a Body, its state, loads on surface nodes and the local-deformation
+// overlay. One update (D-18) = loads -> DOF forces -> step -> map to the surface -> + local U -> normals.
+//
+//   Simulation sim(std::make_shared<HybridKidney>(hybrid_kidney_phantom()));
+//   sim.set_loads({{.node = 223, .force = {0, 0, -1}, .t_release = 500}});
+//   while (sim.time() < 1000) sim.update();
+//   const MatX3& S = sim.surface();                      // displayed surface (#S x 3), mm
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "medspring/local/deformer.hpp"
+#include "medspring/models/body.hpp"
+#include "medspring/physics/integrators.hpp"
+#include "medspring/physics/loads.hpp"
+
+namespace medspring {
+
+struct LocalOptions {
+  bool enabled = false;               // eq. (6) overlay while a force acts (§6.5)
+  LocalDeformationSettings settings;  // patch (k_loc, 5 x 5 window / 25-node BFS), mode, cache_local
+  bool use_body_stiffness = true;     // k_loc = Body::local_stiffness() (kidney: k_surf; vessel 0.05)
+  bool guard = false;                 // §6.5: limit |U_c| to 0.9 x the contact's spoke length
+};
+
+struct SimulationSettings {
+  StepSettings step{};  // dt 0.5 ms, symplectic Euler, sub-stepping on
+  LocalOptions local{};
+  bool normals = true;  // recompute vertex normals every update (rendering)
+};
+
+class Simulation {
+ public:
+  explicit Simulation(BodyPtr body, const SimulationSettings& settings = {});
+
+  /// Loads on SURFACE nodes (the body transfers them to its DOFs). Validated: throws InvalidInput
+  /// naming "loads[k].field".
+  void set_loads(std::vector<PointLoad> loads);
+  const std::vector<PointLoad>& loads() const { return loads_; }
+
+  /// Advances one frame of settings.step.dt and refreshes the displayed surface. Never throws;
+  /// numerical trouble is in the returned status and state().warnings.
+  StepStatus update();
+  /// Runs `frames` updates; returns the status of the last one that was not Ok (or Ok).
+  StepStatus advance(long frames);
+
+  double time() const { return state_.t; }
+  const Body& body() const { return *body_; }
+  BodyPtr body_ptr() const { return body_; }
+  const Model& model() const { return body_->model(); }
+  const State& state() const { return state_; }
+  State& state() { return state_; }
+  /// Displayed surface (#S x 3, mm): mapped global positions + local overlay.
+  const MatX3& surface() const { return surface_; }
+  /// Global (mapped) surface without the local overlay.
+  const MatX3& global_surface() const { return global_; }
+  /// Area-weighted unit vertex normals of surface() (valid when settings.normals).
+  const MatX3& normals() const { return normals_; }
+  /// Displacement of the displayed surface from rest (#S x 3).
+  MatX3 displacement() const { return surface_ - body_->rest_surface(); }
+  /// Total external force currently applied (N) = minus the reaction felt by the tool.
+  Vec3 applied_force() const;
+  /// The local patch (global surface indices) and its displacement of the last update (empty if none).
+  const std::vector<Index>& local_nodes() const;
+  const MatX3& local_displacement() const { return U_; }
+  const SimulationSettings& settings() const { return settings_; }
+  void set_settings(const SimulationSettings& settings);
+  /// Back to rest: x = x0, v = 0, t = 0 (loads kept).
+  void reset();
+  /// Replaces the state (e.g. restored checkpoint); sizes must match the model.
+  void set_state(const State& state);
+
+ private:
+  void refresh_surface();
+
+  BodyPtr body_;
+  SimulationSettings settings_;
+  State state_;
+  std::vector<PointLoad> loads_;
+  MatX3 global_, surface_, normals_, U_;
+  std::optional<LocalDeformer> local_;
+  bool local_active_ = false;
+};
+
+}  // namespace medspring

@@ -1,0 +1,131 @@
+#include "medspring/sim/simulation.hpp"
+
+#include <cmath>
+
+#include "medspring/core/check.hpp"
+#include "medspring/geometry/topology.hpp"
+#include "medspring/local/overlay.hpp"
+
+namespace medspring {
+
+Simulation::Simulation(BodyPtr body, const SimulationSettings& settings) : body_(std::move(body)) {
+  require(body_ != nullptr, "simulation: no body");
+  state_ = make_state(body_->model());
+  set_settings(settings);
+}
+
+void Simulation::set_settings(const SimulationSettings& s) {
+  validate_step_settings(body_->model(), s.step);
+  settings_ = s;
+  local_.reset();
+  local_active_ = false;
+  if (s.local.enabled) {
+    LocalDeformationSettings ls = s.local.settings;
+    if (s.local.use_body_stiffness) ls.patch.k_loc = body_->local_stiffness();
+    const GridLayout g = body_->grid();
+    std::vector<std::uint8_t> fixed = body_->fixed_surface_nodes();
+    if (g.valid()) {
+      local_ = LocalDeformer::tube(g.rings, g.spokes, ls, body_->rest_surface(), fixed);
+    } else {
+      Adjacency adj = vertex_adjacency(body_->num_surface_nodes(), unique_edges(body_->faces()));
+      local_ = LocalDeformer::mesh(std::move(adj), body_->rest_surface(), ls, fixed);
+    }
+  }
+  refresh_surface();
+}
+
+void Simulation::set_loads(std::vector<PointLoad> loads) {
+  validate_loads(loads, body_->num_surface_nodes());
+  if (local_) {  // factor every contact patch now, so that update() never meets a set-up error
+    MatX3 U;
+    for (const PointLoad& L : loads) local_->compute(L.node, L.force, U);
+  }
+  loads_ = std::move(loads);
+}
+
+Vec3 Simulation::applied_force() const {
+  Vec3 F = Vec3::Zero();
+  for (const PointLoad& L : loads_) F += L.at(state_.t);
+  return F;
+}
+
+StepStatus Simulation::update() {
+  // loads at the frame start, held over the frame, transferred to the DOFs (D-14 for the vessel)
+  state_.f_ext.setZero();
+  for (const PointLoad& L : loads_) {
+    const double s = L.scale(state_.t);
+    if (s != 0.0) body_->transfer_force(L.node, s * L.force, state_.f_ext);
+  }
+  const StepStatus st = step(body_->model(), state_, settings_.step);
+  refresh_surface();
+  return st;
+}
+
+StepStatus Simulation::advance(long frames) {
+  StepStatus worst;
+  for (long i = 0; i < frames; ++i) {
+    const StepStatus s = update();
+    if (s.code != StepCode::Ok) worst = s;
+  }
+  return worst;
+}
+
+void Simulation::refresh_surface() {
+  body_->map_to_surface(state_, global_);
+  surface_ = global_;
+  local_active_ = false;
+  if (local_) {
+    // contact = the loaded node with the largest current force (eq. 6 uses the same force)
+    Index contact = -1;
+    Vec3 F = Vec3::Zero();
+    double best = 0;
+    for (const PointLoad& L : loads_) {
+      const Vec3 f = L.at(state_.t);
+      if (f.norm() > best) {
+        best = f.norm();
+        contact = L.node;
+        F = f;
+      }
+    }
+    if (contact >= 0) {
+      local_->compute(contact, F, U_);  // may throw only when a new patch is factored (set-up error)
+      if (settings_.local.guard && body_->spoke_length(contact) > 0)
+        limit_local_displacement(local_->patch(), U_, body_->spoke_length(contact), {});
+      apply_local_overlay(local_->patch(), U_, surface_);
+      local_active_ = true;
+    } else {
+      U_.resize(0, 3);
+    }
+  }
+  if (settings_.normals) vertex_normals(surface_, body_->faces(), normals_);
+}
+
+const std::vector<Index>& Simulation::local_nodes() const {
+  static const std::vector<Index> none;
+  return local_ && local_active_ ? local_->patch().nodes : none;
+}
+
+void Simulation::reset() {
+  state_ = make_state(body_->model());
+  if (local_) local_->invalidate();
+  refresh_surface();
+}
+
+void Simulation::set_state(const State& s) {
+  const Index n = body_->model().num_nodes();
+  require(s.x.rows() == n && s.v.rows() == n, "simulation: state has ", s.x.rows(), " nodes, the model has ",
+          n);
+  require(s.x.allFinite() && s.v.allFinite(), "simulation: state positions/velocities must be finite");
+  State t = make_state(body_->model());
+  t.x = s.x;
+  t.v = s.v;
+  t.t = s.t;
+  t.frames = s.frames;
+  t.substeps = s.substeps;
+  t.stiffening = s.stiffening;
+  t.warnings = s.warnings;
+  state_ = std::move(t);
+  refresh_surface();
+}
+
+}  // namespace medspring
