@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Installs dependencies, builds everything and runs every test (C++ through CTest, Python through pytest).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${BUILD_DIR:-$root/build}
+bash "$root/scripts/install-deps.sh"
+bash "$root/scripts/build.sh" -DMEDSPRING_BUILD_TESTS=ON -DMEDSPRING_BUILD_BENCH=ON
+ctest --test-dir "$build" --output-on-failure --parallel "${JOBS:-$(nproc)}" --timeout 600
+if [ -d "$root/python/tests" ]; then
+  PYTHONPATH="$build/python:${PYTHONPATH:-}" /usr/bin/python3 -m pytest -q "$root/python/tests"
+fi
