@@ -12,13 +12,11 @@ namespace {
 constexpr double kMinLength = 1e-9;  // §1.3: springs shorter than this are skipped
 
 // Spring pass of the force evaluation (vector form of eqs. 1 and 5, §1.3). Returns max kappa_s/k_s.
-// Springs are processed in blocks: the per-spring forces of a block are computed first (independent
-// iterations, so the sqrt/div latencies overlap) and scattered afterwards. Scattering inside the
-// same loop would chain consecutive springs that share a node through memory and make the loop
-// latency-bound (measured: ~2x slower).
+// A plain scalar loop: measured faster here (26 us vs 39 us per 1200-node tube step with
+// -march=native) than a blocked gather / vectorised arithmetic / scatter variant, whose extra
+// passes over the block cost more than the vector sqrt and division save.
 template <bool Soft>
 double spring_forces(const Springs& S, const VecX& inv_k, const double* x, double* f) {
-  constexpr Index kBlock = 64;
   const Index ns = S.size();
   const Index* I = S.i.data();
   const Index* J = S.j.data();
@@ -27,50 +25,33 @@ double spring_forces(const Springs& S, const VecX& inv_k, const double* x, doubl
   const double* KP = S.kp.data();
   const double* IK = inv_k.data();
   double stiff = 1.0;
-  alignas(64) double ex[kBlock], ey[kBlock], ez[kBlock], kap[kBlock];
-  for (Index s0 = 0; s0 < ns; s0 += kBlock) {
-    const Index nb = std::min(kBlock, ns - s0);
-    for (Index q = 0; q < nb; ++q) {  // gather spring vectors e = x_j - x_i
-      const Index a = 3 * I[s0 + q], b = 3 * J[s0 + q];
-      ex[q] = x[b] - x[a];
-      ey[q] = x[b + 1] - x[a + 1];
-      ez[q] = x[b + 2] - x[a + 2];
+  for (Index s = 0; s < ns; ++s) {
+    const Index a = 3 * I[s], b = 3 * J[s];
+    const double ex = x[b] - x[a], ey = x[b + 1] - x[a + 1], ez = x[b + 2] - x[a + 2];
+    const double L2 = ex * ex + ey * ey + ez * ez;
+    if (L2 < kMinLength * kMinLength) continue;
+    const double L = std::sqrt(L2);
+    const double inv = 1.0 / L;
+    const double d = L - L0[s];
+    const double k = K[s], kp = KP[s];
+    double phi, dphi;
+    if (Soft) {
+      phi = spring_tension(k, kp, d);
+      dphi = spring_tension_derivative(k, kp, d);
+    } else {
+      const double kp_d2 = kp * d * d;
+      phi = d * (k + kp_d2);  // eq. (5)
+      dphi = k + 3.0 * kp_d2;
     }
-    const double* l0 = L0 + s0;
-    const double* kk = K + s0;
-    const double* kq = KP + s0;
-    const double* ik = IK + s0;
-    for (Index q = 0; q < nb; ++q) {  // branch-free arithmetic: vectorises
-      const double L2 = ex[q] * ex[q] + ey[q] * ey[q] + ez[q] * ez[q];
-      const bool ok = L2 >= kMinLength * kMinLength;  // §1.3 guard
-      const double L = std::sqrt(ok ? L2 : 1.0);
-      const double d = L - l0[q];
-      double phi, dphi;
-      if constexpr (Soft) {
-        phi = spring_tension(kk[q], kq[q], d);
-        dphi = spring_tension_derivative(kk[q], kq[q], d);
-      } else {
-        const double kp_d2 = kq[q] * d * d;
-        phi = d * (kk[q] + kp_d2);  // eq. (5)
-        dphi = kk[q] + 3.0 * kp_d2;
-      }
-      const double t = ok ? phi / L : 0.0;  // phi / L
-      const double at = t < 0 ? -t : t;
-      kap[q] = (dphi > at ? dphi : at) * ik[q];
-      ex[q] *= t;
-      ey[q] *= t;
-      ez[q] *= t;
-    }
-    for (Index q = 0; q < nb; ++q) stiff = kap[q] > stiff ? kap[q] : stiff;
-    for (Index q = 0; q < nb; ++q) {  // scatter
-      const Index a = 3 * I[s0 + q], b = 3 * J[s0 + q];
-      f[a] += ex[q];
-      f[a + 1] += ey[q];
-      f[a + 2] += ez[q];
-      f[b] -= ex[q];
-      f[b + 1] -= ey[q];
-      f[b + 2] -= ez[q];
-    }
+    const double t = phi * inv;  // phi / L
+    stiff = std::max(stiff, std::max(dphi, std::abs(t)) * IK[s]);
+    const double fx = t * ex, fy = t * ey, fz = t * ez;
+    f[a] += fx;
+    f[a + 1] += fy;
+    f[a + 2] += fz;
+    f[b] -= fx;
+    f[b + 1] -= fy;
+    f[b + 2] -= fz;
   }
   return stiff;
 }
