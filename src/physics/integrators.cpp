@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "medspring/core/check.hpp"
 #include "medspring/physics/forces.hpp"
@@ -40,11 +41,14 @@ void validate_step_settings(const Model& model, const StepSettings& s) {
 
 namespace {
 
-// One symplectic Euler substep with implicit diagonal damping (§2.1). Returns false (and restores the
-// previous positions and velocities of the nodes already advanced) if a velocity became non-finite
-// or exceeded v_max.
+// Outcome of one guarded substep (§2.5).
+enum class Substep { Ok, TooFast, NonFinite };
+
+// One symplectic Euler substep with implicit diagonal damping (§2.1). Returns TooFast / NonFinite (and
+// restores the previous positions and velocities of the nodes already advanced) if a velocity exceeded
+// v_max or became non-finite.
 template <bool Guard>
-bool symplectic_substep(const Model& m, State& st, double h, double vmax2) {
+Substep symplectic_substep(const Model& m, State& st, double h, double vmax2) {
   if (st.step_coef_h != h) {
     for (Index a = 0; a < m.num_nodes(); ++a) st.step_coef[a] = 1.0 / (m.mass[a] + h * m.damping[a]);
     st.step_coef_h = h;
@@ -63,15 +67,16 @@ bool symplectic_substep(const Model& m, State& st, double h, double vmax2) {
     const double vy = (mass * V[q + 1] + h * G[q + 1]) * c;
     const double vz = (mass * V[q + 2] + h * G[q + 2]) * c;
     if constexpr (Guard) {
-      if (!(vx * vx + vy * vy + vz * vz <= vmax2)) {  // also catches NaN
-        for (Index r = 0; r < k; ++r) {               // undo: x_old = x - h v, v_old = (v / c - h g) / m
+      const double v2 = vx * vx + vy * vy + vz * vz;
+      if (!(v2 <= vmax2)) {              // also catches NaN
+        for (Index r = 0; r < k; ++r) {  // undo: x_old = x - h v, v_old = (v / c - h g) / m
           const Index b = fr[r], p = 3 * b;
           for (int d = 0; d < 3; ++d) {
             X[p + d] -= h * V[p + d];
             V[p + d] = (V[p + d] / C[b] - h * G[p + d]) / Mv[b];
           }
         }
-        return false;
+        return std::isfinite(v2) ? Substep::TooFast : Substep::NonFinite;
       }
     }
     V[q] = vx;
@@ -81,7 +86,7 @@ bool symplectic_substep(const Model& m, State& st, double h, double vmax2) {
     X[q + 1] += h * vy;
     X[q + 2] += h * vz;
   }
-  return true;
+  return Substep::Ok;
 }
 
 // Per-spring coefficients of K_s = a n n^T + b I at x with the transverse clamp (§2.3).
@@ -171,6 +176,11 @@ int conjugate_gradient(const Model& m, State& st, double h, const VecX& b, VecX&
   r = b - q;
   const double bn = b.norm();
   converged = true;
+  if (!std::isfinite(bn)) {  // NaN/Inf in the system: report it as a non-finite result (guard, §2.5)
+    converged = false;
+    x.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return 0;
+  }
   if (bn == 0) {
     x.setZero();
     return 0;
@@ -182,6 +192,11 @@ int conjugate_gradient(const Model& m, State& st, double h, const VecX& b, VecX&
     if (r.norm() <= tol * bn) return it;
     apply_system(m, st, h, p, q);
     const double pq = p.dot(q);
+    if (!std::isfinite(pq)) {
+      converged = false;
+      x.setConstant(std::numeric_limits<double>::quiet_NaN());
+      return it;
+    }
     if (!(pq > 0)) break;
     const double alpha = rz / pq;
     x += alpha * p;
@@ -195,17 +210,21 @@ int conjugate_gradient(const Model& m, State& st, double h, const VecX& b, VecX&
   return max_it;
 }
 
-bool state_ok(const Model& m, const State& st, double vmax2) {
+Substep state_check(const Model& m, const State& st, double vmax2) {
+  Substep r = Substep::Ok;
   for (Index a : m.free_nodes) {
     const double v2 = st.v.row(a).squaredNorm();
-    if (!(v2 <= vmax2) || !st.x.row(a).allFinite()) return false;
+    if (!std::isfinite(v2) || !st.x.row(a).allFinite()) return Substep::NonFinite;
+    if (!(v2 <= vmax2)) r = Substep::TooFast;
   }
-  return true;
+  return r;
 }
 
 // One linearly implicit Euler substep (§2.3), optionally followed by Newton iterations on
-// R(v) = M (v - v^n) - h f(x^n + h v, v). Returns false if the result is not finite / too fast.
-bool implicit_substep(const Model& m, State& st, const StepSettings& s, double h, double vmax2, int& cg_its) {
+// R(v) = M (v - v^n) - h f(x^n + h v, v). Returns TooFast / NonFinite (state restored) if the result is
+// too fast / not finite.
+Substep implicit_substep(const Model& m, State& st, const StepSettings& s, double h, double vmax2,
+                         int& cg_its) {
   st.x_save = st.x;
   st.v_save = st.v;
   st.stiffening = internal_forces(m, st.x, st.f_ext, st.f);
@@ -267,13 +286,13 @@ bool implicit_substep(const Model& m, State& st, const StepSettings& s, double h
     }
   }
   for (Index a : m.free_nodes) st.x.row(a) = st.x_save.row(a) + h * st.v.row(a);
-  if (!state_ok(m, st, vmax2)) {
+  const Substep r = state_check(m, st, vmax2);
+  if (r != Substep::Ok) {
     st.x = st.x_save;
     st.v = st.v_save;
     st.dv.setZero();
-    return false;
   }
-  return true;
+  return r;
 }
 
 }  // namespace
@@ -303,21 +322,26 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   int rollbacks = 0;
   while (left > 0) {
     if (loads) accumulate_loads(*loads, t, st.f_ext);
-    bool ok;
+    Substep r;
     if (s.integrator == Integrator::SymplecticEuler) {
       st.stiffening = internal_forces(m, st.x, st.f_ext, st.f);
-      ok = s.guard ? symplectic_substep<true>(m, st, h, vmax2) : symplectic_substep<false>(m, st, h, vmax2);
+      r = s.guard ? symplectic_substep<true>(m, st, h, vmax2) : symplectic_substep<false>(m, st, h, vmax2);
     } else {
-      ok = implicit_substep(m, st, s, h, s.guard ? vmax2 : std::numeric_limits<double>::infinity(),
-                            status.cg_iterations);
+      r = implicit_substep(m, st, s, h, s.guard ? vmax2 : std::numeric_limits<double>::infinity(),
+                           status.cg_iterations);
     }
-    if (!ok) {
-      ++st.warnings.velocity_limit;
+    if (r != Substep::Ok) {
+      ++(r == Substep::NonFinite ? st.warnings.nonfinite : st.warnings.velocity_limit);
       ++st.warnings.rollbacks;
       if (++rollbacks > s.max_rollbacks) {
+        // The frame is dropped: positions stay at the last valid substep, velocities are zeroed (a
+        // state moving at v_max under large spring forces would otherwise fail every later frame), and
+        // the clock moves to the frame end so that time-driven loops and load schedules keep going.
         ++st.warnings.failed;
         status.code = StepCode::Failed;
-        st.t = t;
+        st.v.setZero();
+        st.t = t0 + T;
+        ++st.frames;
         return status;
       }
       status.code = StepCode::RolledBack;

@@ -43,8 +43,19 @@ void Simulation::set_loads(std::vector<PointLoad> loads) {
   loads_ = std::move(loads);
 }
 
+void Simulation::set_tool_force(Index node, const Vec3& F) {
+  require_index(node, body_->num_surface_nodes(), "tool force: surface node");
+  require(F.allFinite(), "tool force on node ", node, " must be finite");
+  if (local_ && node != tool_node_) {  // factor the new contact's patch now (update() never throws)
+    MatX3 U;
+    local_->compute(node, F, U);
+  }
+  tool_node_ = node;
+  tool_force_ = F;
+}
+
 Vec3 Simulation::applied_force() const {
-  Vec3 F = Vec3::Zero();
+  Vec3 F = tool_node_ >= 0 ? tool_force_ : Vec3::Zero();
   for (const PointLoad& L : loads_) F += L.at(state_.t);
   return F;
 }
@@ -56,6 +67,7 @@ StepStatus Simulation::update() {
     const double s = L.scale(state_.t);
     if (s != 0.0) body_->transfer_force(L.node, s * L.force, state_.f_ext);
   }
+  if (tool_node_ >= 0) body_->transfer_force(tool_node_, tool_force_, state_.f_ext);
   const StepStatus st = step(body_->model(), state_, settings_.step);
   refresh_surface();
   return st;
@@ -79,6 +91,11 @@ void Simulation::refresh_surface() {
     Index contact = -1;
     Vec3 F = Vec3::Zero();
     double best = 0;
+    if (tool_node_ >= 0 && tool_force_.norm() > 0) {
+      best = tool_force_.norm();
+      contact = tool_node_;
+      F = tool_force_;
+    }
     for (const PointLoad& L : loads_) {
       const Vec3 f = L.at(state_.t);
       if (f.norm() > best) {

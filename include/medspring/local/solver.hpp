@@ -106,7 +106,9 @@ class LocalSolver {
   Index c_dof_ = -1;               // first unknown of the contact node in the factored system
   VecX g_;                         // Isotropic: #P
   std::vector<Index> block_node_;  // vector modes: patch node of unknowns 3b..3b+2 of the factored system
-  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  // Factored on an empty matrix: Eigen 3.4's default LDLT leaves its `info` field uninitialised, and
+  // moving a LocalSolver that never took the dense path then reads it (UBSan: invalid enum load).
+  Eigen::LDLT<Eigen::MatrixXd> ldlt_{Eigen::MatrixXd(0, 0)};
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
   VecX rhs_, x_;  // per-solve scratch, sized at precompute
 };

@@ -38,6 +38,14 @@ class Simulation {
   /// naming "loads[k].field".
   void set_loads(std::vector<PointLoad> loads);
   const std::vector<PointLoad>& loads() const { return loads_; }
+  /// External tool force F (N) on SURFACE node `node`, added to the loads in every update until it is
+  /// changed or cleared: the per-tick force of a haptic virtual coupling (§2.5, sim/haptics.hpp). A
+  /// new node gets its local patch factored here (throws InvalidInput for a bad node or force).
+  void set_tool_force(Index node, const Vec3& F);
+  void clear_tool_force() { tool_node_ = -1; }
+  /// The tool's node (-1 when none) and force.
+  Index tool_node() const { return tool_node_; }
+  const Vec3& tool_force() const { return tool_force_; }
 
   /// Advances one frame of settings.step.dt and refreshes the displayed surface. Never throws;
   /// numerical trouble is in the returned status and state().warnings.
@@ -59,7 +67,7 @@ class Simulation {
   const MatX3& normals() const { return normals_; }
   /// Displacement of the displayed surface from rest (#S x 3).
   MatX3 displacement() const { return surface_ - body_->rest_surface(); }
-  /// Total external force currently applied (N) = minus the reaction felt by the tool.
+  /// Total external force currently applied (loads + tool force, N) = minus the reaction on the tool.
   Vec3 applied_force() const;
   /// The local patch (global surface indices) and its displacement of the last update (empty if none).
   const std::vector<Index>& local_nodes() const;
@@ -81,6 +89,8 @@ class Simulation {
   MatX3 global_, surface_, normals_, U_;
   std::optional<LocalDeformer> local_;
   bool local_active_ = false;
+  Index tool_node_ = -1;
+  Vec3 tool_force_ = Vec3::Zero();
 };
 
 }  // namespace medspring
