@@ -7,6 +7,9 @@
 
 namespace medspring::cli {
 
+// Real-anatomy cases built by the builders layer (cmd_build.cpp); empty without it or without the data.
+std::vector<bench::BenchCase> builder_bench_cases(const std::string& filter);
+
 int cmd_bench(const Args& args) {
   args.require_known({"json", "quick", "filter", "samples"});
   const bool quick = args.flag("quick");
@@ -17,7 +20,9 @@ int cmd_bench(const Args& args) {
   if (!json)
     std::printf("%-50s %10s %10s %10s %8s %9s %8s\n", "case", "median_us", "p99_us", "mean_us", "nodes",
                 "springs", "ns/spring");
-  for (const auto& c : bench::all_cases({.large = !quick})) {
+  std::vector<bench::BenchCase> cases = bench::all_cases({.large = !quick});
+  for (auto& c : builder_bench_cases(filter)) cases.push_back(std::move(c));
+  for (const auto& c : cases) {
     if (!filter.empty() && c.name.find(filter) == std::string::npos) continue;
     const bench::Timing t = bench::time_case(c, quick ? 50 : 200, samples, quick ? 0.5 : 2.0);
     const double ns_spring = c.springs > 0 ? 1000.0 * t.median_us / static_cast<double>(c.springs) : 0.0;

@@ -27,10 +27,96 @@ const std::vector<Command>& commands() {
        "contact displacement under the force, the time to return to rest and the cost per update.\n",
        {"json"},
        cmd_demo},
+      {"build",
+       "usage: medspring build kidney --mesh FILE [--unit mm|cm|m] [--close-holes N]\n"
+       "                              | --mask FILE [--label N]\n"
+       "                              [--nodes 458] [--atoms 42] [--path mst|dijkstra]\n"
+       "                              --out DIR [--json] [--force]\n"
+       "       medspring build centerline --mask FILE [--label N] | --mesh FILE [--unit mm|cm|m]\n"
+       "                                  [--atoms 40] [--path mst|dijkstra] --out DIR [--json] [--force]\n\n"
+       "Builds a simulation model from real anatomy (ALGORITHMS.md §3-4) and writes it as .vtp files.\n"
+       "  kidney      the hybrid kidney: balloon surface of exactly --nodes nodes fitted to the organ, the\n"
+       "              distance-mapping skeleton of the voxelised organ with --atoms atoms, spokes (D-9),\n"
+       "              parameters of §9. Writes surface.vtp, centerline.vtp (radius array\n"
+       "              MaximumInscribedSphereRadius), spokes.vtp and summary.json.\n"
+       "  centerline  the distance-mapping centerline with radii; ends cut by the volume border are open\n"
+       "              (§3.1); an open tube mesh is capped (§3.6). Writes centerline.vtp, curve.vtp,\n"
+       "              surface.vtp and summary.json.\n"
+       "  --mesh FILE        closed organ surface (.obj .stl .ply .vtp .vtk); --unit: its length unit\n"
+       "  --close-holes N    close holes of up to N edges first (an open mesh is refused otherwise)\n"
+       "  --mask FILE        label volume (.nii .nii.gz .mha .mhd .nrrd); --label: the organ's label\n"
+       "                     (default: the only non-zero label). Several components: the largest is used.\n"
+       "  --path mst|dijkstra  skeleton path: maximum spanning tree of the distance map (D-7, default) or\n"
+       "                     the penalised shortest path (TEASAR-style; straighter in flat organs)\n"
+       "  --out DIR          output folder, written whole or not at all; a non-empty one needs --force\n"
+       "  --json             print the summary as JSON (counts, valence histogram, Hausdorff and mean\n"
+       "                     distance to the input in mm, atoms outside, spokes per atom, build time)\n",
+       {"json", "force"},
+       cmd_build},
+      {"run",
+       "usage: medspring run SCENE --out DIR [--force] [--quiet] [--json] [--static-curve]\n\n"
+       "Builds the model of a scene file (docs/scenes.md), runs it for the scene's duration and writes to "
+       "DIR:\n"
+       "  <name>.pvd + frames/<name>_NNNNN.vtp   ParaView series of the displayed surface; point data\n"
+       "                                        displacement, displacement_magnitude, local_displacement,\n"
+       "                                        local_displacement_magnitude, Normals (mm)\n"
+       "  <name>_atoms.pvd                      the centerline atoms (hybrid, smrm)\n"
+       "  trace.csv                             every update: force, max displacement, traced nodes/atoms\n"
+       "  summary.json, scene.json              results; the scene with every default filled in\n"
+       "The folder is written under a temporary name and renamed when complete; a bad scene writes nothing.\n"
+       "  --force         replace a non-empty DIR (refused otherwise)\n"
+       "  --quiet         no progress on stderr\n"
+       "  --json          print the summary as JSON on stdout\n"
+       "  --static-curve  also write static_curve.csv: static force-displacement of the first load\n",
+       {"force", "quiet", "json", "static-curve"},
+       cmd_run},
+      {"paper",
+       "usage: medspring paper --out DIR [--force] [--quick] [--quiet] [--json] [--scenes DIR]\n\n"
+       "Reproduces the paper's experiments and writes one report: the kidney pushed and released (Fig. 9,\n"
+       "1.0 N and 0.2 N, linear and nonlinear), the vessel under a light and a strong force with and "
+       "without\n"
+       "local deformation (Fig. 10 A-F), and the per-update timings of Tables I and II (D-18: 200 warm-up +\n"
+       "2000 timed updates per case). Real anatomy from $MEDSPRING_DATA (the HuBMAP kidney, the VMR aorta\n"
+       "centerline) plus the procedural phantoms. DIR receives report.md, tables.json, figures/*.png (VTK\n"
+       "renders made under xvfb-run, matplotlib plots) and scenes/<name>/ with the .pvd series of every "
+       "run.\n"
+       "  --quick        phantoms only, fewer timed updates (a smoke test, well under a minute)\n"
+       "  --force        replace a non-empty DIR (refused otherwise); DIR is written whole or not at all\n"
+       "  --quiet        no progress on stderr\n"
+       "  --json         print the tables and per-scene results as JSON on stdout\n"
+       "  --scenes DIR   the bundled scene folder (default: the source tree's scenes/, then\n"
+       "                 <prefix>/share/medspring/scenes)\n",
+       {"force", "quick", "quiet", "json"},
+       cmd_paper},
+      {"haptics",
+       "usage: medspring haptics SCENE|MODEL --trajectory FILE [--node N] [--k-vc 0.1] [--b-vc 0.01]\n"
+       "                        [--f-max 3] [--local] [--linear] [--duration MS] [--out DIR [--force]] "
+       "[--json]\n\n"
+       "Runs the 1 kHz haptic loop (ALGORITHMS.md §2.5, docs/haptics.md) along a recorded tool path: every 1 "
+       "ms\n"
+       "tick F = k_vc (x_tool - x_c) + b_vc (v_tool - v_c), saturated to --f-max, acts on the contact node,\n"
+       "the model advances 1 ms and -F is the reaction for the device. Reports per-tick compute time "
+       "(median,\n"
+       "p99, max) and writes force_trace.csv (time, tool, contact, reaction, saturated, compute_us) to DIR.\n"
+       "  SCENE|MODEL     a scene file (docs/scenes.md; its loads are ignored) or kidney_phantom | tube |\n"
+       "                  vessel_phantom\n"
+       "  --trajectory    CSV rows time_ms, x, y, z (mm; optional header, # comments), linear in between\n"
+       "  --node N        contact surface node (default: the node nearest the first tool position)\n"
+       "  --local         local deformation on the contact patch (eq. 6)\n"
+       "  --linear        linear springs (model names only)\n"
+       "  --duration MS   run length (default: the last trajectory time)\n",
+       {"json", "force", "local", "linear"},
+       cmd_haptics},
   };
   return list;
 }
 
-void extra_usage(std::ostream&) {}
+void extra_usage(std::ostream& os) {
+  os << "  haptics  the 1 kHz haptic loop along a recorded tool path: tick times, force trace\n";
+  os << "  build    build a model from real anatomy: build kidney | build centerline (--help)\n";
+  os << "  run      run a scene file (docs/scenes.md): ParaView series, traces, summary\n";
+  os << "  paper    reproduce the paper: Fig. 9, Fig. 10 A-F, Tables I-II -> report.md, figures, "
+        "tables.json\n";
+}
 
 }  // namespace medspring::cli

@@ -24,5 +24,9 @@ void extra_usage(std::ostream& os);
 int cmd_bench(const Args& args);
 int cmd_info(const Args& args);
 int cmd_demo(const Args& args);
+int cmd_build(const Args& args);    // cmd_build.cpp
+int cmd_run(const Args& args);      // cmd_run.cpp
+int cmd_paper(const Args& args);    // cmd_paper.cpp
+int cmd_haptics(const Args& args);  // cmd_haptics.cpp
 
 }  // namespace medspring::cli

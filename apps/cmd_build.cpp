@@ -1,0 +1,265 @@
+// `medspring build KIND`: from real anatomy (an organ mesh or a segmentation) to simulation models.
+//   build kidney      balloon surface + distance-mapping skeleton + spokes = the hybrid kidney (§4)
+//   build centerline  the distance-mapping centerline with radii (§3)
+// Another kind ("vessel", the SMRM model) is added as one more row of build_kinds().
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cases.hpp"
+#include "commands.hpp"
+#include "medspring/core/check.hpp"
+
+#ifdef MEDSPRING_HAVE_BUILDERS
+#include "medspring/builders/centerline_build.hpp"
+#include "medspring/builders/kidney_build.hpp"
+#include "medspring/builders/output_folder.hpp"
+#include "medspring/io/data_dir.hpp"
+#include "medspring/sim/simulation.hpp"
+#endif
+
+namespace medspring::cli {
+
+/// Benchmark cases that need the builders (real anatomy), appended by `medspring bench`: only those
+/// whose name contains `filter` (empty = all) and whose data file exists; their models are built here.
+std::vector<bench::BenchCase> builder_bench_cases(const std::string& filter);
+
+#ifdef MEDSPRING_HAVE_BUILDERS
+
+namespace {
+
+namespace fs = std::filesystem;
+
+OrganSource organ_source(const Args& args) {
+  OrganSource src;
+  const auto mesh = args.get("mesh"), mask = args.get("mask");
+  require(mesh.has_value() != mask.has_value(), "give exactly one of --mesh FILE and --mask FILE");
+  if (mesh) src.mesh = *mesh;
+  if (mask) src.mask = *mask;
+  if (args.get("label")) {
+    require(mask.has_value(), "option --label: applies to --mask only");
+    const long label = args.integer("label", 0);
+    require(label >= std::numeric_limits<std::int32_t>::min() &&
+                label <= std::numeric_limits<std::int32_t>::max(),
+            "option --label: ", label, " is out of range");
+    src.label = static_cast<std::int32_t>(label);
+  }
+  if (auto u = args.get("unit")) {
+    require(mesh.has_value(), "option --unit: applies to --mesh only (a volume's spacing is in its file)");
+    src.unit = parse_length_unit(*u);
+  }
+  if (args.get("close-holes")) {
+    require(mesh.has_value(), "option --close-holes: applies to --mesh only");
+    const long n = args.integer("close-holes", 0);
+    require(n >= 3 && n <= 100000, "option --close-holes: must be between 3 and 100000 edges (got ", n, ")");
+    src.close_holes = static_cast<Index>(n);
+  }
+  return src;
+}
+
+Index count_option(const Args& args, const std::string& name, long fallback, long min) {
+  const long n = args.integer(name, fallback);
+  require(n >= min && n <= 1000000, "option --", name, ": must be between ", min, " and 1000000 (got ", n,
+          ")");
+  return static_cast<Index>(n);
+}
+
+/// --path mst|dijkstra: the voxel path of the skeleton (§3.4; mst = D-7, the default).
+PathMethod path_option(const Args& args) {
+  const std::string m = args.get_or("path", "mst");
+  if (m == "mst") return PathMethod::MaximumSpanningTree;
+  if (m == "dijkstra") return PathMethod::PenalizedDijkstra;
+  throw InvalidInput(cat("option --path: '", m, "' is not mst or dijkstra"));
+}
+
+fs::path out_option(const Args& args) {
+  const auto out = args.get("out");
+  require(out.has_value() && !out->empty(), "option --out DIR is required");
+  return *out;
+}
+
+nlohmann::json kidney_json(const KidneySummary& s) {
+  return {{"input", s.input},
+          {"input_kind", s.input_kind},
+          {"organ",
+           {{"vertices", s.input_vertices},
+            {"faces", s.input_faces},
+            {"volume_mm3", s.organ_volume_mm3},
+            {"diagonal_mm", s.organ_diagonal_mm}}},
+          {"nodes", s.nodes},
+          {"edges", s.edges},
+          {"faces", s.faces},
+          {"atoms", s.atoms},
+          {"valence_histogram", s.valence_histogram},
+          {"valence6_fraction", s.valence6_fraction},
+          {"hausdorff_mm", s.hausdorff_mm},
+          {"mean_distance_mm", s.mean_distance_mm},
+          {"atoms_outside_organ", s.atoms_outside_organ},
+          {"atoms_outside_mask", s.atoms_outside_mask},
+          {"atoms_outside_model", s.atoms_outside_model},
+          {"skeleton_length_mm", s.skeleton_length_mm},
+          {"atom_spacing_min_mm", s.atom_spacing_min_mm},
+          {"atom_spacing_max_mm", s.atom_spacing_max_mm},
+          {"radius_min_mm", s.min_radius_mm},
+          {"radius_max_mm", s.max_radius_mm},
+          {"voxel_size_mm", s.voxel_size_mm},
+          {"object_voxels", s.object_voxels},
+          {"surface_springs", s.surface_springs},
+          {"centerline_springs", s.centerline_springs},
+          {"spokes", s.spokes},
+          {"spokes_per_atom_min", s.min_spokes_per_atom},
+          {"spokes_per_atom_max", s.max_spokes_per_atom},
+          {"surface_nodes_without_spoke", s.surface_nodes_without_spoke},
+          {"dt_safe_ms", s.dt_safe_ms},
+          {"build_seconds", s.seconds},
+          {"surface_seconds", s.seconds_surface},
+          {"skeleton_seconds", s.seconds_skeleton},
+          {"notes", s.notes},
+          {"warnings", s.warnings}};
+}
+
+nlohmann::json centerline_json(const CenterlineSummary& s) {
+  return {{"input", s.input},
+          {"input_kind", s.input_kind},
+          {"atoms", s.atoms},
+          {"length_mm", s.length_mm},
+          {"atom_spacing_min_mm", s.atom_spacing_min_mm},
+          {"atom_spacing_max_mm", s.atom_spacing_max_mm},
+          {"radius_min_mm", s.min_radius_mm},
+          {"radius_max_mm", s.max_radius_mm},
+          {"radius_mean_mm", s.mean_radius_mm},
+          {"ends", {s.ends[0], s.ends[1]}},
+          {"open_end_voxels", s.open_end_sizes},
+          {"components", s.components},
+          {"object_voxels", s.object_voxels},
+          {"voxel_size_mm", s.voxel_size_mm},
+          {"atoms_outside_mask", s.atoms_outside_mask},
+          {"max_distance_outside_mm", s.max_distance_outside_mm},
+          {"max_radius_deviation_mm", s.max_radius_deviation_mm},
+          {"build_seconds", s.seconds},
+          {"notes", s.notes},
+          {"warnings", s.warnings}};
+}
+
+/// Writes the files and summary.json atomically, then prints the summary.
+template <class WriteFiles>
+int finish(const Args& args, const fs::path& out, nlohmann::json summary, const std::string& text,
+           const std::vector<std::string>& warnings, WriteFiles&& write_files) {
+  for (const auto& w : warnings) std::cerr << "medspring build: warning: " << w << "\n";
+  write_output_folder(out, args.flag("force"), [&](const fs::path& dir) {
+    write_files(dir);
+    std::ofstream f(dir / "summary.json");
+    f << summary.dump(2) << "\n";
+    if (!f) throw IoError(cat((dir / "summary.json").string(), ": cannot write"));
+  });
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(out)) files.push_back(e.path().filename().string());
+  std::sort(files.begin(), files.end());
+  if (args.flag("json")) {
+    summary["out"] = fs::absolute(out).string();
+    summary["files"] = files;
+    std::cout << summary.dump(2) << "\n";
+  } else {
+    std::cout << text << "wrote " << out.string() << ":";
+    for (const auto& f : files) std::cout << " " << f;
+    std::cout << "\n";
+  }
+  return 0;
+}
+
+int build_kidney(const Args& args) {
+  args.require_known(
+      {"json", "force", "mesh", "mask", "label", "unit", "close-holes", "nodes", "atoms", "path", "out"});
+  KidneyBuildSettings st;
+  st.source = organ_source(args);
+  st.nodes = count_option(args, "nodes", 458, 4);
+  st.atoms = count_option(args, "atoms", 42, 2);
+  st.skeleton.path_method = path_option(args);
+  const fs::path out = out_option(args);
+  check_output_folder(out, args.flag("force"));
+  const KidneyBuild k = build_kidney_model(st);
+  return finish(args, out, {{"kidney", kidney_json(k.summary)}}, k.summary.text(), k.summary.warnings,
+                [&](const fs::path& dir) { write_kidney_files(dir, k); });
+}
+
+int build_centerline_cmd(const Args& args) {
+  args.require_known({"json", "force", "mesh", "mask", "label", "unit", "atoms", "path", "out"});
+  CenterlineBuildSettings st;
+  st.source = organ_source(args);
+  st.atoms = count_option(args, "atoms", 40, 2);
+  st.skeleton.path_method = path_option(args);
+  const fs::path out = out_option(args);
+  check_output_folder(out, args.flag("force"));
+  const CenterlineBuild c = build_centerline(st);
+  return finish(args, out, {{"centerline", centerline_json(c.summary)}}, c.summary.text(), c.summary.warnings,
+                [&](const fs::path& dir) { write_centerline_files(dir, c); });
+}
+
+struct BuildKind {
+  const char* name;
+  int (*run)(const Args&);
+};
+
+const std::vector<BuildKind>& build_kinds() {
+  static const std::vector<BuildKind> kinds = {{"kidney", build_kidney},
+                                               {"centerline", build_centerline_cmd}};
+  return kinds;
+}
+
+}  // namespace
+
+int cmd_build(const Args& args) {
+  std::string names;
+  for (const auto& k : build_kinds()) names += names.empty() ? k.name : cat(", ", k.name);
+  require(args.positional().size() == 1, "build: expected one kind (", names,
+          "), see medspring build --help");
+  for (const auto& k : build_kinds())
+    if (args.positional()[0] == k.name) return k.run(args);
+  throw InvalidInput(cat("build: unknown kind '", args.positional()[0], "' (known: ", names, ")"));
+}
+
+std::vector<bench::BenchCase> builder_bench_cases(const std::string& filter) {
+  std::vector<bench::BenchCase> cases;
+  const std::string name = "kidney_real_hybrid_500_explicit_nonlinear";
+  const fs::path file = data_dir() / "kidney_left_hubmap_vhm.obj";
+  if ((!filter.empty() && name.find(filter) == std::string::npos) || !fs::exists(file)) return cases;
+  // The real kidney (458 + 42), built once here (a few seconds, untimed); one update = Simulation::update
+  // (loads -> step -> map -> normals, D-18) with 1 N held on the surface node nearest to the middle atom.
+  auto kidney = std::shared_ptr<const HybridKidney>(
+      build_kidney_model({.source = {.mesh = file, .unit = LengthUnit::Metre}}).model);
+  bench::BenchCase b;
+  b.name = name;
+  b.group = "kidney";
+  b.nodes = kidney->model().num_nodes();
+  b.springs = kidney->model().num_springs();
+  b.setup = [kidney] {
+    auto sim = std::make_shared<Simulation>(kidney);
+    const Vec3 mid = kidney->model().x0.row(kidney->atom_dof(kidney->num_atoms() / 2)).transpose();
+    const Index c = nearest_node(kidney->rest_surface(), mid);
+    const Vec3 dir = (mid - kidney->rest_surface().row(c).transpose()).normalized();
+    sim->set_loads({{.node = c, .force = 1.0 * dir, .t_ramp = 20}});
+    return std::function<void()>([sim] { sim->update(); });
+  };
+  cases.push_back(std::move(b));
+  return cases;
+}
+
+#else  // built without the builders layer (MEDSPRING_WITH_CGAL=OFF)
+
+int cmd_build(const Args&) {
+  throw InvalidInput("build: this medspring was built without the builders layer (needs CGAL and VTK)");
+}
+
+std::vector<bench::BenchCase> builder_bench_cases(const std::string&) {
+  return {};
+}
+
+#endif
+
+}  // namespace medspring::cli

@@ -1,0 +1,379 @@
+#include "scene_support.hpp"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "medspring/core/check.hpp"
+#include "medspring/io/centerline_io.hpp"
+#include "medspring/io/mesh_io.hpp"
+#include "medspring/io/volume_io.hpp"
+#ifdef MEDSPRING_HAVE_MESHING
+#include "medspring/meshing/balloon.hpp"
+#include "medspring/meshing/isosurface.hpp"
+#endif
+
+namespace medspring::cli {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// ---------------------------------------------------------------------------------------------------
+// FileLoader
+
+SurfaceMesh FileLoader::read_mesh(const fs::path& file, LengthUnit unit) {
+  const std::string key = file.string() + "|" + to_string(unit);
+  auto it = meshes_.find(key);
+  if (it == meshes_.end()) it = meshes_.emplace(key, medspring::read_mesh(file, {.unit = unit})).first;
+  return it->second;
+}
+
+std::vector<Centerline> FileLoader::read_centerlines(const fs::path& file, LengthUnit unit,
+                                                     const std::string& radius_array) {
+  return medspring::read_centerlines(file, unit, radius_array);
+}
+
+LabelVolume FileLoader::read_label_volume(const fs::path& file) {
+  return medspring::read_label_volume(file);
+}
+
+SurfaceMesh FileLoader::isosurface(const MaskVolume& mask) {
+#ifdef MEDSPRING_HAVE_MESHING
+  return medspring::isosurface(mask);
+#else
+  (void)mask;
+  throw InvalidInput("isosurfaces need the meshing layer (build with MEDSPRING_WITH_CGAL=ON)");
+#endif
+}
+
+SurfaceMesh FileLoader::balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) {
+#ifdef MEDSPRING_HAVE_MESHING
+  for (const Balloon& b : balloons_)
+    if (b.mesh.num_vertices() == nodes && b.organ.V == organ.V && b.organ.F == organ.F) {
+      notes = b.notes;
+      notes.push_back("(reused from an earlier scene of this run)");
+      return b.mesh;
+    }
+  const BalloonResult r = build_balloon_surface(organ, {.target_nodes = nodes});
+  std::vector<std::string> n;
+  n.push_back(cat(r.report.nodes, " nodes, ", r.report.faces, " triangles, ",
+                  std::round(1000 * r.report.valence6_fraction) / 10, " % with six neighbours, Hausdorff ",
+                  r.report.hausdorff_mm, " mm, mean distance ", r.report.mean_distance_mm,
+                  " mm to the organ, ", r.report.seconds, " s"));
+  for (const auto& w : r.report.warnings) n.push_back("warning: " + w);
+  balloons_.push_back({organ, r.mesh, n});
+  notes = n;
+  return r.mesh;
+#else
+  (void)organ;
+  (void)nodes;
+  (void)notes;
+  throw InvalidInput(
+      "model.surface_nodes: balloon remeshing needs the meshing layer (MEDSPRING_WITH_CGAL=ON)");
+#endif
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Progress
+
+Progress::Progress(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0) {}
+
+void Progress::begin(const std::string& label) {
+  label_ = label;
+  start_ = std::chrono::steady_clock::now();
+  last_quarter_ = 0;
+  drawn_ = false;
+}
+
+void Progress::update(double fraction) {
+  if (quiet_) return;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  if (s < 1.0) return;
+  fraction = std::clamp(fraction, 0.0, 1.0);
+  if (tty_) {
+    const int width = 30;
+    const int filled = static_cast<int>(std::round(fraction * width));
+    std::fprintf(stderr, "\r%-40.40s [%s%s] %3d%% %5.1f s", label_.c_str(), std::string(filled, '#').c_str(),
+                 std::string(width - filled, '.').c_str(), static_cast<int>(std::round(100 * fraction)), s);
+    std::fflush(stderr);
+    drawn_ = true;
+  } else {
+    const int quarter = static_cast<int>(fraction * 4);
+    if (quarter > last_quarter_ && quarter < 4) {
+      std::fprintf(stderr, "%s: %d%%\n", label_.c_str(), 25 * quarter);
+      last_quarter_ = quarter;
+    }
+  }
+}
+
+void Progress::end(const std::string& message) {
+  if (quiet_) return;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  if (drawn_) std::fprintf(stderr, "\r%-90s\r", "");
+  std::fprintf(stderr, "%s: %s (%.1f s)\n", label_.c_str(), message.c_str(), s);
+  std::fflush(stderr);
+  drawn_ = false;
+}
+
+void Progress::note(const std::string& line) {
+  if (quiet_) return;
+  std::fprintf(stderr, "%s\n", line.c_str());
+  std::fflush(stderr);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Output folders
+
+void check_output_folder(const fs::path& dir, bool force) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return;
+  if (!fs::is_directory(dir, ec))
+    throw InvalidInput(cat("--out ", dir.string(), ": exists and is not a folder"));
+  if (!force && !fs::is_empty(dir, ec))
+    throw InvalidInput(
+        cat("--out ", dir.string(), ": folder exists and is not empty (use --force to replace it)"));
+}
+
+namespace {
+
+fs::path normalized_target(const fs::path& p) {
+  fs::path a = fs::absolute(p).lexically_normal();
+  if (a.filename().empty()) a = a.parent_path();
+  return a;
+}
+
+}  // namespace
+
+StagedOutput::StagedOutput(fs::path target, bool force) : target_(normalized_target(target)), force_(force) {
+  check_output_folder(target_, force_);
+  const fs::path parent = target_.parent_path();
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec)
+    throw IoError(cat("--out ", target_.string(), ": cannot create ", parent.string(), ": ", ec.message()));
+  // Folders left by an interrupted run (its process is gone) are removed.
+  const std::string prefix = cat(".", target_.filename().string(), ".tmp-");
+  for (const auto& e : fs::directory_iterator(parent, ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind(prefix, 0) != 0) continue;
+    const long pid = std::strtol(n.c_str() + prefix.size(), nullptr, 10);
+    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) fs::remove_all(e.path(), ec);
+  }
+  stage_ = parent / cat(prefix, getpid());
+  fs::remove_all(stage_, ec);
+  fs::create_directory(stage_, ec);
+  if (ec)
+    throw IoError(cat("--out ", target_.string(), ": cannot create ", stage_.string(), ": ", ec.message()));
+}
+
+StagedOutput::~StagedOutput() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(stage_, ec);
+}
+
+void StagedOutput::commit() {
+  check_output_folder(target_, force_);
+  std::error_code ec;
+  if (fs::exists(target_, ec)) {
+    const fs::path old = target_.parent_path() / cat(".", target_.filename().string(), ".old-", getpid());
+    fs::remove_all(old, ec);
+    fs::rename(target_, old, ec);
+    if (ec)
+      throw IoError(cat("--out ", target_.string(), ": cannot move the old folder aside: ", ec.message()));
+    fs::rename(stage_, target_, ec);
+    if (ec) {
+      std::error_code ec2;
+      fs::rename(old, target_, ec2);
+      throw IoError(
+          cat("--out ", target_.string(), ": cannot move the new folder into place: ", ec.message()));
+    }
+    fs::remove_all(old, ec);
+  } else {
+    fs::rename(stage_, target_, ec);
+    if (ec)
+      throw IoError(
+          cat("--out ", target_.string(), ": cannot move the new folder into place: ", ec.message()));
+  }
+  committed_ = true;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// One scene run written to a folder
+
+namespace {
+
+void write_text(const fs::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  if (!out) throw IoError(cat(file.string(), ": cannot write"));
+}
+
+std::string padded(Index i) {
+  std::ostringstream os;
+  os << std::setw(5) << std::setfill('0') << i;
+  return os.str();
+}
+
+std::string safe_name(const std::string& s) {
+  std::string out;
+  for (char ch : s)
+    out += (std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-') ? ch : '_';
+  return out.empty() ? "scene" : out;
+}
+
+json num(double x) {
+  return std::isfinite(x) ? json(x) : json(nullptr);
+}
+
+}  // namespace
+
+json describe_built(const BuiltScene& b) {
+  const Model& m = b.body->model();
+  return {{"kind", b.body->kind()},
+          {"name", m.name},
+          {"surface_nodes", b.body->num_surface_nodes()},
+          {"triangles", b.body->faces().rows()},
+          {"masses", m.num_nodes()},
+          {"springs", m.num_springs()},
+          {"atoms", b.atoms_rest.rows()},
+          {"dt_ms", b.settings.step.dt},
+          {"dt_safe_rest_ms", b.dt_safe_rest},
+          {"build_seconds", b.build_seconds},
+          {"notes", b.notes}};
+}
+
+json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& progress,
+                         const SceneRunOptions& o) {
+  const std::string name = safe_name(b.scene.name);
+  fs::create_directories(dir);
+  if (b.scene.record.frames) fs::create_directories(dir / "frames");
+  const Index S = b.body->num_surface_nodes();
+  const Index A = static_cast<Index>(b.atoms_rest.rows());
+  SurfaceMesh mesh;
+  mesh.F = b.body->faces();
+  const MatX3& S0 = b.body->rest_surface();
+  MatX3 Ul(S, 3), atoms(A, 3);
+  std::vector<std::pair<double, std::string>> series, atom_series;
+  json frames = json::array();
+  std::vector<std::vector<Index>> chain;
+  if (A >= 2) {
+    chain.emplace_back();
+    for (Index a = 0; a < A; ++a) chain[0].push_back(a);
+  }
+
+  RunHooks hooks;
+  hooks.on_frame = [&](const Simulation& sim, const RecordedFrame& f) {
+    mesh.V = sim.surface();
+    const MatX3 U = sim.surface() - S0;
+    Ul.setZero();
+    const auto& nodes = sim.local_nodes();
+    for (std::size_t r = 0; r < nodes.size(); ++r)
+      Ul.row(nodes[r]) = sim.local_displacement().row(static_cast<Index>(r));
+    const std::string file = cat("frames/", name, "_", padded(f.index), ".vtp");
+    write_vtp(dir / file, mesh,
+              {{"displacement", U},
+               {"displacement_magnitude", U.rowwise().norm()},
+               {"local_displacement", Ul},
+               {"local_displacement_magnitude", Ul.rowwise().norm()},
+               {"Normals", sim.normals()}});
+    series.emplace_back(f.time, file);
+    json fr = {{"index", f.index}, {"time_ms", f.time}, {"file", file}};
+    if (A >= 2) {
+      atoms = sim.state().x.middleRows(b.atom_dof_begin, A);
+      const MatX3 Ua = atoms - b.atoms_rest;
+      const std::string afile = cat("frames/", name, "_atoms_", padded(f.index), ".vtp");
+      write_polyline_vtp(dir / afile, atoms, chain,
+                         {{"displacement", Ua}, {"displacement_magnitude", Ua.rowwise().norm()}});
+      atom_series.emplace_back(f.time, afile);
+      fr["atoms_file"] = afile;
+    }
+    frames.push_back(fr);
+  };
+  hooks.on_progress = [&](double x) { progress.update(x); };
+  const SceneResult r = run_scene(b, hooks);
+  if (!series.empty()) write_pvd(dir / (name + ".pvd"), series);
+  if (!atom_series.empty()) write_pvd(dir / (name + "_atoms.pvd"), atom_series);
+
+  // trace.csv: one row per frame
+  {
+    std::ostringstream os;
+    os.precision(9);
+    os << "time_ms,force_N,max_disp_mm,local_contact_mm,energy_mJ";
+    for (Index n : b.trace_nodes) os << ",node_" << n << "_mm";
+    for (Index a : b.trace_atoms) os << ",atom_" << a << "_mm";
+    os << "\n";
+    const SceneTrace& t = r.trace;
+    for (Index q = 0; q < t.size(); ++q) {
+      os << t.time[q] << "," << t.force[q] << "," << t.max_disp[q] << "," << t.local_contact[q] << ","
+         << t.energy[q];
+      for (const auto& v : t.node_disp) os << "," << v[q];
+      for (const auto& v : t.atom_disp) os << "," << v[q];
+      os << "\n";
+    }
+    write_text(dir / "trace.csv", os.str());
+  }
+  json curve = json::array();
+  if (o.static_curve && !b.loads.empty()) {
+    std::ostringstream os;
+    os.precision(9);
+    os << "force_N,contact_mm,max_disp_mm\n";
+    for (const StaticPoint& p : static_response(b, o.curve_points)) {
+      os << p.force << "," << p.contact_mm << "," << p.max_mm << "\n";
+      curve.push_back({p.force, p.contact_mm});
+    }
+    write_text(dir / "static_curve.csv", os.str());
+  }
+  write_text(dir / "scene.json", scene_to_json(b.scene) + "\n");
+
+  const RunSummary& s = r.summary;
+  json loads = json::array();
+  for (const PointLoad& L : b.loads)
+    loads.push_back({{"node", L.node},
+                     {"force_N", {L.force.x(), L.force.y(), L.force.z()}},
+                     {"magnitude_N", L.force.norm()},
+                     {"t_release_ms", num(L.t_release)}});
+  json atoms_rest = json::array();
+  for (Index a = 0; a < A; ++a)
+    atoms_rest.push_back({b.atoms_rest(a, 0), b.atoms_rest(a, 1), b.atoms_rest(a, 2)});
+  json summary = {{"scene", b.scene.name},
+                  {"scene_file", b.scene.file.string()},
+                  {"description", b.scene.description},
+                  {"model", describe_built(b)},
+                  {"loads", loads},
+                  {"trace_nodes", b.trace_nodes},
+                  {"trace_atoms", b.trace_atoms},
+                  {"atoms_rest", atoms_rest},
+                  {"duration_ms", b.scene.duration},
+                  {"updates", s.updates},
+                  {"run_seconds", s.wall_seconds},
+                  {"median_update_us", s.median_update_us},
+                  {"mean_update_us", s.mean_update_us},
+                  {"substeps", s.substeps},
+                  {"warnings", s.warnings},
+                  {"contact_peak_mm", s.contact_peak_mm},
+                  {"contact_hold_mm", s.contact_hold_mm},
+                  {"atom_hold_mm", s.atom_hold_mm},
+                  {"local_hold_mm", s.local_hold_mm},
+                  {"max_disp_peak_mm", s.max_disp_peak_mm},
+                  {"final_max_disp_mm", s.final_max_disp_mm},
+                  {"release_ms", num(s.release_time)},
+                  {"return_ms", num(s.return_ms)},
+                  {"return_tolerance_mm", s.return_tolerance},
+                  {"pvd", series.empty() ? json(nullptr) : json(name + ".pvd")},
+                  {"atoms_pvd", atom_series.empty() ? json(nullptr) : json(name + "_atoms.pvd")},
+                  {"frames", frames},
+                  {"static_curve", curve}};
+  write_text(dir / "summary.json", summary.dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace medspring::cli

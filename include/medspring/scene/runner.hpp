@@ -1,0 +1,88 @@
+// Running a built scene: one Simulation advanced frame by frame for the scene's duration, traces of
+// every frame, and a callback at every frame to be recorded (the CLI writes .vtp files there).
+//
+//   SceneResult r = run_scene(built, {.on_frame = [&](const Simulation& sim, Index k) { ... }});
+//   r.summary.peak_mm, r.trace.time, r.trace.node_disp[0] ...
+#pragma once
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "medspring/scene/build.hpp"
+#include "medspring/sim/simulation.hpp"
+
+namespace medspring {
+
+/// Per-frame traces (one entry per update, plus the rest state at t = 0 first).
+struct SceneTrace {
+  std::vector<double> time;                    // ms
+  std::vector<double> force;                   // |total applied force|, N
+  std::vector<double> max_disp;                // max |u| over the displayed surface, mm
+  std::vector<double> local_contact;           // |U| of the local overlay at the contact node, mm (0 without)
+  std::vector<double> energy;                  // total energy (kinetic + springs + return springs), mJ
+  std::vector<std::vector<double>> node_disp;  // [k][frame] |u| of BuiltScene::trace_nodes[k], mm
+  std::vector<std::vector<double>> atom_disp;  // [k][frame] |u| of BuiltScene::trace_atoms[k], mm
+  Index size() const { return static_cast<Index>(time.size()); }
+};
+
+/// One recorded surface frame.
+struct RecordedFrame {
+  Index index = 0;  // 0, 1, 2, ... in recording order
+  double time = 0;  // ms
+};
+
+struct RunSummary {
+  Index updates = 0;
+  double wall_seconds = 0.0;
+  double median_update_us = 0.0, mean_update_us = 0.0;
+  std::uint64_t substeps = 0;    // substeps over the run
+  std::uint64_t warnings = 0;    // State::warnings.total()
+  double contact_peak_mm = 0.0;  // max |u| of the first load node
+  double contact_hold_mm =
+      0.0;  // |u| of the first load node in the last frame before its release (or at the end)
+  double max_disp_peak_mm = 0.0;  // max over frames of max |u|
+  double atom_hold_mm = 0.0;      // |u| of the first traced atom at the first load's release
+  double local_hold_mm = 0.0;     // |U| of the local overlay at the first load node at its release
+  double release_time = std::numeric_limits<double>::infinity();  // ms, the last release (inf: none)
+  double return_ms =
+      std::numeric_limits<double>::infinity();  // ms after release until every
+                                                // surface node stays within return_tolerance (inf: never)
+  double return_tolerance = 1e-3;               // mm
+  double final_max_disp_mm = 0.0;               // max |u| at the end
+};
+
+struct SceneResult {
+  SceneTrace trace;
+  std::vector<RecordedFrame> frames;
+  RunSummary summary;
+};
+
+struct RunHooks {
+  /// Called for every recorded frame (the rest state first) with the simulation after that update.
+  std::function<void(const Simulation&, const RecordedFrame&)> on_frame;
+  /// Called now and then with the fraction done in [0, 1].
+  std::function<void(double)> on_progress;
+};
+
+/// Runs the scene for its duration (ceil(duration / dt) updates). Never throws after the first update
+/// (numerical trouble is counted in summary.warnings); throws what Simulation throws while setting up
+/// (InvalidInput for bad loads) and whatever on_frame throws.
+SceneResult run_scene(const BuiltScene& built, const RunHooks& hooks = {});
+
+/// One point of a static force-displacement curve.
+struct StaticPoint {
+  double force = 0.0;       // N
+  double contact_mm = 0.0;  // |u| of the loaded surface node at equilibrium
+  double max_mm = 0.0;      // max |u| over the surface
+  int iterations = 0;       // Newton iterations
+};
+
+/// The static response (§2.4) of the scene's model to its first load, with the magnitude scaled from 0
+/// to the full value in `points` equal steps (continuation: each solve starts at the previous
+/// equilibrium; residual below 1e-8 N). Local deformation is not included. Throws InvalidInput without a
+/// load, SolverError if an equilibrium is not found.
+std::vector<StaticPoint> static_response(const BuiltScene& built, int points = 21);
+
+}  // namespace medspring

@@ -1,0 +1,149 @@
+// Running a built scene (scene/runner.hpp).
+#include "medspring/scene/runner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <set>
+
+#include "medspring/core/check.hpp"
+#include "medspring/physics/forces.hpp"
+#include "medspring/physics/static_solve.hpp"
+
+namespace medspring {
+
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
+  const Scene& scene = b.scene;
+  Simulation sim(b.body, b.settings);
+  sim.set_loads(b.loads);
+  const double dt = b.settings.step.dt;
+  const long n = std::max(1L, static_cast<long>(std::ceil(scene.duration / dt - 1e-9)));
+
+  // Updates whose frame is written: every N, the last, and the first reaching each key time.
+  std::set<long> keys;
+  for (double t : scene.record.key_times)
+    keys.insert(std::clamp(static_cast<long>(std::ceil(t / dt - 1e-9)), 0L, n));
+
+  SceneResult res;
+  SceneTrace& tr = res.trace;
+  tr.node_disp.assign(b.trace_nodes.size(), {});
+  tr.atom_disp.assign(b.trace_atoms.size(), {});
+  const MatX3& S0 = b.body->rest_surface();
+  const Model& model = b.body->model();
+  const Index contact = b.loads.empty() ? -1 : b.loads.front().node;
+
+  auto sample = [&] {
+    tr.time.push_back(sim.time());
+    tr.force.push_back(sim.applied_force().norm());
+    tr.max_disp.push_back((sim.surface() - S0).rowwise().norm().maxCoeff());
+    double uc = 0.0;
+    const auto& patch = sim.local_nodes();
+    for (std::size_t r = 0; r < patch.size(); ++r)
+      if (patch[r] == contact) uc = sim.local_displacement().row(static_cast<Index>(r)).norm();
+    tr.local_contact.push_back(uc);
+    tr.energy.push_back(total_energy(model, sim.state().x, sim.state().v));
+    for (std::size_t k = 0; k < b.trace_nodes.size(); ++k) {
+      const Index i = b.trace_nodes[k];
+      tr.node_disp[k].push_back((sim.surface().row(i) - S0.row(i)).norm());
+    }
+    for (std::size_t k = 0; k < b.trace_atom_dofs.size(); ++k) {
+      const Index i = b.trace_atom_dofs[k];
+      tr.atom_disp[k].push_back((sim.state().x.row(i) - model.x0.row(i)).norm());
+    }
+  };
+  auto record = [&] {
+    RecordedFrame f{static_cast<Index>(res.frames.size()), sim.time()};
+    res.frames.push_back(f);
+    if (hooks.on_frame) hooks.on_frame(sim, f);
+  };
+
+  sample();
+  if (scene.record.frames) record();  // the rest state
+  std::vector<double> us(static_cast<std::size_t>(n));
+  const long progress_every = std::max(1L, n / 100);
+  const auto t_start = std::chrono::steady_clock::now();
+  for (long k = 1; k <= n; ++k) {
+    const auto a = std::chrono::steady_clock::now();
+    sim.update();
+    us[static_cast<std::size_t>(k - 1)] =
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count();
+    sample();
+    if (scene.record.frames && (k % scene.record.every == 0 || k == n || keys.count(k) > 0)) record();
+    if (hooks.on_progress && k % progress_every == 0)
+      hooks.on_progress(static_cast<double>(k) / static_cast<double>(n));
+  }
+  RunSummary& s = res.summary;
+  s.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  s.updates = static_cast<Index>(n);
+  s.median_update_us = median(us);
+  double sum = 0;
+  for (double u : us) sum += u;
+  s.mean_update_us = sum / static_cast<double>(n);
+  s.substeps = sim.state().substeps;
+  s.warnings = sim.state().warnings.total();
+
+  // Releases: the last one, if every load is released.
+  if (!b.loads.empty()) {
+    s.release_time = 0;
+    for (const PointLoad& L : b.loads) s.release_time = std::max(s.release_time, L.t_release);
+  }
+  const double first_release = b.loads.empty() ? INFINITY : b.loads.front().t_release;
+  const Index T = tr.size();
+  Index hold = T - 1;            // the last frame with the first load on (or the end)
+  for (Index q = 0; q < T; ++q)  // the frame at t_release already shows the force released
+    if (tr.time[q] < first_release - 1e-9) hold = q;
+  if (!tr.node_disp.empty()) {
+    s.contact_peak_mm = *std::max_element(tr.node_disp[0].begin(), tr.node_disp[0].end());
+    s.contact_hold_mm = tr.node_disp[0][hold];
+  }
+  if (!tr.atom_disp.empty()) s.atom_hold_mm = tr.atom_disp[0][hold];
+  s.local_hold_mm = tr.local_contact[hold];
+  s.max_disp_peak_mm = *std::max_element(tr.max_disp.begin(), tr.max_disp.end());
+  s.final_max_disp_mm = tr.max_disp.back();
+  if (std::isfinite(s.release_time)) {
+    Index last_out = -1;
+    for (Index q = 0; q < T; ++q)
+      if (tr.time[q] >= s.release_time - 1e-9 && tr.max_disp[q] > s.return_tolerance) last_out = q;
+    if (last_out + 1 < T)
+      s.return_ms = last_out < 0 ? 0.0 : std::max(0.0, tr.time[last_out + 1] - s.release_time);
+  }
+  if (hooks.on_progress) hooks.on_progress(1.0);
+  return res;
+}
+
+std::vector<StaticPoint> static_response(const BuiltScene& b, int points) {
+  require(!b.loads.empty(), "static response: the scene has no load");
+  require(points >= 2, "static response: need at least 2 points (got ", points, ")");
+  const Body& body = *b.body;
+  const Model& m = body.model();
+  const PointLoad& L = b.loads.front();
+  const MatX3& S0 = body.rest_surface();
+  State st = make_state(m);
+  MatX3 f(m.num_nodes(), 3), S;
+  std::vector<StaticPoint> out;
+  for (int k = 0; k < points; ++k) {
+    const double s = static_cast<double>(k) / static_cast<double>(points - 1);
+    f.setZero();
+    if (s > 0) body.transfer_force(L.node, s * L.force, f);
+    const StaticResult r = static_equilibrium(m, f, {.tolerance = 1e-8},
+                                              st.x);  // 1e-8 N: round-off on organs 300 mm from the origin
+    st.x = r.x;
+    body.map_to_surface(st, S);
+    out.push_back({s * L.force.norm(), (S.row(L.node) - S0.row(L.node)).norm(),
+                   (S - S0).rowwise().norm().maxCoeff(), r.iterations});
+  }
+  return out;
+}
+
+}  // namespace medspring

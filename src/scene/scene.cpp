@@ -1,0 +1,741 @@
+// Scene files: JSON -> Scene, with every error naming the scene and the JSON path (docs/scenes.md).
+#include "medspring/scene/scene.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "medspring/core/check.hpp"
+#include "medspring/medial/frames.hpp"
+
+#ifndef MEDSPRING_SCENE_DEFAULT_DATA_DIR
+#define MEDSPRING_SCENE_DEFAULT_DATA_DIR "../shared/data"
+#endif
+
+namespace medspring {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+ModelKind parse_model_kind(const std::string& text) {
+  if (text == "surface") return ModelKind::Surface;
+  if (text == "hybrid") return ModelKind::Hybrid;
+  if (text == "smrm") return ModelKind::Smrm;
+  throw InvalidInput(cat("unknown model kind '", text, "' (expected surface, hybrid or smrm)"));
+}
+
+std::string to_string(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::Surface:
+      return "surface";
+    case ModelKind::Hybrid:
+      return "hybrid";
+    case ModelKind::Smrm:
+      return "smrm";
+  }
+  return "?";
+}
+
+fs::path scene_data_dir() {
+  if (const char* env = std::getenv("MEDSPRING_DATA"); env != nullptr && *env != '\0') return fs::path(env);
+  return fs::path(MEDSPRING_SCENE_DEFAULT_DATA_DIR);
+}
+
+namespace {
+
+struct Ctx {
+  std::string origin;
+  fs::path base_dir;
+};
+
+[[noreturn]] void fail(const Ctx& c, const std::string& path, const std::string& message) {
+  throw InvalidInput(cat(c.origin, ": ", path, ": ", message));
+}
+
+std::string type_name(const json& j) {
+  if (j.is_number()) return "a number";
+  if (j.is_string()) return "a string";
+  if (j.is_boolean()) return "a boolean";
+  if (j.is_array()) return "an array";
+  if (j.is_object()) return "an object";
+  return "null";
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+// Readers for one JSON value at a path.
+double as_number(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_number()) fail(c, path, cat("must be a number (got ", type_name(j), ")"));
+  const double x = j.get<double>();
+  if (!std::isfinite(x)) fail(c, path, cat("must be finite (got ", x, ")"));
+  return x;
+}
+
+Index as_index(const Ctx& c, const json& j, const std::string& path) {
+  const double x = as_number(c, j, path);
+  if (x != std::floor(x) || std::abs(x) > 2e9) fail(c, path, cat("must be an integer (got ", j.dump(), ")"));
+  return static_cast<Index>(x);
+}
+
+bool as_bool(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_boolean()) fail(c, path, cat("must be true or false (got ", type_name(j), ")"));
+  return j.get<bool>();
+}
+
+std::string as_string(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_string()) fail(c, path, cat("must be a string (got ", type_name(j), ")"));
+  return j.get<std::string>();
+}
+
+Vec3 as_vec3(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_array() || j.size() != 3) fail(c, path, "must be an array of 3 numbers");
+  return {as_number(c, j[0], path + "[0]"), as_number(c, j[1], path + "[1]"),
+          as_number(c, j[2], path + "[2]")};
+}
+
+// Runs a parse function of the engine (throwing InvalidInput) and rethrows with the JSON path.
+template <class F>
+auto with_path(const Ctx& c, const std::string& path, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const InvalidInput& e) {
+    fail(c, path, e.what());
+  }
+}
+
+/// One JSON object at a path: keys are read through get(), which records them as known; finish()
+/// reports every key that was not read as unknown.
+class Obj {
+ public:
+  Obj(const Ctx& c, const json& j, std::string path) : c_(c), j_(j), path_(std::move(path)) {
+    if (!j.is_object())
+      fail(c_, path_.empty() ? "(root)" : path_, cat("must be an object (got ", type_name(j), ")"));
+  }
+  const Ctx& ctx() const { return c_; }
+  std::string at(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  const json* get(const std::string& key) {
+    known_.push_back(key);
+    const auto it = j_.find(key);
+    return it == j_.end() ? nullptr : &*it;
+  }
+  bool has(const std::string& key) const { return j_.contains(key); }
+  double number(const std::string& key, double fallback) {
+    const json* v = get(key);
+    return v ? as_number(c_, *v, at(key)) : fallback;
+  }
+  double positive(const std::string& key, double fallback) {
+    const double x = number(key, fallback);
+    if (!(x > 0)) fail(c_, at(key), cat("must be > 0 (got ", x, ")"));
+    return x;
+  }
+  double nonnegative(const std::string& key, double fallback) {
+    const double x = number(key, fallback);
+    if (!(x >= 0)) fail(c_, at(key), cat("must be >= 0 (got ", x, ")"));
+    return x;
+  }
+  Index index(const std::string& key, Index fallback, Index min_value = 0) {
+    const json* v = get(key);
+    if (!v) return fallback;
+    const Index i = as_index(c_, *v, at(key));
+    if (i < min_value) fail(c_, at(key), cat("must be >= ", min_value, " (got ", i, ")"));
+    return i;
+  }
+  bool boolean(const std::string& key, bool fallback) {
+    const json* v = get(key);
+    return v ? as_bool(c_, *v, at(key)) : fallback;
+  }
+  std::string string(const std::string& key, const std::string& fallback) {
+    const json* v = get(key);
+    return v ? as_string(c_, *v, at(key)) : fallback;
+  }
+  /// Throws for the first key that no get() asked for.
+  void finish() const {
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      bool ok = false;
+      for (const auto& k : known_) ok = ok || k == it.key();
+      if (!ok) fail(c_, at(it.key()), cat("unknown key (expected one of: ", join(known_), ")"));
+    }
+  }
+
+ private:
+  const Ctx& c_;
+  const json& j_;
+  std::string path_;
+  std::vector<std::string> known_;
+};
+
+// "${MEDSPRING_DATA}/x" -> data folder; relative -> against the scene folder; the file must exist.
+fs::path resolve_file(const Ctx& c, const json& j, const std::string& path) {
+  std::string s = as_string(c, j, path);
+  if (s.empty()) fail(c, path, "must not be empty");
+  const std::string var = "${MEDSPRING_DATA}";
+  for (auto pos = s.find(var); pos != std::string::npos; pos = s.find(var))
+    s.replace(pos, var.size(), scene_data_dir().string());
+  if (const auto pos = s.find("${"); pos != std::string::npos)
+    fail(c, path, cat("unknown variable in '", s, "' (only ${MEDSPRING_DATA} is expanded)"));
+  fs::path p(s);
+  if (p.is_relative()) p = c.base_dir / p;
+  p = p.lexically_normal();
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec)) {
+    if (s.find(scene_data_dir().string()) != std::string::npos)
+      fail(c, path, cat("file not found: ", p.string(), " (set MEDSPRING_DATA to the data folder)"));
+    fail(c, path, cat("file not found: ", p.string()));
+  }
+  return p;
+}
+
+LengthUnit parse_unit(Obj& o, const std::string& key) {
+  const json* v = o.get(key);
+  if (!v) fail(o.ctx(), o.at(key), "is required (the unit of the file's coordinates: mm, cm, m or um)");
+  const std::string s = as_string(o.ctx(), *v, o.at(key));
+  return with_path(o.ctx(), o.at(key), [&] { return parse_length_unit(s); });
+}
+
+DuffingSettings parse_duffing(const Ctx& c, const json& j, const std::string& path, DuffingSettings d) {
+  Obj o(c, j, path);
+  if (const json* v = o.get("mode")) {
+    const std::string s = as_string(c, *v, o.at("mode"));
+    d.mode = with_path(c, o.at("mode"), [&] { return parse_duffing_mode(s); });
+  }
+  d.eta = o.positive("eta", d.eta);
+  d.length = o.positive("length", d.length);
+  d.soft = o.boolean("soft", d.soft);
+  o.finish();
+  return d;
+}
+
+std::vector<Index> parse_index_list(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_array()) fail(c, path, "must be an array of node indices");
+  std::vector<Index> out;
+  for (std::size_t k = 0; k < j.size(); ++k) {
+    const Index i = as_index(c, j[k], cat(path, "[", k, "]"));
+    if (i < 0) fail(c, cat(path, "[", k, "]"), cat("must be >= 0 (got ", i, ")"));
+    out.push_back(i);
+  }
+  return out;
+}
+
+void parse_source(const Ctx& c, const json& j, const std::string& path, SceneModel& m) {
+  Obj o(c, j, path);
+  ModelSource& s = m.source;
+  const json* phantom = o.get("phantom");
+  const json* mesh = o.get("mesh");
+  const json* seg = o.get("segmentation");
+  const json* line = o.get("centerline");
+  o.finish();
+  const int count = (phantom != nullptr) + (mesh != nullptr) + (seg != nullptr) + (line != nullptr);
+  if (count == 0) fail(c, path, "needs one of phantom, mesh, segmentation or centerline");
+  const bool line_and_mesh = count == 2 && line && mesh;
+  if (count > 1 && !line_and_mesh)
+    fail(c, path,
+         "give exactly one of phantom, mesh, segmentation, centerline (or centerline + mesh for smrm)");
+
+  if (phantom) {
+    s.type = ModelSource::Type::Phantom;
+    const std::string pp = o.at("phantom");
+    if (phantom->is_string()) {
+      s.phantom = phantom->get<std::string>();
+    } else {
+      Obj p(c, *phantom, pp);
+      s.phantom = p.string("name", "");
+      if (s.phantom == "tube") {
+        s.rings = p.index("rings", s.rings, 2);
+        s.spokes = p.index("spokes", s.spokes, 3);
+        s.spacing = p.positive("spacing", s.spacing);
+        s.radius = p.positive("radius", s.radius);
+      } else if (s.phantom == "vessel") {
+        const std::string vp = p.string("path", "straight_x");
+        s.path = with_path(c, p.at("path"), [&] { return parse_vessel_path(vp); });
+        const std::string cs = p.string("cross_section", "circular");
+        s.cross_section = with_path(c, p.at("cross_section"), [&] { return parse_cross_section(cs); });
+      }
+      p.finish();
+    }
+    if (s.phantom != "kidney" && s.phantom != "tube" && s.phantom != "vessel")
+      fail(c, pp, cat("unknown phantom '", s.phantom, "' (expected kidney, tube or vessel)"));
+    const bool ok = (s.phantom == "kidney" && m.kind != ModelKind::Smrm) ||
+                    (s.phantom == "tube" && m.kind == ModelKind::Surface) ||
+                    (s.phantom == "vessel" && m.kind == ModelKind::Smrm);
+    if (!ok)
+      fail(c, pp,
+           cat("phantom '", s.phantom, "' cannot make a ", to_string(m.kind),
+               " model (kidney: surface or hybrid; tube: surface; vessel: smrm)"));
+  }
+  if (mesh) {
+    Obj p(c, *mesh, o.at("mesh"));
+    const json* f = p.get("file");
+    if (!f) fail(c, p.at("file"), "is required");
+    s.mesh = resolve_file(c, *f, p.at("file"));
+    s.mesh_unit = parse_unit(p, "unit");
+    p.finish();
+    if (!line) s.type = ModelSource::Type::Mesh;
+  }
+  if (seg) {
+    s.type = ModelSource::Type::Segmentation;
+    Obj p(c, *seg, o.at("segmentation"));
+    const json* f = p.get("file");
+    if (!f) fail(c, p.at("file"), "is required");
+    s.segmentation = resolve_file(c, *f, p.at("file"));
+    const Index label = p.index("label", 1, 1);
+    s.label = static_cast<std::int32_t>(label);
+    p.finish();
+  }
+  if (line) {
+    s.type = ModelSource::Type::Centerline;
+    Obj p(c, *line, o.at("centerline"));
+    const json* f = p.get("file");
+    if (!f) fail(c, p.at("file"), "is required");
+    s.centerline = resolve_file(c, *f, p.at("file"));
+    s.centerline_unit = parse_unit(p, "unit");
+    s.branch = p.index("branch", 0, 0);
+    s.radius_array = p.string("radius_array", s.radius_array);
+    if (const json* r = p.get("range_mm")) {
+      const std::string rp = p.at("range_mm");
+      if (!r->is_array() || r->size() != 2) fail(c, rp, "must be [start, end] in mm of arc length");
+      s.range_start = as_number(c, (*r)[0], rp + "[0]");
+      s.range_end = as_number(c, (*r)[1], rp + "[1]");
+      if (s.range_start < 0 || s.range_end <= s.range_start)
+        fail(c, rp, cat("needs 0 <= start < end (got ", s.range_start, ", ", s.range_end, ")"));
+    }
+    p.finish();
+  }
+  if (s.type == ModelSource::Type::Centerline && m.kind != ModelKind::Smrm)
+    fail(c, o.at("centerline"), cat("a centerline source makes an smrm model, not ", to_string(m.kind)));
+}
+
+void parse_parameters(const Ctx& c, const json& j, const std::string& path, SceneModel& m) {
+  Obj o(c, j, path);
+  switch (m.kind) {
+    case ModelKind::Hybrid: {
+      HybridSettings& h = m.hybrid;
+      h.surface_node.mass = o.positive("mass", h.surface_node.mass);
+      h.surface_node.beta = o.nonnegative("beta", h.surface_node.beta);
+      h.surface_node.return_k = o.nonnegative("k_r", h.surface_node.return_k);
+      h.atom_node.mass = o.positive("atom_mass", h.atom_node.mass);
+      h.atom_node.beta = o.nonnegative("atom_beta", h.atom_node.beta);
+      h.atom_node.return_k = o.nonnegative("atom_k_r", h.atom_node.return_k);
+      h.k_surf = o.positive("k_surf", h.k_surf);
+      h.k_spoke = o.positive("k_spoke", h.k_spoke);
+      h.k_cl = o.positive("k_cl", h.k_cl);
+      h.spokes_per_atom = o.index("spokes_per_atom", h.spokes_per_atom, 1);
+      if (const json* d = o.get("duffing")) h.duffing = parse_duffing(c, *d, o.at("duffing"), h.duffing);
+      if (const json* f = o.get("fixed")) h.fixed = parse_index_list(c, *f, o.at("fixed"));
+      break;
+    }
+    case ModelKind::Surface: {
+      SurfaceBodyParams& p = m.surface;
+      p.node.mass = o.positive("mass", p.node.mass);
+      p.node.beta = o.nonnegative("beta", p.node.beta);
+      p.node.return_k = o.nonnegative("k_r", p.node.return_k);
+      p.k = o.positive("k", p.k);
+      if (const json* d = o.get("duffing")) p.duffing = parse_duffing(c, *d, o.at("duffing"), p.duffing);
+      if (const json* f = o.get("fixed")) p.fixed = parse_index_list(c, *f, o.at("fixed"));
+      break;
+    }
+    case ModelKind::Smrm: {
+      SmrmSettings& s = m.smrm;
+      s.spokes = o.index("spokes", s.spokes, 3);
+      s.chain.mass = o.positive("mass", s.chain.mass);
+      s.chain.beta = o.nonnegative("beta", s.chain.beta);
+      s.chain.k = o.positive("k_cl", s.chain.k);
+      s.chain.kr = o.nonnegative("k_r", s.chain.kr);
+      s.chain.kb = o.nonnegative("k_b", s.chain.kb);
+      s.chain.fix_first = o.boolean("fix_first", s.chain.fix_first);
+      s.chain.fix_last = o.boolean("fix_last", s.chain.fix_last);
+      s.k_loc = o.positive("k_loc", s.k_loc);
+      if (const json* d = o.get("duffing"))
+        s.chain.duffing = parse_duffing(c, *d, o.at("duffing"), s.chain.duffing);
+      if (const json* f = o.get("frame_mode")) {
+        const std::string t = as_string(c, *f, o.at("frame_mode"));
+        s.frames.mode = with_path(c, o.at("frame_mode"), [&] { return parse_frame_mode(t); });
+      }
+      if (const json* f = o.get("frame_anchor")) {
+        const std::string t = as_string(c, *f, o.at("frame_anchor"));
+        s.frames.anchor = with_path(c, o.at("frame_anchor"), [&] { return parse_frame_anchor(t); });
+      }
+      break;
+    }
+  }
+  o.finish();
+}
+
+void parse_model(const Ctx& c, const json& j, SceneModel& m) {
+  Obj o(c, j, "model");
+  const json* kind = o.get("kind");
+  if (!kind) fail(c, "model.kind", "is required (surface, hybrid or smrm)");
+  const std::string k = as_string(c, *kind, "model.kind");
+  m.kind = with_path(c, "model.kind", [&] { return parse_model_kind(k); });
+  const json* source = o.get("source");
+  if (!source) fail(c, "model.source", "is required");
+  parse_source(c, *source, "model.source", m);
+  m.nonlinear = o.boolean("nonlinear", true);
+  m.surface_nodes = o.index("surface_nodes", 0, 0);
+  if (m.surface_nodes > 0 && m.surface_nodes < 20) fail(c, "model.surface_nodes", "must be 0 or >= 20");
+  if (m.surface_nodes > 0 && m.source.type != ModelSource::Type::Mesh &&
+      m.source.type != ModelSource::Type::Segmentation)
+    fail(c, "model.surface_nodes", "applies only to a mesh or segmentation source (balloon remeshing)");
+  m.atoms = o.index("atoms", 0, 0);
+  if (m.atoms > 0 && m.atoms < 3)
+    fail(c, "model.atoms", cat("must be 0 (default) or >= 3 (got ", m.atoms, ")"));
+  if (m.atoms > 0 && m.kind == ModelKind::Surface) fail(c, "model.atoms", "a surface model has no atoms");
+  if (const json* p = o.get("parameters")) parse_parameters(c, *p, "model.parameters", m);
+  o.finish();
+  if (m.atoms == 0 && m.kind == ModelKind::Hybrid) m.atoms = 42;
+  if (m.atoms == 0 && m.kind == ModelKind::Smrm) m.atoms = 40;
+  m.smrm.atoms = m.atoms > 0 ? m.atoms : m.smrm.atoms;
+  m.hybrid.nonlinear = m.nonlinear;
+  m.smrm.chain.nonlinear = m.nonlinear;
+  if (!m.nonlinear) m.surface.duffing.mode = DuffingMode::Linear;
+}
+
+SceneLoad parse_load(const Ctx& c, const json& j, const std::string& path) {
+  Obj o(c, j, path);
+  SceneLoad L;
+  L.where = path;
+  const json* node = o.get("node");
+  const json* point = o.get("point");
+  const json* ring = o.get("ring");
+  const json* spoke = o.get("spoke");
+  const int picks = (node != nullptr) + (point != nullptr) + (ring != nullptr || spoke != nullptr);
+  if (picks != 1) fail(c, path, "needs exactly one of node, point, or ring + spoke");
+  if (node) {
+    L.pick = SceneLoad::Pick::Node;
+    L.node = as_index(c, *node, o.at("node"));
+  } else if (point) {
+    L.pick = SceneLoad::Pick::Point;
+    L.point = as_vec3(c, *point, o.at("point"));
+  } else {
+    if (!ring || !spoke) fail(c, path, "ring and spoke go together");
+    L.pick = SceneLoad::Pick::RingSpoke;
+    L.ring = as_index(c, *ring, o.at("ring"));
+    L.spoke = as_index(c, *spoke, o.at("spoke"));
+  }
+  const json* dir = o.get("direction");
+  if (!dir) fail(c, o.at("direction"), "is required ([x, y, z], \"inward_normal\" or \"towards_atom\")");
+  if (dir->is_string()) {
+    const std::string d = dir->get<std::string>();
+    if (d == "inward_normal")
+      L.direction = SceneLoad::Direction::InwardNormal;
+    else if (d == "towards_atom")
+      L.direction = SceneLoad::Direction::TowardsAtom;
+    else
+      fail(c, o.at("direction"),
+           cat("unknown direction '", d, "' (expected [x, y, z], inward_normal or towards_atom)"));
+  } else {
+    L.direction = SceneLoad::Direction::Vector;
+    L.vector = as_vec3(c, *dir, o.at("direction"));
+    if (L.vector.norm() < 1e-12) fail(c, o.at("direction"), "must not be the zero vector");
+    L.vector.normalize();
+  }
+  if (o.has("atom") && L.direction != SceneLoad::Direction::TowardsAtom)
+    fail(c, o.at("atom"), "applies only with direction \"towards_atom\"");
+  L.target_atom = o.index("atom", -1, 0);
+  const json* mag = o.get("magnitude");
+  if (!mag) fail(c, o.at("magnitude"), "is required (N)");
+  L.magnitude = as_number(c, *mag, o.at("magnitude"));
+  if (L.magnitude < 0) fail(c, o.at("magnitude"), cat("must be >= 0 N (got ", L.magnitude, ")"));
+  L.t_on = o.nonnegative("t_on", 0.0);
+  L.t_ramp = o.nonnegative("t_ramp", 20.0);
+  if (const json* r = o.get("t_release"); r && !r->is_null()) {
+    L.t_release = as_number(c, *r, o.at("t_release"));
+    if (L.t_release < L.t_on)
+      fail(c, o.at("t_release"), cat("must be >= t_on (", L.t_release, " < ", L.t_on, ")"));
+  }
+  L.ramp_down = o.boolean("ramp_down", false);
+  o.finish();
+  return L;
+}
+
+void parse_integrator_block(const Ctx& c, const json& j, StepSettings& s) {
+  Obj o(c, j, "integrator");
+  if (const json* m = o.get("method")) {
+    const std::string t = as_string(c, *m, "integrator.method");
+    s.integrator = with_path(c, "integrator.method", [&] { return parse_integrator(t); });
+  }
+  s.dt = o.positive("dt", s.dt);
+  s.substep = o.boolean("substep", s.substep);
+  s.safety = o.positive("safety", s.safety);
+  if (s.safety > 1) fail(c, "integrator.safety", cat("must be in (0, 1] (got ", s.safety, ")"));
+  s.max_substeps = static_cast<int>(o.index("max_substeps", s.max_substeps, 1));
+  o.finish();
+}
+
+void parse_local(const Ctx& c, const json& j, Scene& scene) {
+  LocalOptions& L = scene.local;
+  if (j.is_boolean()) {
+    L.enabled = j.get<bool>();
+    return;
+  }
+  Obj o(c, j, "local");
+  L.enabled = o.boolean("enabled", true);
+  if (const json* m = o.get("stiffness")) {
+    const std::string t = as_string(c, *m, "local.stiffness");
+    if (t == "isotropic")
+      L.settings.solver.stiffness = LocalStiffness::Isotropic;
+    else if (t == "linearized")
+      L.settings.solver.stiffness = LocalStiffness::Linearized;
+    else if (t == "axis_projected")
+      L.settings.solver.stiffness = LocalStiffness::AxisProjected;
+    else if (t == "paper_literal")
+      L.settings.solver.stiffness = LocalStiffness::PaperLiteral;
+    else
+      fail(c, "local.stiffness",
+           cat("unknown value '", t, "' (expected isotropic, linearized, axis_projected or paper_literal)"));
+  }
+  if (o.has("k_loc")) {
+    L.settings.patch.k_loc = o.positive("k_loc", L.settings.patch.k_loc);
+    scene.local_k_from_body = false;
+  }
+  L.use_body_stiffness = scene.local_k_from_body;
+  L.settings.cache_local = o.boolean("cache", L.settings.cache_local);
+  L.guard = o.boolean("guard", L.guard);
+  L.settings.patch.count = o.index("patch_nodes", L.settings.patch.count, 2);
+  L.settings.patch.half_width = o.index("half_width", L.settings.patch.half_width, 1);
+  o.finish();
+}
+
+void parse_record(const Ctx& c, const json& j, Scene& scene) {
+  Obj o(c, j, "record");
+  SceneRecord& r = scene.record;
+  r.every = o.index("every", r.every, 1);
+  r.frames = o.boolean("frames", r.frames);
+  if (const json* n = o.get("nodes")) r.nodes = parse_index_list(c, *n, "record.nodes");
+  if (const json* a = o.get("atoms")) r.atoms = parse_index_list(c, *a, "record.atoms");
+  if (const json* k = o.get("key_times")) {
+    if (!k->is_array()) fail(c, "record.key_times", "must be an array of times (ms)");
+    for (std::size_t i = 0; i < k->size(); ++i) {
+      const std::string p = cat("record.key_times[", i, "]");
+      const double t = as_number(c, (*k)[i], p);
+      if (t < 0 || t > scene.duration)
+        fail(c, p, cat("must be within [0, duration = ", scene.duration, "] ms (got ", t, ")"));
+      r.key_times.push_back(t);
+    }
+  }
+  o.finish();
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const fs::path& base_dir, const std::string& origin) {
+  const Ctx c{origin, base_dir};
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    std::string what = e.what();
+    if (const auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
+    throw IoError(cat(origin, ": invalid JSON: ", what));
+  } catch (const json::exception& e) {  // e.g. number overflow (1e999)
+    std::string what = e.what();
+    if (const auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
+    throw InvalidInput(cat(origin, ": invalid JSON: ", what, " (numbers must be finite)"));
+  }
+  Scene s;
+  Obj o(c, j, "");
+  s.name = o.string("name", "");
+  s.description = o.string("description", "");
+  const json* model = o.get("model");
+  if (!model) fail(c, "model", "is required");
+  parse_model(c, *model, s.model);
+  if (const json* loads = o.get("loads")) {
+    if (!loads->is_array()) fail(c, "loads", "must be an array");
+    for (std::size_t k = 0; k < loads->size(); ++k)
+      s.loads.push_back(parse_load(c, (*loads)[k], cat("loads[", k, "]")));
+  }
+  if (const json* in = o.get("integrator")) parse_integrator_block(c, *in, s.step);
+  if (const json* d = o.get("duration")) {
+    s.duration = as_number(c, *d, "duration");
+    if (!(s.duration > 0)) fail(c, "duration", cat("must be > 0 ms (got ", s.duration, ")"));
+    if (s.duration / s.step.dt > 1e8) fail(c, "duration", "is more than 1e8 updates");
+  }
+  if (const json* l = o.get("local")) parse_local(c, *l, s);
+  if (const json* r = o.get("record")) parse_record(c, *r, s);
+  o.finish();
+  s.file = origin;
+  if (s.name.empty()) s.name = fs::path(origin).stem().string();
+  if (s.model.kind == ModelKind::Hybrid || s.model.kind == ModelKind::Smrm) {
+    const Index na = s.model.atoms;
+    for (std::size_t k = 0; k < s.record.atoms.size(); ++k)
+      if (s.record.atoms[k] >= na)
+        fail(c, cat("record.atoms[", k, "]"),
+             cat("index ", s.record.atoms[k], " out of range [0, ", na, ")"));
+    for (const SceneLoad& L : s.loads)
+      if (L.target_atom >= na)
+        fail(c, L.where + ".atom", cat("index ", L.target_atom, " out of range [0, ", na, ")"));
+  } else if (!s.record.atoms.empty()) {
+    fail(c, "record.atoms", "a surface model has no atoms");
+  }
+  return s;
+}
+
+Scene load_scene(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw IoError(cat(file.string(), ": cannot read the scene file (missing or unreadable)"));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  fs::path base = file.parent_path();
+  if (base.empty()) base = ".";
+  return parse_scene(ss.str(), fs::absolute(base).lexically_normal(), file.string());
+}
+
+namespace {
+
+json vec_json(const Vec3& v) {
+  return json::array({v.x(), v.y(), v.z()});
+}
+
+json duffing_json(const DuffingSettings& d) {
+  return {{"mode", to_string(d.mode)}, {"eta", d.eta}, {"length", d.length}, {"soft", d.soft}};
+}
+
+const char* stiffness_name(LocalStiffness s) {
+  switch (s) {
+    case LocalStiffness::Isotropic:
+      return "isotropic";
+    case LocalStiffness::Linearized:
+      return "linearized";
+    case LocalStiffness::AxisProjected:
+      return "axis_projected";
+    case LocalStiffness::PaperLiteral:
+      return "paper_literal";
+  }
+  return "?";
+}
+
+}  // namespace
+
+std::string scene_to_json(const Scene& s) {
+  const ModelSource& src = s.model.source;
+  json source;
+  switch (src.type) {
+    case ModelSource::Type::Phantom: {
+      json p = {{"name", src.phantom}};
+      if (src.phantom == "tube")
+        p.update(
+            {{"rings", src.rings}, {"spokes", src.spokes}, {"spacing", src.spacing}, {"radius", src.radius}});
+      if (src.phantom == "vessel")
+        p.update({{"path", to_string(src.path)}, {"cross_section", to_string(src.cross_section)}});
+      source["phantom"] = p;
+      break;
+    }
+    case ModelSource::Type::Mesh:
+      break;
+    case ModelSource::Type::Segmentation:
+      source["segmentation"] = {{"file", src.segmentation.string()}, {"label", src.label}};
+      break;
+    case ModelSource::Type::Centerline: {
+      json cl = {{"file", src.centerline.string()},
+                 {"unit", to_string(src.centerline_unit)},
+                 {"branch", src.branch},
+                 {"radius_array", src.radius_array}};
+      if (src.range_start > 0 || std::isfinite(src.range_end))
+        cl["range_mm"] = {src.range_start,
+                          std::isfinite(src.range_end) ? json(src.range_end) : json(nullptr)};
+      source["centerline"] = cl;
+      break;
+    }
+  }
+  if (!src.mesh.empty()) source["mesh"] = {{"file", src.mesh.string()}, {"unit", to_string(src.mesh_unit)}};
+
+  json params;
+  const SceneModel& m = s.model;
+  if (m.kind == ModelKind::Hybrid) {
+    const HybridSettings& h = m.hybrid;
+    params = {{"mass", h.surface_node.mass},
+              {"beta", h.surface_node.beta},
+              {"k_r", h.surface_node.return_k},
+              {"atom_mass", h.atom_node.mass},
+              {"atom_beta", h.atom_node.beta},
+              {"atom_k_r", h.atom_node.return_k},
+              {"k_surf", h.k_surf},
+              {"k_spoke", h.k_spoke},
+              {"k_cl", h.k_cl},
+              {"spokes_per_atom", h.spokes_per_atom},
+              {"duffing", duffing_json(h.duffing)},
+              {"fixed", h.fixed}};
+  } else if (m.kind == ModelKind::Surface) {
+    const SurfaceBodyParams& p = m.surface;
+    params = {{"mass", p.node.mass},
+              {"beta", p.node.beta},
+              {"k_r", p.node.return_k},
+              {"k", p.k},
+              {"duffing", duffing_json(p.duffing)},
+              {"fixed", p.fixed}};
+  } else {
+    const SmrmSettings& q = m.smrm;
+    params = {{"spokes", q.spokes},
+              {"mass", q.chain.mass},
+              {"beta", q.chain.beta},
+              {"k_cl", q.chain.k},
+              {"k_r", q.chain.kr},
+              {"k_b", q.chain.kb},
+              {"fix_first", q.chain.fix_first},
+              {"fix_last", q.chain.fix_last},
+              {"k_loc", q.k_loc},
+              {"duffing", duffing_json(q.chain.duffing)},
+              {"frame_mode", to_string(q.frames.mode)},
+              {"frame_anchor", to_string(q.frames.anchor)}};
+  }
+  json model = {{"kind", to_string(m.kind)},
+                {"source", source},
+                {"nonlinear", m.nonlinear},
+                {"surface_nodes", m.surface_nodes},
+                {"parameters", params}};
+  if (m.kind != ModelKind::Surface) model["atoms"] = m.atoms;
+
+  json loads = json::array();
+  for (const SceneLoad& L : s.loads) {
+    json l;
+    if (L.pick == SceneLoad::Pick::Node) l["node"] = L.node;
+    if (L.pick == SceneLoad::Pick::Point) l["point"] = vec_json(L.point);
+    if (L.pick == SceneLoad::Pick::RingSpoke) l.update({{"ring", L.ring}, {"spoke", L.spoke}});
+    if (L.direction == SceneLoad::Direction::Vector) l["direction"] = vec_json(L.vector);
+    if (L.direction == SceneLoad::Direction::InwardNormal) l["direction"] = "inward_normal";
+    if (L.direction == SceneLoad::Direction::TowardsAtom) {
+      l["direction"] = "towards_atom";
+      if (L.target_atom >= 0) l["atom"] = L.target_atom;
+    }
+    l.update({{"magnitude", L.magnitude},
+              {"t_on", L.t_on},
+              {"t_ramp", L.t_ramp},
+              {"t_release", std::isfinite(L.t_release) ? json(L.t_release) : json(nullptr)},
+              {"ramp_down", L.ramp_down}});
+    loads.push_back(l);
+  }
+  json local = {{"enabled", s.local.enabled},
+                {"stiffness", stiffness_name(s.local.settings.solver.stiffness)},
+                {"cache", s.local.settings.cache_local},
+                {"guard", s.local.guard},
+                {"patch_nodes", s.local.settings.patch.count},
+                {"half_width", s.local.settings.patch.half_width}};
+  if (!s.local_k_from_body) local["k_loc"] = s.local.settings.patch.k_loc;
+  json j = {{"name", s.name},
+            {"description", s.description},
+            {"model", model},
+            {"loads", loads},
+            {"integrator",
+             {{"method", to_string(s.step.integrator)},
+              {"dt", s.step.dt},
+              {"substep", s.step.substep},
+              {"safety", s.step.safety},
+              {"max_substeps", s.step.max_substeps}}},
+            {"duration", s.duration},
+            {"local", local},
+            {"record",
+             {{"every", s.record.every},
+              {"frames", s.record.frames},
+              {"key_times", s.record.key_times},
+              {"nodes", s.record.nodes},
+              {"atoms", s.record.atoms}}}};
+  return j.dump(2);
+}
+
+}  // namespace medspring

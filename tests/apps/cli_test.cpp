@@ -1,0 +1,229 @@
+// The medspring command end to end: `run` writes a ParaView series, bad scenes fail with one line naming
+// the JSON path and write nothing, output folders are written safely, `paper --quick` makes the report.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "test_support.hpp"
+
+namespace medspring {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int rc = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string quote(const std::string& s) {
+  return "'" + s + "'";
+}
+
+/// Runs `medspring ARGS` with stdout and stderr captured (stderr is not a terminal: plain progress lines).
+Result medspring(const std::string& args) {
+  static int n = 0;
+  const fs::path dir = testing::temp_dir("cli-io-" + std::to_string(n++));
+  const std::string cmd = quote(MEDSPRING_EXE) + " " + args + " > " + quote((dir / "out").string()) + " 2> " +
+                          quote((dir / "err").string());
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(dir / "out");
+  r.err = slurp(dir / "err");
+  return r;
+}
+
+void write(const fs::path& p, const std::string& text) {
+  std::ofstream(p) << text;
+}
+
+int count_lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+/// A short phantom scene: the kidney pressed for 30 ms, released, run to 50 ms.
+const char* kSmallScene = R"({
+  "model": {"kind": "hybrid", "source": {"phantom": "kidney"}},
+  "loads": [{"node": 223, "direction": "towards_atom", "atom": 21, "magnitude": 0.5, "t_ramp": 10, "t_release": 30}],
+  "duration": 50,
+  "record": {"every": 10, "atoms": [21]}
+})";
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto p = text.find(from);
+  EXPECT_NE(p, std::string::npos) << from;
+  return text.replace(p, from.size(), to);
+}
+
+TEST(CliRun, SmallPhantomSceneWritesAParaViewSeriesTracesAndSummary) {
+  const fs::path dir = testing::temp_dir("cli-run");
+  write(dir / "small.json", kSmallScene);
+  const fs::path out = dir / "result";
+  const Result r =
+      medspring("run " + quote((dir / "small.json").string()) + " --out " + quote(out.string()) + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(r.out);
+  EXPECT_EQ(s["updates"], 100);
+  EXPECT_EQ(s["frames"], 11);  // rest + every 10 updates
+  EXPECT_TRUE(fs::exists(out / "small.pvd"));
+  EXPECT_TRUE(fs::exists(out / "small_atoms.pvd"));
+  int vtp = 0;
+  for (const auto& e : fs::directory_iterator(out / "frames")) vtp += e.path().extension() == ".vtp";
+  EXPECT_EQ(vtp, 22);  // surface + atoms per frame
+  const std::string pvd = slurp(out / "small.pvd");
+  EXPECT_NE(pvd.find("frames/small_00010.vtp"), std::string::npos);
+  const std::string vtp0 = slurp(out / "frames" / "small_00005.vtp");
+  for (const char* array : {"displacement", "displacement_magnitude", "local_displacement", "Normals"})
+    EXPECT_NE(vtp0.find(std::string("Name=\"") + array + "\""), std::string::npos) << array;
+  EXPECT_EQ(count_lines(slurp(out / "trace.csv")), 102);  // header + rest + 100 updates
+  EXPECT_TRUE(fs::exists(out / "scene.json"));
+  EXPECT_GT(s["contact_peak_mm"].get<double>(), 0.5);
+  // no temporary folder is left beside the output
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".result.tmp"), std::string::npos);
+}
+
+struct BadScene {
+  std::string name, text, expected;
+};
+
+TEST(CliRun, BadScenesFailWithOneLineNamingTheJsonPathAndWriteNothing) {
+  const fs::path dir = testing::temp_dir("cli-bad");
+  // a 20 mm object whose coordinates are in metres (0.02), declared as millimetres
+  write(dir / "tiny.obj",
+        "v 0 0 0\nv 0.02 0 0\nv 0 0.02 0\nv 0 0 0.02\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  const std::vector<BadScene> cases = {
+      {"missing_file",
+       replaced(kSmallScene, "\"phantom\": \"kidney\"", R"("mesh": {"file": "nope.obj", "unit": "mm"})"),
+       "model.source.mesh.file: file not found"},
+      {"wrong_unit",
+       replaced(kSmallScene, "\"phantom\": \"kidney\"", R"("mesh": {"file": "tiny.obj", "unit": "mm"})"),
+       "model.source.mesh.unit: the mesh tiny.obj is 0.0"},
+      {"unknown_key", replaced(kSmallScene, "\"every\"", "\"evry\""), "record.evry: unknown key"},
+      {"node_out_of_range", replaced(kSmallScene, "\"node\": 223", "\"node\": 458"),
+       "loads[0].node: index 458 out of range [0, 458)"},
+      {"negative_duration", replaced(kSmallScene, "\"duration\": 50", "\"duration\": -50"),
+       "duration: must be > 0 ms (got -50)"},
+      {"dt_above_stable_bound",
+       replaced(kSmallScene, "\"duration\": 50",
+                R"("duration": 50, "integrator": {"dt": 1.5, "substep": false})"),
+       "integrator.dt: 1.5 ms is above the stable step"},
+  };
+  for (const auto& c : cases) {
+    const fs::path scene = dir / (c.name + ".json");
+    write(scene, c.text);
+    const fs::path out = dir / ("out_" + c.name);
+    const Result r = medspring("run " + quote(scene.string()) + " --out " + quote(out.string()));
+    EXPECT_NE(r.rc, 0) << c.name;
+    EXPECT_EQ(count_lines(r.err), 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(scene.string() + ": " + c.expected), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+  int left = 0;  // nothing but the inputs: no output or temporary folders
+  for (const auto& e : fs::directory_iterator(dir)) left += e.is_directory();
+  EXPECT_EQ(left, 0);
+  const Result missing =
+      medspring("run " + quote((dir / "absent.json").string()) + " --out " + quote((dir / "o").string()));
+  EXPECT_NE(missing.rc, 0);
+  EXPECT_NE(missing.err.find("absent.json: cannot read the scene file"), std::string::npos) << missing.err;
+  EXPECT_NE(medspring("run --out x").rc, 0);
+  EXPECT_NE(medspring("run a.json b.json --out x").rc, 0);
+}
+
+TEST(CliRun, NonEmptyOutputFolderIsRefusedWithoutForceAndReplacedWithIt) {
+  const fs::path dir = testing::temp_dir("cli-force");
+  write(dir / "small.json", kSmallScene);
+  const fs::path out = dir / "result";
+  fs::create_directories(out);
+  write(out / "keep.txt", "old\n");
+  const std::string args = "run " + quote((dir / "small.json").string()) + " --out " + quote(out.string());
+  const Result refused = medspring(args);
+  EXPECT_NE(refused.rc, 0);
+  EXPECT_NE(refused.err.find("not empty (use --force"), std::string::npos) << refused.err;
+  EXPECT_TRUE(fs::exists(out / "keep.txt"));
+  EXPECT_FALSE(fs::exists(out / "small.pvd"));
+  const Result forced = medspring(args + " --force --quiet");
+  ASSERT_EQ(forced.rc, 0) << forced.err;
+  EXPECT_EQ(forced.err, "");  // --quiet: no progress
+  EXPECT_FALSE(fs::exists(out / "keep.txt"));
+  EXPECT_TRUE(fs::exists(out / "small.pvd"));
+  // an empty folder is not refused
+  fs::create_directories(dir / "empty");
+  EXPECT_EQ(medspring("run " + quote((dir / "small.json").string()) + " --quiet --out " +
+                      quote((dir / "empty").string()))
+                .rc,
+            0);
+}
+
+TEST(CliHelp, RunAndPaperAreListedAndHaveHelp) {
+  const Result top = medspring("--help");
+  EXPECT_EQ(top.rc, 0);
+  EXPECT_NE(top.out.find("\n  paper "), std::string::npos);  // scripts/main.sh switches on this line
+  EXPECT_NE(top.out.find("\n  run "), std::string::npos);
+  for (const char* cmd : {"run", "paper"}) {
+    const Result r = medspring(std::string(cmd) + " --help");
+    EXPECT_EQ(r.rc, 0) << cmd;
+    EXPECT_NE(r.out.find(std::string("usage: medspring ") + cmd), std::string::npos) << cmd;
+  }
+  EXPECT_NE(medspring("paper --out x --bogus").rc, 0);
+  EXPECT_NE(medspring("paper").rc, 0);
+}
+
+TEST(CliBench, TableCasesAreReportedByBench) {
+  const Result r = medspring("bench --quick --json --samples 20 --filter table_smrm_1200_nonlinear");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  std::vector<std::string> names;
+  for (const auto& c : j["results"]) names.push_back(c["name"]);
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"table_smrm_1200_nonlinear", "table_smrm_1200_nonlinear_local_no_cache",
+                                      "table_smrm_1200_nonlinear_local_cache"}));
+}
+
+TEST(CliPaper, QuickRunMakesTheReportFiguresAndTablesOnThePhantoms) {
+  const fs::path dir = testing::temp_dir("cli-paper");
+  const fs::path out = dir / "paper";
+  const Result r = medspring("paper --quick --out " + quote(out.string()));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string report = slurp(out / "report.md");
+  for (const char* part : {"## Fig. 9", "## Fig. 10", "**Table I**", "**Table II**", "## Parameters used"})
+    EXPECT_NE(report.find(part), std::string::npos) << part;
+  for (const char* png : {"fig9_A", "fig9_B", "fig9_C", "fig9_D", "fig10_A", "fig10_B", "fig10_C", "fig10_D",
+                          "fig10_E", "fig10_F", "fig9_displacement", "fig10_displacement",
+                          "force_displacement", "vessel_profile", "timing"}) {
+    const fs::path p = out / "figures" / (std::string(png) + ".png");
+    ASSERT_TRUE(fs::exists(p)) << p;
+    EXPECT_GT(fs::file_size(p), 10000u) << p;
+    EXPECT_NE(report.find(std::string("figures/") + png + ".png"), std::string::npos) << png;
+  }
+  const nlohmann::json t = nlohmann::json::parse(slurp(out / "tables.json"));
+  EXPECT_GT(t["table1"]["smrm"]["nonlinear"]["measured_median_ms"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(t["table1"]["mass_spring"]["linear"]["paper_ms"].get<double>(), 18.0);
+  EXPECT_DOUBLE_EQ(t["table2"]["smrm"]["with_local"]["paper_ms"].get<double>(), 27.0);
+  EXPECT_EQ(t["scenes"].size(), 12u);
+  EXPECT_TRUE(
+      fs::exists(out / "scenes" / "phantom" / "kidney_1.0N_nonlinear" / "phantom_kidney_1.0N_nonlinear.pvd"));
+  // a second run into the same folder is refused without --force and leaves the report as it was
+  const Result again = medspring("paper --quick --out " + quote(out.string()));
+  EXPECT_NE(again.rc, 0);
+  EXPECT_NE(again.err.find("not empty (use --force"), std::string::npos) << again.err;
+  EXPECT_EQ(slurp(out / "report.md"), report);
+}
+
+}  // namespace
+}  // namespace medspring

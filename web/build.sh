@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Compiles the Eigen-only engine layers (core geometry physics local medial models sim) and the embind
+# bindings (web/src/bindings.cpp) to WebAssembly with Debian's emscripten: web/dist/medspring.mjs
+# (ES module, wasm embedded: -sSINGLE_FILE, so node and the browser load it without fetch).
+# Usage: bash web/build.sh [BUILD_DIR]   (objects in BUILD_DIR, default build-wasm; incremental)
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(dirname "$here")"
+build="${1:-$root/build-wasm}"
+export NODE_PATH="${NODE_PATH:-/usr/share/nodejs}"  # em++ needs acorn (TOOLCHAIN.md)
+command -v em++ >/dev/null || { echo "web/build.sh: em++ not found (apt-get install emscripten)" >&2; exit 1; }
+mkdir -p "$build/obj" "$here/dist"
+flags=(-std=c++20 -O3 -DNDEBUG -fexceptions -I"$root/include" -I/usr/include/eigen3 -DEIGEN_MPL2_ONLY)
+objs=()
+jobs=0
+for layer in core geometry physics local medial models sim; do
+  for src in "$root"/src/$layer/*.cpp; do
+    obj="$build/obj/$layer-$(basename "${src%.cpp}").o"
+    objs+=("$obj")
+    if [[ ! -f "$obj" || "$src" -nt "$obj" || -n "$(find "$root/include" -newer "$obj" -name '*.hpp' -print -quit)" ]]; then
+      em++ "${flags[@]}" -c "$src" -o "$obj" &
+      jobs=$((jobs + 1))
+      if (( jobs >= ${WASM_JOBS:-2} )); then wait -n; jobs=$((jobs - 1)); fi
+    fi
+  done
+done
+wait
+em++ "${flags[@]}" -c "$here/src/bindings.cpp" -o "$build/obj/bindings.o"
+em++ -O3 "${objs[@]}" "$build/obj/bindings.o" -lembind -o "$here/dist/medspring.mjs" \
+  -sMODULARIZE=1 -sEXPORT_ES6=1 -sEXPORT_NAME=createMedSpring -sALLOW_MEMORY_GROWTH=1 -sSINGLE_FILE=1 \
+  -sENVIRONMENT=web,node -fexceptions
+echo "web/build.sh: wrote $here/dist/medspring.mjs"
