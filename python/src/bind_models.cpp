@@ -7,6 +7,7 @@
 #include "medspring/medial/vessel_phantoms.hpp"
 #include "medspring/models/body.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/model_package.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 
@@ -449,6 +450,24 @@ void bind_models(py::module_& m) {
       },
       "vessel"_a, "settings"_a = VesselExperimentSettings{},
       "Runs the four cases of §7.2 (light / strong force, linear / nonlinear chain); GIL released.");
+
+  // ---- Model packages ----
+  m.def(
+      "save_model_package",
+      [](const std::string& path, const Body& body, const std::string& name, const std::string& description) {
+        save_model_package(path, package_of(body, name, description));
+      },
+      "path"_a, "body"_a, "name"_a = "", "description"_a = "",
+      "Writes the body as a model package (.msm, docs/model_packages.md), atomically: what the engine needs to rebuild "
+      "it exactly (the browser page loads these).");
+  m.def(
+      "load_model_package",
+      [](const std::string& path) {
+        return std::const_pointer_cast<Body>(make_body(read_model_package(path)));
+      },
+      "path"_a,
+      "Rebuilds the body saved in a model package. Raises IoError (truncated, corrupted, other version) or "
+      "InvalidInput (invalid contents), naming the file.");
 }
 
 }  // namespace medspring::python

@@ -1,6 +1,7 @@
 // Sim layer: Simulation, the main user API (loads on surface nodes -> step -> surface map -> local
 // overlay -> normals). update / advance release the GIL. Positions and velocities are zero-copy views.
 #include "bind_common.hpp"
+#include "medspring/sim/checkpoint.hpp"
 #include "medspring/sim/simulation.hpp"
 
 namespace medspring::python {
@@ -20,8 +21,12 @@ void keep_state_buffers(Simulation& sim, Fn&& fn) {
     return std::array<MatX3*, 3>{&s.x, &s.v, &s.f_ext};
   };
   {
+    // set the viewed buffers aside and leave equal copies in the state, which `fn` may read
     auto f = fields();
-    for (int i = 0; i < 3; ++i) saved[i].swap(*f[i]);
+    for (int i = 0; i < 3; ++i) {
+      saved[i].swap(*f[i]);
+      *f[i] = saved[i];
+    }
   }
   auto restore = [&]() {
     auto f = fields();
@@ -174,6 +179,21 @@ void bind_sim(py::module_& m) {
           "state"_a,
           "Replaces the state (e.g. a checkpoint from state.copy()); sizes must match the model. Existing "
           "views stay valid.")
+      .def(
+          "save_checkpoint", [](const Simulation& s, const std::string& path) { save_checkpoint(path, s); },
+          "path"_a,
+          "Writes a checkpoint (state, loads, step settings; versioned and checksummed) atomically: a "
+          "temporary "
+          "file renamed over `path` (docs/reliability.md).")
+      .def(
+          "restore_checkpoint",
+          [](Simulation& s, const std::string& path) {
+            keep_state_buffers(s, [&] { restore_checkpoint(path, s); });
+          },
+          "path"_a,
+          "Resumes from a checkpoint of the same model: the next update gives the same bits as in the saved "
+          "run. Raises IoError (truncated, corrupted, other version) or InvalidInput (another model); the "
+          "simulation is unchanged then. Existing views stay valid.")
       .def("__repr__", [](const Simulation& s) {
         return cat("<medspring.Simulation ", s.body().kind(), " body, ", s.model().num_nodes(),
                    " nodes, t = ", s.time(), " ms>");

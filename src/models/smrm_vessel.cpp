@@ -102,6 +102,8 @@ SmrmVessel::SmrmVessel(SmrmParts parts, const SmrmSettings& settings)
           n);
   require(binding_.offset.rows() == m, w, ": binding has ", binding_.offset.rows(), " offsets for ", m,
           " nodes");
+  require(!binding_.generic() || static_cast<Index>(binding_.lambda.size()) == m, w, ": binding has ",
+          binding_.lambda.size(), " bracket parameters for ", m, " nodes");
   for (Index k = 0; k < m; ++k) {
     const Index a = binding_.atom[static_cast<std::size_t>(k)];
     require_index(a, binding_.generic() ? n - 1 : n, cat(w, ": node ", k, ": atom"));

@@ -6,7 +6,7 @@ namespace medspring {
 
 SurfaceBody::SurfaceBody(const SurfaceMesh& mesh, const SurfaceBodyParams& params, std::string name,
                          GridLayout grid)
-    : model_(make_surface_model(mesh, params, name)), F_(mesh.F), grid_(grid), k_(params.k) {
+    : model_(make_surface_model(mesh, params, name)), F_(mesh.F), grid_(grid), params_(params), k_(params.k) {
   if (grid_.valid())
     require(grid_.rings * grid_.spokes == mesh.num_vertices(), name, ": grid ", grid_.rings, " x ",
             grid_.spokes, " does not match ", mesh.num_vertices(), " nodes");

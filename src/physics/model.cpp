@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/geometry/topology.hpp"
 #include "medspring/physics/stability.hpp"
@@ -225,6 +226,51 @@ State make_state(const Model& m) {
   s.spring_b.setZero(ns);
   s.spring_n.setZero(ns, 3);
   return s;
+}
+
+namespace {
+
+template <class T>
+std::uint64_t hash_vector(const std::vector<T>& v, std::uint64_t h) {
+  const std::uint64_t n = v.size();
+  h = fnv1a64(&n, sizeof n, h);
+  return v.empty() ? h : fnv1a64(v.data(), v.size() * sizeof(T), h);
+}
+template <class Derived>
+std::uint64_t hash_dense(const Eigen::DenseBase<Derived>& m, std::uint64_t h) {
+  const std::uint64_t n = static_cast<std::uint64_t>(m.size());
+  h = fnv1a64(&n, sizeof n, h);
+  for (Index r = 0; r < m.rows(); ++r)
+    for (Index c = 0; c < m.cols(); ++c) {
+      const auto v = m.derived()(r, c);
+      h = fnv1a64(&v, sizeof v, h);
+    }
+  return h;
+}
+
+}  // namespace
+
+std::uint64_t model_fingerprint(const Model& m) {
+  std::uint64_t h = fnv1a64("medspring-model-v1", 18);
+  const std::uint64_t n = static_cast<std::uint64_t>(m.num_nodes());
+  h = fnv1a64(&n, sizeof n, h);
+  h = hash_dense(m.x0, h);
+  h = hash_dense(m.mass, h);
+  h = hash_dense(m.damping, h);
+  h = hash_dense(m.kr, h);
+  h = hash_vector(m.fixed, h);
+  const Springs& S = m.springs;
+  h = hash_vector(S.i, h);
+  h = hash_vector(S.j, h);
+  h = hash_vector(S.L0, h);
+  h = hash_vector(S.k, h);
+  h = hash_vector(S.kp, h);
+  const BendingTerms& B = m.bending;
+  h = hash_vector(B.a, h);
+  h = hash_vector(B.b, h);
+  h = hash_vector(B.c, h);
+  h = hash_dense(B.kb, h);
+  return h;
 }
 
 }  // namespace medspring

@@ -1,139 +1,18 @@
 #include "medspring/sim/checkpoint.hpp"
 
-#include <atomic>
 #include <cmath>
-#include <cstring>
-#include <fstream>
-#include <iterator>
 #include <limits>
-#include <random>
-#include <system_error>
 
+#include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
 
 namespace medspring {
 
 namespace {
 
-constexpr std::size_t kHeaderSize = 8 + 4 + 4 + 8 + 8;  // magic, version, flags, payload size, checksum
-constexpr std::size_t kMaxName = 4096;                  // bytes of a stored name
-
-// Little-endian encoding of fixed-size values, independent of the host byte order.
-class Writer {
- public:
-  void u8(std::uint8_t v) { out_.push_back(static_cast<char>(v)); }
-  void u32(std::uint32_t v) {
-    for (int b = 0; b < 4; ++b) u8(static_cast<std::uint8_t>(v >> (8 * b)));
-  }
-  void u64(std::uint64_t v) {
-    for (int b = 0; b < 8; ++b) u8(static_cast<std::uint8_t>(v >> (8 * b)));
-  }
-  void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
-  void f64(double v) {
-    std::uint64_t u;
-    std::memcpy(&u, &v, sizeof u);
-    u64(u);
-  }
-  void str(const std::string& s) {
-    u32(static_cast<std::uint32_t>(s.size()));
-    out_ += s;
-  }
-  void doubles(const double* p, Index n) {
-    for (Index k = 0; k < n; ++k) f64(p[k]);
-  }
-  std::string& bytes() { return out_; }
-
- private:
-  std::string out_;
-};
-
-class Reader {
- public:
-  Reader(std::string_view bytes, const std::string& what) : b_(bytes), what_(what) {}
-  std::uint8_t u8() {
-    need(1);
-    return static_cast<std::uint8_t>(b_[pos_++]);
-  }
-  std::uint32_t u32() {
-    need(4);
-    std::uint32_t v = 0;
-    for (int b = 0; b < 4; ++b) v |= std::uint32_t{static_cast<std::uint8_t>(b_[pos_++])} << (8 * b);
-    return v;
-  }
-  std::uint64_t u64() {
-    need(8);
-    std::uint64_t v = 0;
-    for (int b = 0; b < 8; ++b) v |= std::uint64_t{static_cast<std::uint8_t>(b_[pos_++])} << (8 * b);
-    return v;
-  }
-  std::int32_t i32() { return static_cast<std::int32_t>(u32()); }
-  double f64() {
-    const std::uint64_t u = u64();
-    double v;
-    std::memcpy(&v, &u, sizeof v);
-    return v;
-  }
-  bool flag(const char* field) {
-    const std::uint8_t v = u8();
-    if (v > 1) fail(cat(field, ": expected 0 or 1 (got ", int{v}, ")"));
-    return v == 1;
-  }
-  std::string str(const char* field) {
-    const std::uint32_t n = u32();
-    if (n > kMaxName) fail(cat(field, ": length ", n, " exceeds ", kMaxName));
-    need(n);
-    std::string s(b_.substr(pos_, n));
-    pos_ += n;
-    return s;
-  }
-  /// A count of items of `item_bytes` each that must fit in the remaining bytes.
-  Index count(const char* field, std::size_t item_bytes) {
-    const std::uint64_t n = u64();
-    if (n > static_cast<std::uint64_t>(std::numeric_limits<Index>::max()) || n * item_bytes > left())
-      fail(cat(field, ": count ", n, " does not fit in the remaining ", left(), " bytes"));
-    return static_cast<Index>(n);
-  }
-  void doubles(double* p, Index n) {
-    for (Index k = 0; k < n; ++k) p[k] = f64();
-  }
-  std::size_t left() const { return b_.size() - pos_; }
-  [[noreturn]] void fail(const std::string& msg) const {
-    throw IoError(cat(what_, ": malformed checkpoint: ", msg, " (at payload byte ", pos_, ")"));
-  }
-
- private:
-  void need(std::size_t n) const {
-    if (left() < n) fail(cat("needs ", n, " more bytes, ", left(), " left"));
-  }
-  std::string_view b_;
-  const std::string& what_;
-  std::size_t pos_ = 0;
-};
-
-template <class T>
-std::uint64_t hash_vector(const std::vector<T>& v, std::uint64_t h) {
-  const std::uint64_t n = v.size();
-  h = fnv1a64(&n, sizeof n, h);
-  return v.empty() ? h : fnv1a64(v.data(), v.size() * sizeof(T), h);
-}
-template <class Derived>
-std::uint64_t hash_dense(const Eigen::DenseBase<Derived>& m, std::uint64_t h) {
-  const std::uint64_t n = static_cast<std::uint64_t>(m.size());
-  h = fnv1a64(&n, sizeof n, h);
-  for (Index r = 0; r < m.rows(); ++r)
-    for (Index c = 0; c < m.cols(); ++c) {
-      const auto v = m.derived()(r, c);
-      h = fnv1a64(&v, sizeof v, h);
-    }
-  return h;
-}
-
-std::string hex(std::uint64_t v) {
-  static const char* digits = "0123456789abcdef";
-  std::string s = "0x";
-  for (int b = 15; b >= 0; --b) s += digits[(v >> (4 * b)) & 0xF];
-  return s;
-}
+constexpr std::size_t kMaxName = 4096;  // bytes of a stored name
+const std::string kKind = "checkpoint";
+constexpr std::size_t kMaxExtra = std::size_t{1} << 30;  // application section, bytes
 
 void require_finite_matrix(const MatX3& P, const std::string& what, const char* field) {
   const Index r = first_nonfinite_row(P);
@@ -141,38 +20,6 @@ void require_finite_matrix(const MatX3& P, const std::string& what, const char* 
 }
 
 }  // namespace
-
-std::uint64_t fnv1a64(const void* data, std::size_t n, std::uint64_t h) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t k = 0; k < n; ++k) {
-    h ^= p[k];
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
-std::uint64_t model_fingerprint(const Model& m) {
-  std::uint64_t h = fnv1a64("medspring-model-v1", 18);
-  const std::uint64_t n = static_cast<std::uint64_t>(m.num_nodes());
-  h = fnv1a64(&n, sizeof n, h);
-  h = hash_dense(m.x0, h);
-  h = hash_dense(m.mass, h);
-  h = hash_dense(m.damping, h);
-  h = hash_dense(m.kr, h);
-  h = hash_vector(m.fixed, h);
-  const Springs& S = m.springs;
-  h = hash_vector(S.i, h);
-  h = hash_vector(S.j, h);
-  h = hash_vector(S.L0, h);
-  h = hash_vector(S.k, h);
-  h = hash_vector(S.kp, h);
-  const BendingTerms& B = m.bending;
-  h = hash_vector(B.a, h);
-  h = hash_vector(B.b, h);
-  h = hash_vector(B.c, h);
-  h = hash_dense(B.kb, h);
-  return h;
-}
 
 Checkpoint make_checkpoint(const Simulation& sim) {
   Checkpoint c;
@@ -186,10 +33,10 @@ Checkpoint make_checkpoint(const Simulation& sim) {
 }
 
 std::string encode_checkpoint(const Checkpoint& c) {
-  Writer p;  // payload
+  ByteWriter p;  // payload
   p.u64(c.fingerprint);
-  p.str(c.model_name.substr(0, kMaxName));
-  p.str(c.body_kind.substr(0, kMaxName));
+  p.str(c.model_name, kMaxName);
+  p.str(c.body_kind, kMaxName);
   const StepSettings& s = c.step;
   p.f64(s.dt);
   p.u8(s.integrator == Integrator::ImplicitEuler ? 1 : 0);
@@ -230,44 +77,15 @@ std::string encode_checkpoint(const Checkpoint& c) {
     p.f64(L.t_release);
     p.u8(L.ramp_down ? 1 : 0);
   }
-  const std::string& payload = p.bytes();
-
-  Writer out;
-  for (int k = 0; k < 8; ++k) out.u8(static_cast<std::uint8_t>(kCheckpointMagic[k]));
-  out.u32(kCheckpointVersion);
-  out.u32(0);  // flags (reserved)
-  out.u64(payload.size());
-  out.u64(fnv1a64(payload.data(), payload.size()));
-  out.bytes() += payload;
-  return std::move(out.bytes());
+  p.str(c.extra, kMaxExtra);
+  return frame_payload(kCheckpointMagic, kCheckpointVersion, p.bytes());
 }
 
 Checkpoint decode_checkpoint(std::string_view bytes, const std::string& what) {
-  if (bytes.size() < kHeaderSize)
-    throw IoError(cat(what, ": truncated checkpoint (", bytes.size(), " bytes, the header alone has ",
-                      kHeaderSize, ")"));
-  if (bytes.substr(0, 8) != std::string_view(kCheckpointMagic, 8))
-    throw IoError(cat(what, ": not a MedSpring checkpoint (bad magic)"));
-  Reader h(bytes.substr(8, kHeaderSize - 8), what);
-  const std::uint32_t version = h.u32();
-  if (version != kCheckpointVersion)
-    throw IoError(cat(what, ": unsupported checkpoint version ", version, " (this build reads version ",
-                      kCheckpointVersion, ")"));
-  const std::uint32_t flags = h.u32();
-  if (flags != 0) throw IoError(cat(what, ": unsupported checkpoint flags ", flags));
-  const std::uint64_t size = h.u64();
-  const std::uint64_t sum = h.u64();
-  const std::string_view payload = bytes.substr(kHeaderSize);
-  if (payload.size() < size)
-    throw IoError(cat(what, ": truncated checkpoint (payload has ", payload.size(), " of ", size, " bytes)"));
-  if (payload.size() > size)
-    throw IoError(cat(what, ": corrupted checkpoint (", payload.size() - size, " bytes after the payload)"));
-  const std::uint64_t actual = fnv1a64(payload.data(), payload.size());
-  if (actual != sum)
-    throw IoError(
-        cat(what, ": corrupted checkpoint (checksum ", hex(actual), ", the header says ", hex(sum), ")"));
-
-  Reader r(payload, what);
+  std::uint32_t version = 0;
+  const std::string_view payload =
+      unframe_payload(bytes, kCheckpointMagic, 1, kCheckpointVersion, kKind, what, &version);
+  ByteReader r(payload, what, kKind);
   Checkpoint c;
   c.fingerprint = r.u64();
   c.model_name = r.str("model name");
@@ -320,7 +138,8 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& what) {
     L.t_release = r.f64();
     L.ramp_down = r.flag("loads.ramp_down");
   }
-  if (r.left() != 0) r.fail(cat(r.left(), " unread bytes at the end of the payload"));
+  if (version >= 2) c.extra = r.str("extra", kMaxExtra);
+  r.finish();
   return c;
 }
 
@@ -330,9 +149,9 @@ void apply_checkpoint(const Checkpoint& c, Simulation& sim, const std::string& w
   const Index n = m.num_nodes();
   if (c.fingerprint != fp || c.state.x.rows() != n || c.body_kind != sim.body().kind())
     throw InvalidInput(cat(what, ": saved from another model: '", c.model_name, "' (", c.body_kind, ", ",
-                           c.state.x.rows(), " nodes, fingerprint ", hex(c.fingerprint),
+                           c.state.x.rows(), " nodes, fingerprint ", hex64(c.fingerprint),
                            "), this simulation runs '", m.name, "' (", sim.body().kind(), ", ", n,
-                           " nodes, fingerprint ", hex(fp), ")"));
+                           " nodes, fingerprint ", hex64(fp), ")"));
   // validate everything before changing the simulation
   const State& in = c.state;
   require_finite_matrix(in.x, what, "state.x");
@@ -359,36 +178,11 @@ void apply_checkpoint(const Checkpoint& c, Simulation& sim, const std::string& w
 }
 
 void save_checkpoint(const std::filesystem::path& path, const Simulation& sim) {
-  namespace fs = std::filesystem;
-  const std::string bytes = encode_checkpoint(make_checkpoint(sim));
-  static std::atomic<unsigned> counter{0};
-  std::random_device rd;
-  const fs::path tmp = fs::path(path).concat(cat(".tmp-", rd(), "-", counter++));
-  auto fail = [&](const std::string& why) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw IoError(cat(path.string(), ": cannot write checkpoint: ", why));
-  };
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) fail(cat("cannot create ", tmp.string()));
-    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    f.flush();
-    if (!f) fail(cat("write to ", tmp.string(), " failed"));
-    f.close();
-    if (f.fail()) fail(cat("closing ", tmp.string(), " failed"));
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);  // atomic replacement on POSIX file systems
-  if (ec) fail(cat("rename from ", tmp.string(), " failed: ", ec.message()));
+  write_file_atomically(path, encode_checkpoint(make_checkpoint(sim)), kKind);
 }
 
 Checkpoint read_checkpoint(const std::filesystem::path& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw IoError(cat(path.string(), ": cannot open checkpoint"));
-  const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (f.bad()) throw IoError(cat(path.string(), ": read error"));
-  return decode_checkpoint(bytes, path.string());
+  return decode_checkpoint(read_file_bytes(path, kKind), path.string());
 }
 
 void restore_checkpoint(const std::filesystem::path& path, Simulation& sim) {

@@ -193,8 +193,8 @@ TEST_F(CheckpointRefusal, FlippedPayloadBitsFailTheChecksum) {
 
 TEST_F(CheckpointRefusal, WrongVersionMagicAndTrailingBytesAreRefused) {
   std::string v = bytes_;
-  v[8] = 2;  // version 2
-  expect_refused<IoError>(v, "unsupported checkpoint version 2");
+  v[8] = 3;  // version 3
+  expect_refused<IoError>(v, "unsupported checkpoint version 3");
   std::string m = bytes_;
   m[0] = 'X';
   expect_refused<IoError>(m, "bad magic");

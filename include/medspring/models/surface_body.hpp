@@ -19,11 +19,14 @@ class SurfaceBody final : public Body {
   GridLayout grid() const override { return grid_; }
   double local_stiffness() const override { return k_; }
   std::vector<std::uint8_t> fixed_surface_nodes() const override { return model_.fixed; }
+  /// The parameters it was built with.
+  const SurfaceBodyParams& params() const { return params_; }
 
  private:
   Model model_;
   MatX3i F_;
   GridLayout grid_;
+  SurfaceBodyParams params_;
   double k_;
 };
 

@@ -109,4 +109,9 @@ struct SurfaceBodyParams {
 Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& params,
                          const std::string& name = "surface");
 
+/// Fingerprint of a model: FNV-1a 64 over the node count, rest positions, masses, damping, return
+/// springs, fixed flags, springs (ends, rest lengths, k, k') and bending terms (bit patterns of the
+/// doubles). Two models with the same fingerprint simulate identically.
+std::uint64_t model_fingerprint(const Model& model);
+
 }  // namespace medspring

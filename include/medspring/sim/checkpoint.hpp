@@ -14,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "medspring/core/binary.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/physics/state.hpp"
@@ -21,17 +22,10 @@
 
 namespace medspring {
 
-/// File magic (8 bytes) and the only format version this build reads and writes.
+/// File magic (8 bytes) and the format version this build writes.
 inline constexpr char kCheckpointMagic[9] = "MSPRCKPT";
-inline constexpr std::uint32_t kCheckpointVersion = 1;
-
-/// FNV-1a 64-bit hash of n bytes, continuing from `h` (default: the FNV offset basis).
-std::uint64_t fnv1a64(const void* data, std::size_t n, std::uint64_t h = 0xcbf29ce484222325ULL);
-
-/// Fingerprint of a model: FNV-1a 64 over the node count, rest positions, masses, damping, return
-/// springs, fixed flags, springs (ends, rest lengths, k, k') and bending terms (bit patterns of the
-/// doubles). Two models with the same fingerprint simulate identically.
-std::uint64_t model_fingerprint(const Model& model);
+/// Version 2 added the application section `extra`; version 1 files are still read.
+inline constexpr std::uint32_t kCheckpointVersion = 2;
 
 /// Everything a checkpoint holds. `state` carries x, v, f_ext, t, frames, substeps, stiffening,
 /// warnings and the implicit warm start dv; its other scratch is rebuilt by make_state (step_coef is a
@@ -43,6 +37,8 @@ struct Checkpoint {
   StepSettings step;              // the step settings the run used (restored with the state)
   State state;
   std::vector<PointLoad> loads;  // the load schedule (absolute times, ms)
+  /// Application section, opaque to the engine (e.g. the CLI's traces so far); at most 1 GiB.
+  std::string extra;
 };
 
 /// Snapshot of a simulation (no I/O).

@@ -1,0 +1,354 @@
+// Model packages (models/model_package.hpp): encode, decode with every field checked, rebuild.
+#include "medspring/models/model_package.hpp"
+
+#include <cmath>
+#include <memory>
+
+#include "medspring/core/binary.hpp"
+#include "medspring/core/check.hpp"
+
+namespace medspring {
+
+namespace {
+
+const std::string kKind = "model package";
+constexpr std::size_t kMaxText = 1 << 16;  // name, description
+
+void put_points(ByteWriter& w, const MatX3& P) {
+  w.u64(static_cast<std::uint64_t>(P.rows()));
+  for (Index r = 0; r < P.rows(); ++r)
+    for (int c = 0; c < 3; ++c) w.f64(P(r, c));
+}
+MatX3 get_points(ByteReader& r, const char* field) {
+  const Index n = r.count(field, 3 * sizeof(double));
+  MatX3 P(n, 3);
+  for (Index i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) P(i, c) = r.f64();
+  return P;
+}
+void put_indices(ByteWriter& w, const std::vector<Index>& v) {
+  w.u64(v.size());
+  for (Index i : v) w.i64(i);
+}
+std::vector<Index> get_indices(ByteReader& r, const char* field, Index bound) {
+  const Index n = r.count(field, 8);
+  std::vector<Index> v(static_cast<std::size_t>(n));
+  for (Index k = 0; k < n; ++k) {
+    const std::int64_t i = r.i64();
+    if (i < 0 || i >= bound) r.fail(cat(field, "[", k, "]: index ", i, " out of range [0, ", bound, ")"));
+    v[static_cast<std::size_t>(k)] = static_cast<Index>(i);
+  }
+  return v;
+}
+void put_doubles(ByteWriter& w, const VecX& v) {
+  w.u64(static_cast<std::uint64_t>(v.size()));
+  w.doubles(v.data(), static_cast<Index>(v.size()));
+}
+VecX get_doubles(ByteReader& r, const char* field) {
+  const Index n = r.count(field, sizeof(double));
+  VecX v(n);
+  r.doubles(v.data(), n);
+  return v;
+}
+template <class E>
+E get_enum(ByteReader& r, const char* field, int count) {
+  const std::uint8_t v = r.u8();
+  if (v >= count) r.fail(cat(field, ": unknown value ", int{v}));
+  return static_cast<E>(v);
+}
+
+void put_node(ByteWriter& w, const NodeParams& p) {
+  w.f64(p.mass);
+  w.f64(p.beta);
+  w.f64(p.return_k);
+}
+NodeParams get_node(ByteReader& r) {
+  NodeParams p;
+  p.mass = r.f64();
+  p.beta = r.f64();
+  p.return_k = r.f64();
+  return p;
+}
+void put_duffing(ByteWriter& w, const DuffingSettings& d) {
+  w.u8(static_cast<std::uint8_t>(d.mode));
+  w.f64(d.eta);
+  w.f64(d.length);
+  w.flag(d.soft);
+}
+DuffingSettings get_duffing(ByteReader& r) {
+  DuffingSettings d;
+  d.mode = get_enum<DuffingMode>(r, "duffing.mode", 4);
+  d.eta = r.f64();
+  d.length = r.f64();
+  d.soft = r.flag("duffing.soft");
+  return d;
+}
+
+}  // namespace
+
+ModelPackage package_of(const Body& body, const std::string& name, const std::string& description) {
+  ModelPackage p;
+  p.name = name.empty() ? body.model().name : name;
+  p.description = description;
+  p.kind = body.kind();
+  p.surface.V = body.rest_surface();
+  p.surface.F = body.faces();
+  p.grid = body.grid();
+  p.fingerprint = model_fingerprint(body.model());
+  if (const auto* s = dynamic_cast<const SurfaceBody*>(&body)) {
+    p.surface_params = s->params();
+  } else if (const auto* h = dynamic_cast<const HybridKidney*>(&body)) {
+    p.atoms = h->model().x0.bottomRows(h->num_atoms());
+    p.hybrid = h->settings();
+  } else if (const auto* v = dynamic_cast<const SmrmVessel*>(&body)) {
+    p.atoms = v->rest_atoms();
+    p.atom_radius = v->atom_radius();
+    p.binding = v->binding();
+    p.smrm = v->settings();
+  } else {
+    throw InvalidInput(cat("package_of: unknown body kind '", body.kind(), "'"));
+  }
+  return p;
+}
+
+BodyPtr make_body(const ModelPackage& p) {
+  const std::string w = cat("model package '", p.name, "'");
+  try {
+    if (p.kind == "surface")
+      return std::make_shared<SurfaceBody>(p.surface, p.surface_params, p.name, p.grid);
+    if (p.kind == "hybrid") return std::make_shared<HybridKidney>(p.surface, p.atoms, p.hybrid, p.name);
+    if (p.kind == "smrm") {
+      SmrmParts parts;
+      parts.name = p.name;
+      parts.atoms = p.atoms;
+      parts.atom_radius = p.atom_radius;
+      parts.binding = p.binding;
+      finalize_binding(parts.binding);
+      parts.rest_surface = p.surface.V;
+      parts.faces = p.surface.F;
+      parts.grid = p.grid;
+      return std::make_shared<SmrmVessel>(std::move(parts), p.smrm);
+    }
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(cat(w, ": ", e.what()));
+  }
+  throw InvalidInput(cat(w, ": unknown kind '", p.kind, "' (expected surface, hybrid or smrm)"));
+}
+
+std::string encode_model_package(const ModelPackage& p) {
+  ByteWriter w;
+  w.str(p.name, kMaxText);
+  w.str(p.description, kMaxText);
+  w.str(p.kind);
+  put_points(w, p.surface.V);
+  w.u64(static_cast<std::uint64_t>(p.surface.F.rows()));
+  for (Index f = 0; f < p.surface.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) w.i64(p.surface.F(f, c));
+  w.i64(p.grid.rings);
+  w.i64(p.grid.spokes);
+  if (p.kind == "surface") {
+    const SurfaceBodyParams& s = p.surface_params;
+    put_node(w, s.node);
+    w.f64(s.k);
+    put_duffing(w, s.duffing);
+    put_indices(w, s.fixed);
+  } else if (p.kind == "hybrid") {
+    const HybridSettings& h = p.hybrid;
+    put_points(w, p.atoms);
+    put_node(w, h.surface_node);
+    put_node(w, h.atom_node);
+    w.f64(h.k_surf);
+    w.f64(h.k_spoke);
+    w.f64(h.k_cl);
+    w.flag(h.nonlinear);
+    put_duffing(w, h.duffing);
+    w.i64(h.spokes_per_atom);
+    put_indices(w, h.fixed);
+  } else if (p.kind == "smrm") {
+    put_points(w, p.atoms);
+    put_doubles(w, p.atom_radius);
+    const SurfaceBinding& b = p.binding;
+    w.i64(b.num_atoms);
+    put_indices(w, b.atom);
+    w.u64(b.lambda.size());
+    for (double l : b.lambda) w.f64(l);
+    put_points(w, b.offset);
+    const SmrmSettings& s = p.smrm;
+    w.i64(s.atoms);
+    w.i64(s.spokes);
+    w.u8(static_cast<std::uint8_t>(s.frames.mode));
+    w.u8(static_cast<std::uint8_t>(s.frames.anchor));
+    const ChainSettings& c = s.chain;
+    for (double v : {c.k, c.kr, c.mass, c.beta}) w.f64(v);
+    w.flag(c.nonlinear);
+    put_duffing(w, c.duffing);
+    w.flag(c.fix_first);
+    w.flag(c.fix_last);
+    w.f64(c.kb);
+    for (double v : {s.k_loc, s.dedup_tolerance, s.max_radius_factor}) w.f64(v);
+  } else {
+    throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
+  }
+  w.u64(p.fingerprint);
+  return frame_payload(kModelPackageMagic, kModelPackageVersion, w.bytes());
+}
+
+ModelPackage decode_model_package(std::string_view bytes, const std::string& what) {
+  const std::string_view payload =
+      unframe_payload(bytes, kModelPackageMagic, kModelPackageVersion, kModelPackageVersion, kKind, what);
+  ByteReader r(payload, what, kKind);
+  ModelPackage p;
+  p.name = r.str("name", kMaxText);
+  p.description = r.str("description", kMaxText);
+  p.kind = r.str("kind");
+  if (p.kind != "surface" && p.kind != "hybrid" && p.kind != "smrm")
+    r.fail(cat("kind: '", p.kind, "' (expected surface, hybrid or smrm)"));
+  p.surface.V = get_points(r, "surface vertices");
+  const Index nv = static_cast<Index>(p.surface.V.rows());
+  const Index nf = r.count("surface faces", 3 * 8);
+  p.surface.F.resize(nf, 3);
+  for (Index f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const std::int64_t i = r.i64();
+      if (i < 0 || i >= nv) r.fail(cat("face ", f, ": vertex ", i, " out of range [0, ", nv, ")"));
+      p.surface.F(f, c) = static_cast<Index>(i);
+    }
+  const std::int64_t rings = r.i64(), spokes = r.i64();
+  if (rings < 0 || spokes < 0 || rings > nv || spokes > nv)
+    r.fail(cat("grid ", rings, " x ", spokes, " for ", nv, " vertices"));
+  p.grid = GridLayout{static_cast<Index>(rings), static_cast<Index>(spokes)};
+  if (p.kind == "surface") {
+    SurfaceBodyParams& s = p.surface_params;
+    s.node = get_node(r);
+    s.k = r.f64();
+    s.duffing = get_duffing(r);
+    s.fixed = get_indices(r, "fixed", nv);
+  } else if (p.kind == "hybrid") {
+    HybridSettings& h = p.hybrid;
+    p.atoms = get_points(r, "atoms");
+    h.surface_node = get_node(r);
+    h.atom_node = get_node(r);
+    h.k_surf = r.f64();
+    h.k_spoke = r.f64();
+    h.k_cl = r.f64();
+    h.nonlinear = r.flag("nonlinear");
+    h.duffing = get_duffing(r);
+    const std::int64_t k = r.i64();
+    if (k < 0 || k > nv) r.fail(cat("spokes_per_atom: ", k, " out of range [0, ", nv, "]"));
+    h.spokes_per_atom = static_cast<Index>(k);
+    h.fixed = get_indices(r, "fixed", nv);
+  } else {
+    p.atoms = get_points(r, "atoms");
+    const Index na = static_cast<Index>(p.atoms.rows());
+    p.atom_radius = get_doubles(r, "atom radius");
+    if (p.atom_radius.size() != 0 && p.atom_radius.size() != na)
+      r.fail(cat("atom radius: ", p.atom_radius.size(), " values for ", na, " atoms"));
+    SurfaceBinding& b = p.binding;
+    const std::int64_t bn = r.i64();
+    if (bn != na) r.fail(cat("binding: for ", bn, " atoms, the package has ", na));
+    b.num_atoms = na;
+    b.atom = get_indices(r, "binding atom", na);
+    const Index nl = r.count("binding lambda", sizeof(double));
+    b.lambda.resize(static_cast<std::size_t>(nl));
+    for (double& l : b.lambda) l = r.f64();
+    b.offset = get_points(r, "binding offsets");
+    const Index m = b.size();
+    if (m != nv || b.offset.rows() != m || (nl != 0 && nl != m))
+      r.fail(cat("binding: ", m, " nodes, ", b.offset.rows(), " offsets, ", nl, " bracket parameters for ",
+                 nv, " surface vertices"));
+    SmrmSettings& s = p.smrm;
+    const std::int64_t atoms = r.i64(), sp = r.i64();
+    if (atoms < 0 || sp < 0 || atoms > (1 << 24) || sp > (1 << 24))
+      r.fail(cat("settings: atoms ", atoms, ", spokes ", sp));
+    s.atoms = static_cast<Index>(atoms);
+    s.spokes = static_cast<Index>(sp);
+    s.frames.mode = get_enum<FrameMode>(r, "frames.mode", 2);
+    s.frames.anchor = get_enum<FrameAnchor>(r, "frames.anchor", 3);
+    ChainSettings& c = s.chain;
+    c.k = r.f64();
+    c.kr = r.f64();
+    c.mass = r.f64();
+    c.beta = r.f64();
+    c.nonlinear = r.flag("chain.nonlinear");
+    c.duffing = get_duffing(r);
+    c.fix_first = r.flag("chain.fix_first");
+    c.fix_last = r.flag("chain.fix_last");
+    c.kb = r.f64();
+    s.k_loc = r.f64();
+    s.dedup_tolerance = r.f64();
+    s.max_radius_factor = r.f64();
+  }
+  p.fingerprint = r.u64();
+  r.finish();
+  return p;
+}
+
+void save_model_package(const std::filesystem::path& path, const ModelPackage& package) {
+  write_file_atomically(path, encode_model_package(package), kKind);
+}
+
+ModelPackage read_model_package(const std::filesystem::path& path) {
+  return decode_model_package(read_file_bytes(path, kKind), path.string());
+}
+
+bool check_fingerprint(const ModelPackage& package, const Body& rebuilt) {
+  return package.fingerprint == 0 || package.fingerprint == model_fingerprint(rebuilt.model());
+}
+
+TissueParams tissue_params(const ModelPackage& p) {
+  TissueParams t;
+  if (p.kind == "surface") {
+    const SurfaceBodyParams& s = p.surface_params;
+    t = {s.k, s.duffing.eta, s.node.return_k, s.node.beta, s.duffing.mode != DuffingMode::Linear};
+  } else if (p.kind == "hybrid") {
+    const HybridSettings& h = p.hybrid;
+    t = {h.k_surf, h.duffing.eta, h.surface_node.return_k, h.surface_node.beta, h.nonlinear};
+  } else {
+    const ChainSettings& c = p.smrm.chain;
+    t = {c.k, c.duffing.eta, c.kr, c.beta, c.nonlinear};
+  }
+  return t;
+}
+
+void set_tissue_params(ModelPackage& p, const TissueParams& t) {
+  const std::string w = cat("model package '", p.name, "': tissue parameter ");
+  require_positive(t.k, w, "k");
+  require_nonnegative(t.eta, w, "eta");
+  require_nonnegative(t.kr, w, "kr");
+  require_nonnegative(t.beta, w, "beta");
+  if (p.kind == "surface") {
+    SurfaceBodyParams& s = p.surface_params;
+    s.k = t.k;
+    s.duffing.eta = t.eta;
+    if (!t.nonlinear)
+      s.duffing.mode = DuffingMode::Linear;
+    else if (s.duffing.mode == DuffingMode::Linear)
+      s.duffing.mode = DuffingMode::Strain;
+    s.node.return_k = t.kr;
+    s.node.beta = t.beta;
+  } else if (p.kind == "hybrid") {
+    HybridSettings& h = p.hybrid;
+    const double ratio = t.k / h.k_surf;  // spokes and centerline keep their ratio to the surface springs
+    h.k_surf = t.k;
+    h.k_spoke *= ratio;
+    h.k_cl *= ratio;
+    h.duffing.eta = t.eta;
+    h.nonlinear = t.nonlinear;
+    if (t.nonlinear && h.duffing.mode == DuffingMode::Linear) h.duffing.mode = DuffingMode::Strain;
+    h.surface_node.return_k = h.atom_node.return_k = t.kr;
+    h.surface_node.beta = h.atom_node.beta = t.beta;
+  } else if (p.kind == "smrm") {
+    ChainSettings& c = p.smrm.chain;
+    c.k = t.k;
+    c.duffing.eta = t.eta;
+    c.nonlinear = t.nonlinear;
+    if (t.nonlinear && c.duffing.mode == DuffingMode::Linear) c.duffing.mode = DuffingMode::Strain;
+    c.kr = t.kr;
+    c.beta = t.beta;
+  } else {
+    throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
+  }
+  p.fingerprint = 0;  // the package no longer describes the model it was saved from
+}
+
+}  // namespace medspring
