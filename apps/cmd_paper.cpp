@@ -153,27 +153,6 @@ void run_logged(const std::string& what, const std::string& command, const fs::p
     throw Error(cat(what, " failed (exit ", status, "): ", last_line(log), " [log: ", log.string(), "]"));
 }
 
-fs::path exe_dir() {
-  std::error_code ec;
-  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? fs::path(".") : p.parent_path();
-}
-
-fs::path find_folder(const std::optional<std::string>& given, const char* compiled, const std::string& share,
-                     const std::string& what, const std::string& probe) {
-  std::vector<fs::path> tries;
-  if (given) tries.emplace_back(*given);
-  tries.emplace_back(compiled);
-  tries.push_back(exe_dir() / ".." / "share" / "medspring" / share);
-  for (const auto& t : tries) {
-    std::error_code ec;
-    if (fs::exists(t / probe, ec)) return fs::absolute(t).lexically_normal();
-  }
-  std::string list;
-  for (const auto& t : tries) list += (list.empty() ? "" : ", ") + t.string();
-  throw IoError(cat("cannot find the ", what, " (looked for ", probe, " in ", list, ")"));
-}
-
 void write_text(const fs::path& file, const std::string& text) {
   std::ofstream out(file, std::ios::binary);
   out << text;
@@ -402,7 +381,9 @@ int cmd_paper(const Args& args) {
     const BuiltScene built = build_scene(r.scene, &loader);
     r.rel = cat("scenes/", r.set, "/", r.e.file);
     r.dir = root / r.rel;
-    r.summary = run_scene_to_folder(built, r.dir, progress, {.static_curve = r.e.static_curve});
+    SceneRunOptions run_options;
+    run_options.static_curve = r.e.static_curve;
+    r.summary = run_scene_to_folder(built, r.dir, progress, run_options);
     const MatX3& S0 = built.body->rest_surface();
     const Index c = built.loads.front().node;
     r.contact = S0.row(c).transpose();

@@ -54,7 +54,8 @@ const std::vector<Command>& commands() {
        {"json", "force"},
        cmd_build},
       {"run",
-       "usage: medspring run SCENE --out DIR [--force] [--quiet] [--json] [--static-curve]\n\n"
+       "usage: medspring run SCENE --out DIR [--force] [--quiet] [--json] [--static-curve]\n"
+       "                     [--checkpoint-every N] [--checkpoint FILE] [--stop-at MS] [--resume FILE]\n\n"
        "Builds the model of a scene file (docs/scenes.md), runs it for the scene's duration and writes to "
        "DIR:\n"
        "  <name>.pvd + frames/<name>_NNNNN.vtp   ParaView series of the displayed surface; point data\n"
@@ -67,7 +68,14 @@ const std::vector<Command>& commands() {
        "  --force         replace a non-empty DIR (refused otherwise)\n"
        "  --quiet         no progress on stderr\n"
        "  --json          print the summary as JSON on stdout\n"
-       "  --static-curve  also write static_curve.csv: static force-displacement of the first load\n",
+       "  --static-curve  also write static_curve.csv: static force-displacement of the first load\n"
+       "  --checkpoint-every N  save a checkpoint every N updates (docs/reliability.md): the simulation\n"
+       "                  and the traces so far, replaced atomically; default file DIR.mscp beside DIR\n"
+       "  --checkpoint FILE     where checkpoints go\n"
+       "  --stop-at MS    stop after the update reaching MS (writing a checkpoint and the partial results)\n"
+       "  --resume FILE   continue the run saved in FILE (same scene): trace.csv and the summary's results\n"
+       "                  are those of an uninterrupted run bit for bit; frames are written from the resume\n"
+       "                  point on (earlier ones are in the interrupted run's folder)\n",
        {"force", "quiet", "json", "static-curve"},
        cmd_run},
       {"paper",
@@ -107,12 +115,48 @@ const std::vector<Command>& commands() {
        "  --duration MS   run length (default: the last trajectory time)\n",
        {"json", "force", "local", "linear"},
        cmd_haptics},
+      {"export",
+       "usage: medspring export --web --out DIR [--force] [--quiet] [--json] [--scenes DIR]\n"
+       "       medspring export SCENE... --out DIR [--force] [--quiet] [--json]\n\n"
+       "Writes built models as model packages (.msm, docs/model_packages.md): the inputs of the engine's constructors\n"
+       "(rest surface, atoms, spokes or spoke offsets, parameters), so the engine alone -- the browser "
+       "page's\n"
+       "WebAssembly build, a simulator without VTK/CGAL -- rebuilds the model exactly and can change its\n"
+       "tissue parameters. DIR also receives models.json (file, name, kind, sizes, parameters).\n"
+       "  --web     the browser page's set: the real kidney (hybrid, 458 + 42) and the real aorta (SMRM 40 "
+       "x\n"
+       "            30) from $MEDSPRING_DATA (skipped, with a note, where the data is absent), the kidney "
+       "and\n"
+       "            vessel phantoms and the plain mass-spring tube\n"
+       "  SCENE...  the model of each scene file (docs/scenes.md) as <scene name>.msm\n"
+       "  --force   replace a non-empty DIR (the folder is written whole or not at all)\n",
+       {"json", "force", "quiet", "web"},
+       cmd_export},
+      {"view",
+       "usage: medspring view [--port N] [--models DIR] [--web DIR] [--exit-after S] [--quiet]\n\n"
+       "Serves the browser page (docs/web.md) on http://127.0.0.1:N/ and prints the URL: the engine as\n"
+       "WebAssembly (web/dist/medspring.mjs, built by web/build.sh), three.js (web/node_modules, npm ci) "
+       "and\n"
+       "the model packages of DIR (medspring export --web --out DIR). One thread, GET/HEAD only, nothing\n"
+       "outside these folders. Stops on Ctrl-C / SIGTERM.\n"
+       "  --port N        port (default 8080; 0: any free port, the URL says which)\n"
+       "  --models DIR    folder with models.json and the .msm files, served as /models/ (default: "
+       "web/models\n"
+       "                  if present; without one the page offers the built-in phantoms)\n"
+       "  --web DIR       the page folder (default: the source tree's web/, then "
+       "<prefix>/share/medspring/web)\n"
+       "  --exit-after S  stop after S seconds (tests)\n"
+       "  --quiet         no request log on stderr\n",
+       {"quiet"},
+       cmd_view},
   };
   return list;
 }
 
 void extra_usage(std::ostream& os) {
   os << "  haptics  the 1 kHz haptic loop along a recorded tool path: tick times, force trace\n";
+  os << "  export   write built models as packages the engine alone (and the web page) rebuilds\n";
+  os << "  view     serve the browser page on 127.0.0.1: poke the models with the mouse (docs/web.md)\n";
   os << "  build    build a model from real anatomy: build kidney | build centerline (--help)\n";
   os << "  run      run a scene file (docs/scenes.md): ParaView series, traces, summary\n";
   os << "  paper    reproduce the paper: Fig. 9, Fig. 10 A-F, Tables I-II -> report.md, figures, "

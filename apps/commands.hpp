@@ -28,5 +28,7 @@ int cmd_build(const Args& args);    // cmd_build.cpp
 int cmd_run(const Args& args);      // cmd_run.cpp
 int cmd_paper(const Args& args);    // cmd_paper.cpp
 int cmd_haptics(const Args& args);  // cmd_haptics.cpp
+int cmd_export(const Args& args);   // cmd_export.cpp
+int cmd_view(const Args& args);     // cmd_view.cpp
 
 }  // namespace medspring::cli

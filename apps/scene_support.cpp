@@ -299,6 +299,13 @@ json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& pro
     frames.push_back(fr);
   };
   hooks.on_progress = [&](double x) { progress.update(x); };
+  hooks.checkpoint_every = o.checkpoint_every;
+  hooks.resume = o.resume;
+  hooks.stop_at = o.stop_at;
+  if (!o.checkpoint.empty())
+    hooks.on_checkpoint = [&](const Checkpoint& c) {
+      write_file_atomically(o.checkpoint, encode_checkpoint(c), "checkpoint");
+    };
   const SceneResult r = run_scene(b, hooks);
   if (!series.empty()) write_pvd(dir / (name + ".pvd"), series);
   if (!atom_series.empty()) write_pvd(dir / (name + "_atoms.pvd"), atom_series);
@@ -371,9 +378,35 @@ json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& pro
                   {"pvd", series.empty() ? json(nullptr) : json(name + ".pvd")},
                   {"atoms_pvd", atom_series.empty() ? json(nullptr) : json(name + "_atoms.pvd")},
                   {"frames", frames},
+                  {"first_update", r.first_update},
+                  {"resumed_from_ms", o.resume ? json(o.resume->state.t) : json(nullptr)},
+                  {"stopped", r.stopped},
+                  {"checkpoint", o.checkpoint.empty() ? json(nullptr) : json(o.checkpoint.string())},
                   {"static_curve", curve}};
   write_text(dir / "summary.json", summary.dump(2) + "\n");
   return summary;
+}
+
+std::filesystem::path exe_dir() {
+  std::error_code ec;
+  const std::filesystem::path p = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path(".") : p.parent_path();
+}
+
+std::filesystem::path find_folder(const std::optional<std::string>& given, const char* compiled,
+                                  const std::string& share, const std::string& what,
+                                  const std::string& probe) {
+  std::vector<std::filesystem::path> tries;
+  if (given) tries.emplace_back(*given);
+  tries.emplace_back(compiled);
+  tries.push_back(exe_dir() / ".." / "share" / "medspring" / share);
+  for (const auto& t : tries) {
+    std::error_code ec;
+    if (std::filesystem::exists(t / probe, ec)) return std::filesystem::absolute(t).lexically_normal();
+  }
+  std::string list;
+  for (const auto& t : tries) list += (list.empty() ? "" : ", ") + t.string();
+  throw IoError(cat("cannot find the ", what, " (looked for ", probe, " in ", list, ")"));
 }
 
 }  // namespace medspring::cli

@@ -5,8 +5,10 @@
 
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -87,9 +89,22 @@ void check_output_folder(const std::filesystem::path& dir, bool force);
 struct SceneRunOptions {
   bool static_curve = false;  // also the static force-displacement curve of the first load
   int curve_points = 21;
+  long checkpoint_every = 0;                                 // updates between checkpoints (0: none)
+  std::filesystem::path checkpoint;                          // where they go (replaced atomically each time)
+  const Checkpoint* resume = nullptr;                        // continue a run from its checkpoint
+  double stop_at = std::numeric_limits<double>::infinity();  // ms: stop early (with a checkpoint)
 };
 nlohmann::json run_scene_to_folder(const BuiltScene& built, const std::filesystem::path& dir,
                                    Progress& progress, const SceneRunOptions& options = {});
+
+/// The folder of the running executable.
+std::filesystem::path exe_dir();
+
+/// A resource folder holding `probe`: `given` (a command-line option), else the compiled-in source
+/// folder, else <exe>/../share/medspring/<share>. IoError listing the places tried when none has it.
+std::filesystem::path find_folder(const std::optional<std::string>& given, const char* compiled,
+                                  const std::string& share, const std::string& what,
+                                  const std::string& probe);
 
 /// A JSON description of a built model (kind, counts, notes) for summaries.
 nlohmann::json describe_built(const BuiltScene& built);

@@ -4,6 +4,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build}
 bash "$root/scripts/install-deps.sh"
+bash "$root/scripts/install-web-deps.sh" || echo "test: web tools not installed: the web tests will be skipped" >&2
 bash "$root/scripts/build.sh" -DMEDSPRING_BUILD_TESTS=ON -DMEDSPRING_BUILD_BENCH=ON
 ctest --test-dir "$build" --output-on-failure --parallel "${JOBS:-$(nproc)}" --timeout 600
 if [ -d "$root/python/tests" ]; then

@@ -24,9 +24,20 @@ for layer in core geometry physics local medial models sim; do
     fi
   done
 done
-wait
-em++ "${flags[@]}" -c "$here/src/bindings.cpp" -o "$build/obj/bindings.o"
-em++ -O3 "${objs[@]}" "$build/obj/bindings.o" -lembind -o "$here/dist/medspring.mjs" \
-  -sMODULARIZE=1 -sEXPORT_ES6=1 -sEXPORT_NAME=createMedSpring -sALLOW_MEMORY_GROWTH=1 -sSINGLE_FILE=1 \
-  -sENVIRONMENT=web,node -fexceptions
-echo "web/build.sh: wrote $here/dist/medspring.mjs"
+while (( jobs > 0 )); do wait -n; jobs=$((jobs - 1)); done  # fails the script if a compile failed
+bobj="$build/obj/bindings.o"
+if [[ ! -f "$bobj" || "$here/src/bindings.cpp" -nt "$bobj" || -n "$(find "$root/include" -newer "$bobj" -name '*.hpp' -print -quit)" ]]; then
+  em++ "${flags[@]}" -c "$here/src/bindings.cpp" -o "$bobj"
+fi
+out="$here/dist/medspring.mjs"
+relink=0
+[[ -f "$out" ]] || relink=1
+for o in "${objs[@]}" "$bobj"; do [[ "$o" -nt "$out" ]] && relink=1; done
+if (( relink )); then
+  em++ -O3 "${objs[@]}" "$bobj" -lembind -o "$out" \
+    -sMODULARIZE=1 -sEXPORT_ES6=1 -sEXPORT_NAME=createMedSpring -sALLOW_MEMORY_GROWTH=1 -sSINGLE_FILE=1 \
+    -sENVIRONMENT=web,node -fexceptions
+  echo "web/build.sh: wrote $out"
+else
+  echo "web/build.sh: $out is up to date"
+fi

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <set>
 
+#include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/static_solve.hpp"
@@ -19,6 +20,35 @@ double median(std::vector<double> v) {
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
   return *mid;
+}
+
+constexpr char kTraceTag[] = "medspring-scene-trace-v1";
+
+void put_vector(ByteWriter& w, const std::vector<double>& v) {
+  w.u64(v.size());
+  w.doubles(v.data(), static_cast<Index>(v.size()));
+}
+std::vector<double> get_vector(ByteReader& r, const char* field) {
+  std::vector<double> v(static_cast<std::size_t>(r.count(field, sizeof(double))));
+  r.doubles(v.data(), static_cast<Index>(v.size()));
+  return v;
+}
+
+// The runner's part of a checkpoint: where the run is, its traces and per-update times so far.
+std::string encode_progress(const std::string& scene, long k, Index frames, const SceneTrace& t,
+                            const std::vector<double>& us) {
+  ByteWriter w;
+  w.str(kTraceTag);
+  w.str(scene);
+  w.i64(k);
+  w.i64(frames);
+  for (const auto* v : {&t.time, &t.force, &t.max_disp, &t.local_contact, &t.energy}) put_vector(w, *v);
+  w.u64(t.node_disp.size());
+  for (const auto& v : t.node_disp) put_vector(w, v);
+  w.u64(t.atom_disp.size());
+  for (const auto& v : t.atom_disp) put_vector(w, v);
+  put_vector(w, std::vector<double>(us.begin(), us.begin() + k));
+  return std::move(w.bytes());
 }
 
 }  // namespace
@@ -39,6 +69,37 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   SceneTrace& tr = res.trace;
   tr.node_disp.assign(b.trace_nodes.size(), {});
   tr.atom_disp.assign(b.trace_atoms.size(), {});
+  std::vector<double> us(static_cast<std::size_t>(n));
+  long k0 = 0;        // updates done before this call
+  Index frames0 = 0;  // frames recorded before this call
+  if (hooks.resume != nullptr) {
+    apply_checkpoint(*hooks.resume, sim, "resume");  // first: another model is the mismatch to name
+    const std::string what = cat("resume: checkpoint of '", hooks.resume->model_name, "'");
+    ByteReader r(hooks.resume->extra, what, "scene checkpoint");
+    if (hooks.resume->extra.empty() || r.str("tag") != kTraceTag)
+      throw InvalidInput(cat(what, ": it holds no scene run (saved by another program?)"));
+    const std::string name = r.str("scene");
+    if (name != scene.name)
+      throw InvalidInput(cat(what, ": saved from scene '", name, "', this is scene '", scene.name, "'"));
+    k0 = static_cast<long>(r.i64());
+    frames0 = static_cast<Index>(r.i64());
+    for (auto* v : {&tr.time, &tr.force, &tr.max_disp, &tr.local_contact, &tr.energy})
+      *v = get_vector(r, "trace");
+    if (r.u64() != tr.node_disp.size()) r.fail("traced nodes differ from the scene's");
+    for (auto& v : tr.node_disp) v = get_vector(r, "node trace");
+    if (r.u64() != tr.atom_disp.size()) r.fail("traced atoms differ from the scene's");
+    for (auto& v : tr.atom_disp) v = get_vector(r, "atom trace");
+    const std::vector<double> done = get_vector(r, "update times");
+    r.finish();
+    bool sizes = k0 >= 0 && k0 <= n && frames0 >= 0 && done.size() == static_cast<std::size_t>(k0);
+    for (const auto* v : {&tr.time, &tr.force, &tr.max_disp, &tr.local_contact, &tr.energy})
+      sizes = sizes && v->size() == static_cast<std::size_t>(k0 + 1);
+    for (const auto& v : tr.node_disp) sizes = sizes && v.size() == static_cast<std::size_t>(k0 + 1);
+    for (const auto& v : tr.atom_disp) sizes = sizes && v.size() == static_cast<std::size_t>(k0 + 1);
+    if (!sizes) throw InvalidInput(cat(what, ": its traces do not match update ", k0, " of ", n));
+    std::copy(done.begin(), done.end(), us.begin());
+    res.first_update = k0 + 1;
+  }
   const MatX3& S0 = b.body->rest_surface();
   const Model& model = b.body->model();
   const Index contact = b.loads.empty() ? -1 : b.loads.front().node;
@@ -63,17 +124,24 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
     }
   };
   auto record = [&] {
-    RecordedFrame f{static_cast<Index>(res.frames.size()), sim.time()};
+    RecordedFrame f{frames0 + static_cast<Index>(res.frames.size()), sim.time()};
     res.frames.push_back(f);
     if (hooks.on_frame) hooks.on_frame(sim, f);
   };
 
-  sample();
-  if (scene.record.frames) record();  // the rest state
-  std::vector<double> us(static_cast<std::size_t>(n));
+  if (hooks.resume == nullptr) {
+    sample();
+    if (scene.record.frames) record();  // the rest state
+  }
+  auto checkpoint = [&](long k) {
+    Checkpoint c = make_checkpoint(sim);
+    c.extra = encode_progress(scene.name, k, frames0 + static_cast<Index>(res.frames.size()), tr, us);
+    hooks.on_checkpoint(c);
+  };
   const long progress_every = std::max(1L, n / 100);
   const auto t_start = std::chrono::steady_clock::now();
-  for (long k = 1; k <= n; ++k) {
+  long last = n;  // the last update done
+  for (long k = k0 + 1; k <= n; ++k) {
     const auto a = std::chrono::steady_clock::now();
     sim.update();
     us[static_cast<std::size_t>(k - 1)] =
@@ -82,14 +150,23 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
     if (scene.record.frames && (k % scene.record.every == 0 || k == n || keys.count(k) > 0)) record();
     if (hooks.on_progress && k % progress_every == 0)
       hooks.on_progress(static_cast<double>(k) / static_cast<double>(n));
+    const bool stop = k < n && sim.time() >= hooks.stop_at - 1e-9;
+    if (hooks.on_checkpoint && ((hooks.checkpoint_every > 0 && k % hooks.checkpoint_every == 0) || stop))
+      checkpoint(k);
+    if (stop) {
+      last = k;
+      res.stopped = true;
+      break;
+    }
   }
+  us.resize(static_cast<std::size_t>(last));
   RunSummary& s = res.summary;
   s.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  s.updates = static_cast<Index>(n);
+  s.updates = static_cast<Index>(last);
   s.median_update_us = median(us);
   double sum = 0;
   for (double u : us) sum += u;
-  s.mean_update_us = sum / static_cast<double>(n);
+  s.mean_update_us = sum / static_cast<double>(std::max(1L, last));
   s.substeps = sim.state().substeps;
   s.warnings = sim.state().warnings.total();
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -96,6 +97,92 @@ TEST(CliRun, SmallPhantomSceneWritesAParaViewSeriesTracesAndSummary) {
   // no temporary folder is left beside the output
   for (const auto& e : fs::directory_iterator(dir))
     EXPECT_EQ(e.path().filename().string().find(".result.tmp"), std::string::npos);
+}
+
+TEST(CliRun, StoppedAndResumedRunGivesTheUninterruptedTraceBitForBit) {
+  const fs::path dir = testing::temp_dir("cli-resume");
+  write(dir / "small.json", kSmallScene);
+  const std::string scene = quote((dir / "small.json").string());
+  const Result whole = medspring("run " + scene + " --out " + quote((dir / "whole").string()) + " --quiet");
+  ASSERT_EQ(whole.rc, 0) << whole.err;
+  // the first part stops at 22 ms (during the press), checkpointing every 10 updates and at the stop
+  const fs::path ck = dir / "part.mscp";
+  const Result part =
+      medspring("run " + scene + " --out " + quote((dir / "part1").string()) +
+                " --checkpoint-every 10 --stop-at 22 --checkpoint " + quote(ck.string()) + " --json");
+  ASSERT_EQ(part.rc, 0) << part.err;
+  const nlohmann::json s1 = nlohmann::json::parse(part.out);
+  EXPECT_TRUE(s1["stopped"].get<bool>());
+  EXPECT_EQ(s1["updates"], 44);
+  ASSERT_TRUE(fs::exists(ck));
+  const Result rest = medspring("run " + scene + " --out " + quote((dir / "part2").string()) + " --resume " +
+                                quote(ck.string()) + " --json");
+  ASSERT_EQ(rest.rc, 0) << rest.err;
+  const nlohmann::json s2 = nlohmann::json::parse(rest.out);
+  EXPECT_EQ(s2["first_update"], 45);
+  EXPECT_EQ(s2["resumed_from_ms"], 22.0);
+  EXPECT_FALSE(s2["stopped"].get<bool>());
+  EXPECT_EQ(slurp(dir / "part2" / "trace.csv"), slurp(dir / "whole" / "trace.csv"));
+  // the last frame of the resumed run is the uninterrupted run's, byte for byte
+  EXPECT_EQ(slurp(dir / "part2" / "frames" / "small_00010.vtp"),
+            slurp(dir / "whole" / "frames" / "small_00010.vtp"));
+  const nlohmann::json w = nlohmann::json::parse(slurp(dir / "whole" / "summary.json"));
+  const nlohmann::json r2 = nlohmann::json::parse(slurp(dir / "part2" / "summary.json"));
+  for (const char* key :
+       {"contact_peak_mm", "contact_hold_mm", "max_disp_peak_mm", "return_ms", "final_max_disp_mm"})
+    EXPECT_EQ(r2[key], w[key]) << key;
+
+  // a corrupted checkpoint and one of another scene are refused, naming the file, writing nothing
+  std::string bytes = slurp(ck);
+  bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0x55);
+  std::ofstream(dir / "bad.mscp", std::ios::binary) << bytes;
+  const Result bad = medspring("run " + scene + " --out " + quote((dir / "bad").string()) + " --resume " +
+                               quote((dir / "bad.mscp").string()));
+  EXPECT_NE(bad.rc, 0);
+  EXPECT_NE(bad.err.find("corrupted checkpoint"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+  write(dir / "other.json",
+        R"({"model": {"kind": "surface", "source": {"phantom": "tube"}}, "duration": 50})");
+  const Result other = medspring("run " + quote((dir / "other.json").string()) + " --out " +
+                                 quote((dir / "other").string()) + " --resume " + quote(ck.string()));
+  EXPECT_NE(other.rc, 0);
+  EXPECT_NE(other.err.find("another model"), std::string::npos) << other.err;
+  EXPECT_FALSE(fs::exists(dir / "other"));
+  // the same model under another scene: its traces would not fit, refused by name
+  write(dir / "copy.json", kSmallScene);
+  const Result copy = medspring("run " + quote((dir / "copy.json").string()) + " --out " +
+                                quote((dir / "copy").string()) + " --resume " + quote(ck.string()));
+  EXPECT_NE(copy.rc, 0);
+  EXPECT_NE(copy.err.find("saved from scene 'small', this is scene 'copy'"), std::string::npos) << copy.err;
+  EXPECT_FALSE(fs::exists(dir / "copy"));
+}
+
+TEST(CliExport, WebSetIsWrittenAndEveryPackageRebuilds) {
+  const fs::path dir = testing::temp_dir("cli-export");
+  const Result r = medspring("export --web --out " + quote((dir / "models").string()) + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  std::set<std::string> files;
+  for (const auto& m : j["models"]) {
+    files.insert(m["file"].get<std::string>());
+    EXPECT_TRUE(fs::exists(dir / "models" / m["file"].get<std::string>()));
+    EXPECT_GT(m["masses"].get<long>(), 0);
+  }
+  EXPECT_TRUE(fs::exists(dir / "models" / "models.json"));
+  for (const char* f : {"kidney.msm", "aorta.msm", "kidney_phantom.msm", "vessel_phantom.msm", "tube.msm"})
+    EXPECT_EQ(files.count(f), 1u) << f;
+  for (const auto& m : j["models"])
+    if (m["file"] == "kidney.msm") {
+      EXPECT_EQ(m["surface_nodes"], 458);
+      EXPECT_EQ(m["masses"], 500);
+    } else if (m["file"] == "aorta.msm") {
+      EXPECT_EQ(m["surface_nodes"], 1200);
+      EXPECT_EQ(m["masses"], 40);
+    }
+  // without --web or a scene: a usage error
+  const Result usage = medspring("export --out " + quote((dir / "x").string()));
+  EXPECT_NE(usage.rc, 0);
+  EXPECT_NE(usage.err.find("--web"), std::string::npos) << usage.err;
 }
 
 struct BadScene {

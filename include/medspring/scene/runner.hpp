@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "medspring/scene/build.hpp"
+#include "medspring/sim/checkpoint.hpp"
 #include "medspring/sim/simulation.hpp"
 
 namespace medspring {
@@ -55,8 +56,10 @@ struct RunSummary {
 
 struct SceneResult {
   SceneTrace trace;
-  std::vector<RecordedFrame> frames;
+  std::vector<RecordedFrame> frames;  // the frames recorded by this call (a resumed run: from the resume on)
   RunSummary summary;
+  long first_update = 1;  // 1, or the update after the resume point
+  bool stopped = false;   // stopped at RunHooks::stop_at before the scene's duration
 };
 
 struct RunHooks {
@@ -64,6 +67,15 @@ struct RunHooks {
   std::function<void(const Simulation&, const RecordedFrame&)> on_frame;
   /// Called now and then with the fraction done in [0, 1].
   std::function<void(double)> on_progress;
+  /// Every `checkpoint_every` updates (0: never), a checkpoint of the run: the simulation plus, in its
+  /// `extra` section, the traces and frame count so far. A run resumed from it gives the same traces.
+  long checkpoint_every = 0;
+  std::function<void(const Checkpoint&)> on_checkpoint;
+  /// Continue a run from one of its checkpoints (same scene: InvalidInput otherwise).
+  const Checkpoint* resume = nullptr;
+  /// Stop after the first update reaching this time (ms), before the scene's duration; a checkpoint
+  /// is taken there when on_checkpoint is set.
+  double stop_at = std::numeric_limits<double>::infinity();
 };
 
 /// Runs the scene for its duration (ceil(duration / dt) updates). Never throws after the first update
