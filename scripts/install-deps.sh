@@ -4,6 +4,7 @@ set -euo pipefail
 PACKAGES=(
   g++ cmake ninja-build pkg-config git
   libeigen3-dev                      # engine: linear algebra
+  zlib1g-dev                         # io: compressed MetaImage / NRRD data
   libvtk9-dev                        # io: mesh/image formats, isosurfaces, rendering
   libcgal-dev libgmp-dev libmpfr-dev # meshing: isotropic remeshing
   nlohmann-json3-dev                 # CLI and scenes: JSON
@@ -11,17 +12,4 @@ PACKAGES=(
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-matplotlib
   xvfb xauth                         # offscreen rendering of the report figures (VTK under Xvfb)
 )
-missing=()
-for p in "${PACKAGES[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${#PACKAGES[@]} packages already installed"
-  exit 0
-fi
-echo "install-deps: installing ${missing[*]}"
-SUDO=""
-[ "$(id -u)" -eq 0 ] || SUDO="sudo"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+bash "$(dirname "$0")/apt-install.sh" install-deps "${PACKAGES[@]}"

@@ -7,18 +7,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 pkgs=(emscripten chromium)
 command -v node >/dev/null || pkgs+=(nodejs)
 command -v npm >/dev/null || pkgs+=(npm)
-missing=()
-for p in "${pkgs[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "install-web-deps: installing ${missing[*]}"
-  SUDO=""
-  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
-  export DEBIAN_FRONTEND=noninteractive
-  $SUDO apt-get update -qq
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+bash "$root/scripts/apt-install.sh" install-web-deps "${pkgs[@]}"
 # three and playwright-core at the versions of web/package-lock.json (never `playwright install`: the
 # tests use Debian's /usr/bin/chromium).
 web="$root/web"

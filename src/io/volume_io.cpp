@@ -2,11 +2,9 @@
 
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
-#include <vtkMetaImageReader.h>
 #include <vtkNIFTIImageHeader.h>
 #include <vtkNIFTIImageReader.h>
 #include <vtkNew.h>
-#include <vtkNrrdReader.h>
 #include <vtkPointData.h>
 #include <vtkSetGet.h>
 #include <vtkmetaio/metaImage.h>
@@ -23,6 +21,7 @@
 
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
+#include "safe_readers.hpp"
 #include "vtk_support.hpp"
 
 namespace fs = std::filesystem;
@@ -188,12 +187,13 @@ LabelVolume read_nifti(const fs::path& path, const ReadVolumeOptions& options) {
   VtkMessageCapture capture;
   vtkNew<vtkNIFTIImageReader> reader;
   const std::string file = path.string();
-  if (!reader->CanReadFile(file.c_str())) {
+  if (!guard_vtk(path, [&] { return reader->CanReadFile(file.c_str()); })) {
     capture.throw_if_failed(path);
     throw IoError(cat(name_of(path), ": not a NIfTI-1 or NIfTI-2 file (no valid header)"));
   }
+  check_nifti(path);  // vtkNIFTIImageReader dereferences null on inconsistent headers
   reader->SetFileName(file.c_str());
-  reader->Update();
+  guard_vtk(path, [&] { reader->Update(); });
   capture.throw_if_failed(path, reader);
   vtkNIFTIImageHeader* h = reader->GetNIFTIHeader();
   if (!h) throw IoError(cat(name_of(path), ": no NIfTI header"));
@@ -246,41 +246,10 @@ LabelVolume read_nifti(const fs::path& path, const ReadVolumeOptions& options) {
 const Mat3 kLpsToRas = Vec3(-1.0, -1.0, 1.0).asDiagonal();  // also RAS -> LPS
 
 LabelVolume read_metaimage(const fs::path& path, const ReadVolumeOptions& options) {
-  CerrCapture cerr;
-  VtkMessageCapture capture;
-  const std::string file = path.string();
-  vtkNew<vtkMetaImageReader> reader;
-  if (!reader->CanReadFile(file.c_str())) {
-    capture.throw_if_failed(path);
-    throw IoError(cat(name_of(path), ": not a MetaImage file (no valid header)"));
-  }
-  reader->SetFileName(file.c_str());
-  reader->Update();
-  // vtkMetaImageReader accepts truncated data silently; metaio then complains on std::cerr only
-  // ("M_ReadElementsData: data not read completely").
-  if (!capture.has_errors() && !cerr.first_line().empty())
-    throw IoError(cat(name_of(path), ": ", cerr.first_line()));
-  capture.throw_if_failed(path, reader);
-
-  // vtkMetaImageReader ignores TransformMatrix: read it from the header with VTK's metaio.
-  vtkmetaio::MetaImage meta;
-  if (!meta.Read(file.c_str(), false))
-    throw IoError(cat(name_of(path), ": cannot read the MetaImage header ", cerr.first_line()));
-  const int nd = meta.NDims();
-  if (nd < 2 || nd > 3) throw IoError(cat(name_of(path), ": ", nd, "-D MetaImage; a label volume is 3-D"));
-  if (meta.ElementNumberOfChannels() != 1)
-    throw IoError(cat(name_of(path), ": ", meta.ElementNumberOfChannels(),
-                      " channels per voxel; a label volume needs 1"));
-  Mat3 D = Mat3::Identity();
-  Vec3 spacing = Vec3::Ones(), origin = Vec3::Zero();
-  for (int i = 0; i < nd; ++i) {
-    spacing(i) = meta.ElementSpacing(i);
-    origin(i) = meta.Position(i);
-    for (int j = 0; j < nd; ++j)
-      D(j, i) = meta.TransformMatrix(i, j);  // row i of TransformMatrix = axis i (ITK)
-  }
-  const Geometry g = geometry_from_affine(kLpsToRas * D * spacing.asDiagonal(), kLpsToRas * origin, path);
-  return to_label_volume(reader->GetOutput(), g, false, 1.0, 0.0, options, path);
+  // MedSpring's reader (safe_readers.hpp): metaio overflows a fixed buffer on a long header value.
+  const RawVolume raw = read_metaimage_file(path);
+  const Geometry g = geometry_from_affine(kLpsToRas * raw.axes * raw.spacing.asDiagonal(), kLpsToRas * raw.origin, path);
+  return to_label_volume(raw.image, g, false, 1.0, 0.0, options, path);
 }
 
 // --- NRRD -------------------------------------------------------------------------------------------
@@ -325,8 +294,8 @@ std::vector<Vec3> nrrd_vectors(const std::string& text, const fs::path& path, co
 }
 
 LabelVolume read_nrrd(const fs::path& path, const ReadVolumeOptions& options) {
-  // vtkNrrdReader keeps the spacing and origin but no orientation: the declared space, its "space
-  // directions" and the true sizes come from the header.
+  // The geometry (declared space, "space directions", "space origin", "spacings") comes from the
+  // header fields; the voxels from MedSpring's reader.
   const auto fields = nrrd_fields(path);
   auto field = [&](const char* key) {
     const auto it = fields.find(key);
@@ -338,21 +307,24 @@ LabelVolume read_nrrd(const fs::path& path, const ReadVolumeOptions& options) {
   if (space == "left-posterior-superior" || space == "lps") {
     flip = Vec3(-1, -1, 1);
   } else if (space == "left-anterior-superior" || space == "las" || space == "3d-left-handed") {
-    // vtkNrrdReader reverses the rows of such files for raw encoding only
+    // not converted (vtkNrrdReader, used before, reversed the rows of such files for raw encoding only)
     throw IoError(cat(name_of(path), ": NRRD space '", field("space"),
                       "' is not supported (store the volume in LPS or RAS)"));
   }
 
-  VtkMessageCapture capture;
-  const std::string file = path.string();
-  vtkNew<vtkNrrdReader> reader;
-  reader->SetFileName(file.c_str());
-  reader->Update();
-  capture.throw_if_failed(path, reader);
-  vtkImageData* image = reader->GetOutput();
-
-  Mat3 A = Vec3(image->GetSpacing()[0], image->GetSpacing()[1], image->GetSpacing()[2]).asDiagonal();
-  Vec3 t(image->GetOrigin()[0], image->GetOrigin()[1], image->GetOrigin()[2]);
+  // MedSpring's reader (safe_readers.hpp): vtkNrrdReader loops forever on a NUL in the header.
+  const RawVolume raw = read_nrrd_file(path);
+  Vec3 spacing = Vec3::Ones();
+  if (const std::string sp = field("spacings"); !sp.empty()) {
+    std::istringstream in(sp);
+    for (int c = 0; c < raw.ndims; ++c) {
+      double v = 1;
+      if (!(in >> v) || !std::isfinite(v) || v <= 0) v = 1;  // "nan" for a non-spatial axis
+      spacing(c) = v;
+    }
+  }
+  Mat3 A = spacing.asDiagonal();
+  Vec3 t = Vec3::Zero();
   if (const std::string dirs_text = field("space directions"); !dirs_text.empty()) {
     const auto dirs = nrrd_vectors(dirs_text, path, "space directions");
     if (dirs.size() != 3)
@@ -367,23 +339,7 @@ LabelVolume read_nrrd(const fs::path& path, const ReadVolumeOptions& options) {
   }
   const Geometry g = geometry_from_affine(flip.asDiagonal() * A, flip.asDiagonal() * t, path);
 
-  // A 3-D file whose first axis has <= 9 samples comes out of vtkNrrdReader as vector voxels of a
-  // 2-D image; the header's sizes (and kinds) tell the truth.
-  std::array<Index, 3> sizes{0, 0, 0};
-  std::istringstream size_in(field("sizes"));
-  const bool three_d = field("dimension") == "3" && (size_in >> sizes[0] >> sizes[1] >> sizes[2]);
-  std::istringstream kinds_in(field("kinds"));
-  std::string kind0;
-  kinds_in >> kind0;
-  std::transform(kind0.begin(), kind0.end(), kind0.begin(), [](unsigned char c) { return std::tolower(c); });
-  const bool spatial0 = kind0.empty() || kind0 == "domain" || kind0 == "space";
-  vtkDataArray* scalars = image->GetPointData() ? image->GetPointData()->GetScalars() : nullptr;
-  int d[3];
-  image->GetDimensions(d);
-  if (three_d && spatial0 && scalars && scalars->GetNumberOfComponents() == sizes[0] && d[0] == sizes[1] &&
-      d[1] == sizes[2] && d[2] == 1)
-    return to_label_volume(image, g, false, 1.0, 0.0, options, path, &sizes);
-  return to_label_volume(image, g, false, 1.0, 0.0, options, path);
+  return to_label_volume(raw.image, g, false, 1.0, 0.0, options, path);
 }
 
 template <class T>

@@ -8,9 +8,13 @@
 
 #include <filesystem>
 #include <functional>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "medspring/core/check.hpp"
+#include "medspring/core/error.hpp"
 #include "medspring/core/types.hpp"
 #include "medspring/geometry/polyline.hpp"
 #include "medspring/io/mesh_io.hpp"
@@ -45,6 +49,21 @@ class VtkMessageCapture {
   std::vector<std::string> errors_, warnings_;
   VtkMessageCapture* outer_ = nullptr;
 };
+
+/// Runs `f` (calls into VTK) and returns its result; a C++ exception thrown inside VTK (std::length_error
+/// or std::bad_alloc from a size read from the file) becomes IoError naming the file.
+template <class F>
+auto guard_vtk(const std::filesystem::path& file, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const Error&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw IoError(cat(file.string(), ": out of memory reading the file (a size in it is too large)"));
+  } catch (const std::exception& e) {
+    throw IoError(cat(file.string(), ": ", e.what()));
+  }
+}
 
 /// Lower-case extension with the dot; ".nii.gz" (and ".img.gz", ...) counted as one: "mesh.OBJ" ->
 /// ".obj", "mask.nii.gz" -> ".nii.gz".
