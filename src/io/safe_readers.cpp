@@ -988,6 +988,161 @@ RawVolume read_nrrd_file(const fs::path& path) {
   return out;
 }
 
+// --- VTK XML binary data ------------------------------------------------------------------------------
+
+/// The value of attribute `name` in the XML start tag `tag` ("" when absent).
+std::string xml_attribute(std::string_view tag, std::string_view name) {
+  for (std::size_t at = tag.find(name); at != std::string_view::npos; at = tag.find(name, at + 1)) {
+    if (at == 0 || !is_space(tag[at - 1])) continue;
+    std::size_t i = at + name.size();
+    while (i < tag.size() && is_space(tag[i])) ++i;
+    if (i >= tag.size() || tag[i] != '=') continue;
+    ++i;
+    while (i < tag.size() && is_space(tag[i])) ++i;
+    if (i >= tag.size() || (tag[i] != '"' && tag[i] != '\'')) continue;
+    const std::size_t end = tag.find(tag[i], i + 1);
+    if (end == std::string_view::npos) return "";
+    return std::string(tag.substr(i + 1, end - i - 1));
+  }
+  return "";
+}
+
+/// Decodes base64 from `text` until `need` bytes are out, a '=' or a '<' (whitespace skipped).
+std::string base64_prefix(std::string_view text, std::size_t need) {
+  auto value = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    if (c == '+') return 62;
+    if (c == '/') return 63;
+    return -1;
+  };
+  std::string out;
+  std::uint32_t acc = 0;
+  int bits = 0;
+  for (char c : text) {
+    if (out.size() >= need || c == '=' || c == '<') break;
+    const int v = value(c);
+    if (v < 0) continue;
+    acc = (acc << 6) | static_cast<std::uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<char>((acc >> bits) & 0xff));
+    }
+  }
+  return out;
+}
+
+/// Base64 characters in `text` up to the first '<'.
+std::size_t base64_length(std::string_view text) {
+  std::size_t n = 0;
+  for (char c : text) {
+    if (c == '<') break;
+    if (!is_space(c)) ++n;
+  }
+  return n;
+}
+
+void check_vtk_xml(const fs::path& path) {
+  const std::string bytes = read_all(path);
+  const std::string_view file(bytes);
+  const std::size_t root = file.find("<VTKFile");
+  if (root == std::string_view::npos) return;  // not VTK XML: the reader says so
+  const std::size_t root_end = file.find('>', root);
+  if (root_end == std::string_view::npos) bad(path, "VTK XML: unterminated <VTKFile> tag");
+  const std::string_view root_tag = file.substr(root, root_end - root);
+  const std::string header_type = xml_attribute(root_tag, "header_type");
+  const std::size_t H = header_type == "UInt64" ? 8 : 4;
+  const bool compressed = !xml_attribute(root_tag, "compressor").empty();
+  const bool big = xml_attribute(root_tag, "byte_order") == "BigEndian";
+
+  // the appended section: data from the '_' after <AppendedData ...> to the end of the file
+  const std::size_t appended_tag = file.find("<AppendedData");
+  std::size_t appended = std::string_view::npos;
+  bool appended_base64 = false;
+  if (appended_tag != std::string_view::npos) {
+    const std::size_t gt = file.find('>', appended_tag);
+    if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <AppendedData> tag");
+    appended_base64 = xml_attribute(file.substr(appended_tag, gt - appended_tag), "encoding") == "base64";
+    appended = file.find('_', gt);
+    if (appended == std::string_view::npos) bad(path, "VTK XML: <AppendedData> without its '_' marker");
+    ++appended;
+  }
+  const std::string_view xml = file.substr(0, appended_tag);  // DataArray tags live before the raw data
+
+  auto word = [&](std::string_view h, std::size_t k) {
+    std::uint64_t v = 0;
+    for (std::size_t b = 0; b < H; ++b) {
+      const auto byte = static_cast<unsigned char>(h[k * H + (big ? b : H - 1 - b)]);
+      v = (v << 8) | byte;
+    }
+    return v;
+  };
+  // header: the decoded header bytes available; left: data bytes after the header
+  auto check = [&](const std::string& name, auto&& header_bytes, auto&& left_after) {
+    const std::string_view what = name;
+    std::string h = header_bytes(3 * H);
+    if (!compressed) {
+      if (h.size() < H) bad(path, "VTK XML: DataArray '", what, "': truncated size header");
+      const std::uint64_t n = word(h, 0);
+      if (n > left_after(H))
+        bad(path, "VTK XML: DataArray '", what, "' declares ", n, " bytes, the file holds ", left_after(H));
+      return;
+    }
+    if (h.size() < 3 * H) bad(path, "VTK XML: DataArray '", what, "': truncated compression header");
+    const std::uint64_t blocks = word(h, 0), block = word(h, 1), last = word(h, 2);
+    if (blocks > left_after(3 * H) / H)
+      bad(path, "VTK XML: DataArray '", what, "' declares ", blocks, " compressed blocks, more than the file holds");
+    const std::size_t header = (3 + static_cast<std::size_t>(blocks)) * H;
+    h = header_bytes(header);
+    if (h.size() < header) bad(path, "VTK XML: DataArray '", what, "': truncated compression header");
+    std::uint64_t packed = 0;
+    for (std::uint64_t k = 0; k < blocks; ++k) packed += std::min<std::uint64_t>(word(h, 3 + k), std::uint64_t(1) << 62);
+    if (packed > left_after(header))
+      bad(path, "VTK XML: DataArray '", what, "' declares ", packed, " compressed bytes, the file holds ",
+          left_after(header));
+    // zlib expands at most ~1032:1, LZ4 255:1; LZMA more: 16384:1 bounds what a real file needs
+    const long double unpacked = blocks == 0 ? 0.0L : static_cast<long double>(block) * (blocks - 1) + (last ? last : block);
+    const long double limit = 16384.0L * static_cast<long double>(packed) + 65536.0L;
+    if (static_cast<long double>(block) > limit || unpacked > limit)
+      bad(path, "VTK XML: DataArray '", what, "' declares ", static_cast<double>(std::max<long double>(unpacked, block)),
+          " uncompressed bytes from ", packed, " compressed bytes");
+  };
+
+  for (std::size_t at = xml.find("<DataArray"); at != std::string_view::npos; at = xml.find("<DataArray", at + 1)) {
+    const std::size_t gt = xml.find('>', at);
+    if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <DataArray> tag");
+    const std::string_view tag = xml.substr(at, gt - at);
+    const std::string format = xml_attribute(tag, "format");
+    const std::string name = xml_attribute(tag, "Name");
+    if (format == "appended") {
+      if (appended == std::string_view::npos) bad(path, "VTK XML: DataArray '", name, "' is appended, the file has no <AppendedData>");
+      std::uint64_t offset = 0;
+      const std::string off = xml_attribute(tag, "offset");
+      const auto r = std::from_chars(off.data(), off.data() + off.size(), offset);
+      if (r.ec != std::errc() || r.ptr != off.data() + off.size())
+        bad(path, "VTK XML: DataArray '", name, "': offset '", shown(off), "'");
+      if (offset > file.size() - appended)
+        bad(path, "VTK XML: DataArray '", name, "': offset ", offset, " is past the end of the file");
+      const std::string_view data = file.substr(appended + static_cast<std::size_t>(offset));
+      if (appended_base64) {
+        const std::uint64_t chars = base64_length(data);
+        check(name, [&](std::size_t n) { return base64_prefix(data, n); },
+              [&](std::size_t used) { return chars * 3 / 4 >= used ? chars * 3 / 4 - used + 3 : 0; });
+      } else {
+        check(name, [&](std::size_t n) { return std::string(data.substr(0, n)); },
+              [&](std::size_t used) { return data.size() >= used ? data.size() - used : 0; });
+      }
+    } else if (format == "binary") {
+      const std::string_view data = xml.substr(gt + 1);
+      const std::uint64_t chars = base64_length(data);
+      check(name, [&](std::size_t n) { return base64_prefix(data, n); },
+            [&](std::size_t used) { return chars * 3 / 4 >= used ? chars * 3 / 4 - used + 3 : 0; });
+    }
+  }
+}
+
 // --- NIfTI -----------------------------------------------------------------------------------------------
 
 void check_nifti(const fs::path& path) {

@@ -52,6 +52,13 @@ RawVolume read_metaimage_file(const std::filesystem::path& path);
 /// detached header, byte skip / line skip). The geometry fields are left to the caller.
 RawVolume read_nrrd_file(const std::filesystem::path& path);
 
+/// Checks the binary data of a VTK XML file (.vtp) before vtkXMLPolyDataReader reads it: for every
+/// DataArray in "appended" (raw or base64) or "binary" format, the size header (or, with a compressor,
+/// the block count, block sizes and compressed sizes) must fit in the bytes the file holds, and the
+/// uncompressed size must be one the compressed bytes can give. vtkXMLDataParser allocates whatever the
+/// header says first.
+void check_vtk_xml(const std::filesystem::path& path);
+
 /// Checks a NIfTI-1 or NIfTI-2 file (.nii or .nii.gz, either byte order) before vtkNIFTIImageReader
 /// reads it: header size and magic, dimensions (1 to 7, each >= 1), a datatype VTK reads with the
 /// matching bitpix, vox_offset, and a data block as long as the header says (gzip streams are

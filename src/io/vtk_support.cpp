@@ -427,6 +427,7 @@ vtkSmartPointer<vtkPolyData> read_polydata(const fs::path& path, MeshFormat form
         capture.throw_if_failed(path);
         throw IoError(cat(name_of(path), ": not a VTK XML PolyData file"));
       }
+      check_vtk_xml(path);  // vtkXMLDataParser allocates whatever the size headers say
       reader->SetFileName(file.c_str());
       poly = run_reader(reader.Get(), path, capture);
       break;

@@ -438,6 +438,85 @@ TEST_F(MalformedMesh, GarbageInXmlPlyAndLegacyFilesIsNamed) {
   expect_error_naming([&] { read_mesh(dir_ / "cut.vtp"); }, "cut.vtp");
 }
 
+std::string base64_decode(std::string_view text) {
+  static const std::string A = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  std::uint32_t acc = 0;
+  int bits = 0;
+  for (char c : text) {
+    const auto v = A.find(c);
+    if (v == std::string::npos) break;
+    acc = (acc << 6) | static_cast<std::uint32_t>(v);
+    if ((bits += 6) >= 8) out.push_back(static_cast<char>((acc >> (bits -= 8)) & 0xff));
+  }
+  return out;
+}
+
+std::string base64_encode(std::string_view bytes) {
+  static const char* A = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    std::uint32_t v = 0;
+    const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);
+    for (std::size_t k = 0; k < 3; ++k) v = (v << 8) | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0u);
+    for (std::size_t k = 0; k < 4; ++k) out.push_back(k <= n ? A[(v >> (18 - 6 * k)) & 63] : '=');
+  }
+  return out;
+}
+
+TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
+  // write_vtp: appended base64 data, zlib, UInt64 headers [blocks, block size, last size, compressed
+  // sizes], the header its own base64 stream; the Points array is at offset 0
+  write_vtp(dir_ / "whole.vtp", kidney_phantom());
+  const std::string vtp = testing::read_text(dir_ / "whole.vtp");
+  const std::size_t data = vtp.find('_', vtp.find("<AppendedData")) + 1;
+  const std::size_t header_chars = 44;  // 4 words = 32 bytes
+  auto patched = [&](std::size_t word, std::uint64_t value) {
+    std::string h = base64_decode(std::string_view(vtp).substr(data, header_chars));
+    EXPECT_EQ(h.size(), 32u);
+    for (int k = 0; k < 8; ++k) h[8 * word + k] = static_cast<char>((value >> (8 * k)) & 0xff);
+    std::string b = vtp;
+    b.replace(data, header_chars, base64_encode(h));
+    return b;
+  };
+  write_text(dir_ / "same.vtp", patched(0, 1));  // the helpers re-encode the header faithfully
+  EXPECT_EQ(testing::read_text(dir_ / "same.vtp"), vtp);
+  write_text(dir_ / "blocks.vtp", patched(0, std::uint64_t(1) << 60));  // block count
+  expect_error_naming([&] { read_mesh(dir_ / "blocks.vtp"); },
+                      "blocks.vtp: VTK XML: DataArray 'Points' declares 1152921504606846976 compressed blocks");
+  write_text(dir_ / "packed.vtp", patched(3, std::uint64_t(1) << 40));  // compressed size of block 0
+  expect_error_naming([&] { read_mesh(dir_ / "packed.vtp"); }, "compressed bytes, the file holds");
+  write_text(dir_ / "unpacked.vtp", patched(1, std::uint64_t(1) << 39));  // uncompressed block size
+  expect_error_naming([&] { read_mesh(dir_ / "unpacked.vtp"); }, "uncompressed bytes from");
+
+  // appended raw, uncompressed, UInt32 headers: one triangle
+  std::string raw;
+  auto put = [&](const auto& v) { raw.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  const std::string xml =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n"
+      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/></Points>\n"
+      "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"40\"/>\n"
+      "<DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\"56\"/></Polys>\n"
+      "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_";
+  put(std::uint32_t{36});
+  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(v);
+  put(std::uint32_t{12});
+  for (std::int32_t v : {0, 1, 2}) put(v);
+  put(std::uint32_t{4});
+  put(std::int32_t{3});
+  const std::string tail = "\n</AppendedData>\n</VTKFile>\n";
+  write_text(dir_ / "raw.vtp", xml + raw + tail);
+  EXPECT_EQ(read_mesh(dir_ / "raw.vtp").num_faces(), 1);
+  raw[0] = '\xff';
+  raw[1] = '\xff';
+  raw[2] = '\xff';
+  raw[3] = '\x7f';
+  write_text(dir_ / "raw-big.vtp", xml + raw + tail);
+  expect_error_naming([&] { read_mesh(dir_ / "raw-big.vtp"); },
+                      "raw-big.vtp: VTK XML: DataArray '' declares 2147483647 bytes, the file holds");
+}
+
 TEST_F(MalformedMesh, VtpWithOutOfRangeIndexOrNanPointIsNamed) {
   SurfaceMesh m;
   m.V.resize(3, 3);
