@@ -1,15 +1,21 @@
 // medspring_soak: long-run stability (issue 9). Repeated press / release cycles on the hybrid kidney
-// phantom and the 40 x 30 tube; checks finiteness, rest recovery, bounded energy and resident memory.
+// phantom, the SMRM vessel phantom (40 atoms x 30 spokes on an arc) and the 40 x 30 tube, and on any
+// model package given (the real kidney and aorta of `medspring export --web`); checks finiteness, rest
+// recovery, bounded energy and resident memory.
 //
-//   medspring_soak [updates=1000000] [integrator=symplectic_euler]
+//   medspring_soak [updates=1000000] [integrator=symplectic_euler] [PACKAGE.msm [FORCE_N=0.5]]...
 //
-// Prints one line per model and exits 1 if any check fails.
+// A package is pressed at its surface node farthest along +x, towards the surface centroid. Prints one
+// line per model and exits 1 if any check fails.
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
 #include "medspring/geometry/phantoms.hpp"
+#include "medspring/core/error.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/model_package.hpp"
+#include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 #include "soak_run.hpp"
 
@@ -57,9 +63,16 @@ bool run_model(const char* name, BodyPtr body, const soak::Options& o, long upda
 
 int main(int argc, char** argv) {
   const long updates = argc > 1 ? std::atol(argv[1]) : 1000000;
-  const Integrator integ = argc > 2 ? parse_integrator(argv[2]) : Integrator::SymplecticEuler;
   if (updates <= 0) {
-    std::fprintf(stderr, "usage: medspring_soak [updates > 0] [symplectic_euler|implicit_euler]\n");
+    std::fprintf(stderr,
+                 "usage: medspring_soak [updates > 0] [symplectic_euler|implicit_euler] [PACKAGE.msm [FORCE_N]]...\n");
+    return 2;
+  }
+  Integrator integ = Integrator::SymplecticEuler;
+  try {
+    if (argc > 2) integ = parse_integrator(argv[2]);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "medspring_soak: %s\n", e.what());
     return 2;
   }
   bool ok = run_model("hybrid kidney", std::make_shared<HybridKidney>(hybrid_kidney_phantom()),
@@ -69,5 +82,25 @@ int main(int argc, char** argv) {
                                                GridLayout{40, 30}),
                  {.node = 20 * 30 + 7, .force = Vec3(0, -0.5, 0)}, updates, integ) &&
        ok;
+  ok = run_model("smrm vessel", std::make_shared<SmrmVessel>(smrm_phantom(VesselPath::Arc, CrossSectionShape::Circular)),
+                 {.node = 20 * 30, .force = Vec3(0, 0, -0.5), .settle_ms = 200}, updates, integ) &&
+       ok;
+  for (int a = 3; a < argc; ++a) {
+    const std::string file = argv[a];
+    double newton = 0.5;
+    if (a + 1 < argc && std::string(argv[a + 1]).find(".msm") == std::string::npos) newton = std::atof(argv[++a]);
+    try {
+      BodyPtr body = make_body(read_model_package(file));
+      const MatX3& S = body->rest_surface();
+      const Vec3 c = S.colwise().mean().transpose();
+      Index node = 0;
+      S.col(0).maxCoeff(&node);
+      const Vec3 inward = (c - S.row(node).transpose()).normalized();
+      ok = run_model(file.c_str(), std::move(body), {.node = node, .force = newton * inward}, updates, integ) && ok;
+    } catch (const Error& e) {
+      std::fprintf(stderr, "medspring_soak: %s\n", e.what());
+      return 2;
+    }
+  }
   return ok ? 0 : 1;
 }
