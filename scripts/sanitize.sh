@@ -37,7 +37,9 @@ t2=$(date +%s)
 
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS  # fuzz/run sets its own
 if [ "$secs" != 0 ]; then
-  FUZZ_BUILD_DIR=$build FUZZ_NO_BUILD=1 FUZZ_CORPUS_DIR=$build/fuzz-corpus bash "$root/fuzz/run" "$secs"
+  # a fixed seed: the same inputs every run, so that a CI failure is a regression, not a new random find
+  FUZZ_ARGS=${FUZZ_ARGS:--seed=1} FUZZ_BUILD_DIR=$build FUZZ_NO_BUILD=1 FUZZ_CORPUS_DIR=$build/fuzz-corpus \
+    bash "$root/fuzz/run" "$secs"
 fi
 t3=$(date +%s)
 echo "sanitize.sh: build $((t1 - t0)) s, sanitized tests $((t2 - t1)) s, fuzz $((t3 - t2)) s" \

@@ -1169,6 +1169,10 @@ void check_nifti(const fs::path& path) {
   const bool v1 = version == 1;
   if (v1 ? b.substr(344, 4) != std::string_view("n+1\0", 4) : b.substr(4, 8) != std::string_view("n+2\0\r\n\x1a\n", 8))
     bad(path, "not a single-file NIfTI-", version, " image (magic)");
+  // vtkNIFTIImageReader takes a NIfTI-2 magic at byte 4 ('n+2'..'n+9', 'ni2'..'ni9') before the size
+  // field and would read this 348-byte header as a 540-byte one
+  if (v1 && b[4] == 'n' && (b[5] == '+' || b[5] == 'i') && b[6] >= '2' && b[6] <= '9' && b[7] == '\0')
+    bad(path, "NIfTI: a NIfTI-1 header (348 bytes) with the NIfTI-", b[6], " magic '", b.substr(4, 3), "' at byte 4");
   // dim[0..7], datatype, bitpix, vox_offset
   double dim[8];
   for (int a = 0; a < 8; ++a)

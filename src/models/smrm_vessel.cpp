@@ -104,6 +104,7 @@ SmrmVessel::SmrmVessel(SmrmParts parts, const SmrmSettings& settings)
           " nodes");
   require(!binding_.generic() || static_cast<Index>(binding_.lambda.size()) == m, w, ": binding has ",
           binding_.lambda.size(), " bracket parameters for ", m, " nodes");
+  require_finite_points(binding_.offset, cat(w, ": binding offset of surface node"));
   for (Index k = 0; k < m; ++k) {
     const Index a = binding_.atom[static_cast<std::size_t>(k)];
     require_index(a, binding_.generic() ? n - 1 : n, cat(w, ": node ", k, ": atom"));
@@ -135,6 +136,7 @@ SmrmVessel::SmrmVessel(SmrmParts parts, const SmrmSettings& settings)
   // Spoke lengths (distance to the interpolated atom) and the largest in-plane spoke of every atom.
   spoke_length_.resize(m);
   VecX rho_max = VecX::Zero(n);
+  require_finite_points(binding_.offset, cat(w, ": binding offset of surface node"));
   for (Index k = 0; k < m; ++k) {
     const Index a = binding_.atom[static_cast<std::size_t>(k)];
     const double lam = binding_.generic() ? binding_.lambda[static_cast<std::size_t>(k)] : 0.0;

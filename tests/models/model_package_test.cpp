@@ -152,6 +152,15 @@ TEST(ModelPackage, InvalidContentsAreRefusedByMakeBody) {
   ModelPackage nan = package_of(*vessel(), "v");
   nan.atoms(4, 1) = std::nan("");
   EXPECT_THROW(make_body(decode_model_package(encode_model_package(nan))), InvalidInput);
+  // a NaN surface offset (found by fuzz_model_package: the node reconstructed as NaN at rest)
+  ModelPackage offset = package_of(*vessel(), "v");
+  offset.binding.offset(40, 1) = std::nan("");
+  try {
+    make_body(decode_model_package(encode_model_package(offset)));
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("binding offset of surface node[40]"), std::string::npos) << e.what();
+  }
 }
 
 TEST(TissueParams, ScaleTheSpringsAndSwitchTheLaw) {
