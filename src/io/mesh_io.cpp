@@ -9,6 +9,7 @@
 #include <vtkPoints.h>
 #include <vtkPolyDataWriter.h>
 #include <vtkSTLWriter.h>
+#include <vtkPolyData.h>
 #include <vtkTriangleFilter.h>
 
 #include <cmath>
@@ -53,8 +54,14 @@ MeshReadResult mesh_from_polydata(vtkPolyData* poly, const fs::path& path, MeshF
   vtkSmartPointer<vtkPolyData> tri = poly;
   if (non_triangles > 0) {
     VtkMessageCapture capture;
+    // geometry only: the mesh uses no attribute arrays, and vtkTriangleFilter copies them by index
+    // without checking their length (an OBJ with more normals than vertices crashed it; fuzz_mesh_obj)
+    vtkNew<vtkPolyData> geometry;
+    geometry->SetPoints(poly->GetPoints());
+    geometry->SetPolys(poly->GetPolys());
+    geometry->SetStrips(poly->GetStrips());
     vtkNew<vtkTriangleFilter> filter;
-    filter->SetInputData(poly);
+    filter->SetInputData(geometry);
     filter->PassVertsOff();
     filter->PassLinesOff();
     filter->Update();
