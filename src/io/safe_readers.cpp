@@ -1092,6 +1092,9 @@ void check_vtk_xml(const fs::path& path) {
     }
     if (h.size() < 3 * H) bad(path, "VTK XML: DataArray '", what, "': truncated compression header");
     const std::uint64_t blocks = word(h, 0), block = word(h, 1), last = word(h, 2);
+    if (blocks > 0 && (block == 0 || last > block))  // vtkXMLDataParser divides by the block size
+      bad(path, "VTK XML: DataArray '", what, "': compression header with block size ", block,
+          " and last block size ", last);
     if (blocks > left_after(3 * H) / H)
       bad(path, "VTK XML: DataArray '", what, "' declares ", blocks, " compressed blocks, more than the file holds");
     const std::size_t header = (3 + static_cast<std::size_t>(blocks)) * H;

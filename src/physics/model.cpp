@@ -273,4 +273,22 @@ std::uint64_t model_fingerprint(const Model& m) {
   return h;
 }
 
+void require_state_in_reach(const Model& m, const MatX3& x, const MatX3& v, const std::string& what) {
+  const Index n = m.num_nodes();
+  require(x.rows() == n && v.rows() == n, what, ": state has ", x.rows(), " positions and ", v.rows(),
+          " velocities, the model has ", n, " nodes");
+  require_finite_points(x, what, ": state.x");
+  require_finite_points(v, what, ": state.v");
+  if (n == 0) return;
+  const double size = (m.x0.colwise().maxCoeff() - m.x0.colwise().minCoeff()).norm();
+  const double reach = kStateReach * (1.0 + size);
+  for (Index i = 0; i < n; ++i) {
+    const double d = (x.row(i) - m.x0.row(i)).stableNorm();
+    require(d <= reach, what, ": state.x: node ", i, " is ", d, " mm from its rest position (the model is ", size,
+            " mm across; at most ", reach, ")");
+    const double s = v.row(i).stableNorm();
+    require(s <= reach, what, ": state.v: node ", i, " moves at ", s, " mm/ms (at most ", reach, ")");
+  }
+}
+
 }  // namespace medspring

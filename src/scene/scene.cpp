@@ -432,8 +432,10 @@ SceneLoad parse_load(const Ctx& c, const json& j, const std::string& path) {
   } else {
     L.direction = SceneLoad::Direction::Vector;
     L.vector = as_vec3(c, *dir, o.at("direction"));
-    if (L.vector.norm() < 1e-12) fail(c, o.at("direction"), "must not be the zero vector");
-    L.vector.normalize();
+    const double norm = L.vector.norm();
+    if (norm < 1e-12) fail(c, o.at("direction"), "must not be the zero vector");
+    if (!std::isfinite(norm)) fail(c, o.at("direction"), "is too long to normalise");
+    // kept as written (build_scene normalises): scene_to_json -> parse_scene is then the identity
   }
   if (o.has("atom") && L.direction != SceneLoad::Direction::TowardsAtom)
     fail(c, o.at("atom"), "applies only with direction \"towards_atom\"");

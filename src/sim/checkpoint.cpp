@@ -154,8 +154,7 @@ void apply_checkpoint(const Checkpoint& c, Simulation& sim, const std::string& w
                            " nodes, fingerprint ", hex64(fp), ")"));
   // validate everything before changing the simulation
   const State& in = c.state;
-  require_finite_matrix(in.x, what, "state.x");
-  require_finite_matrix(in.v, what, "state.v");
+  require_state_in_reach(m, in.x, in.v, what);
   if (in.f_ext.rows() == n) require_finite_matrix(in.f_ext, what, "state.f_ext");
   if (in.dv.size() == 3 * n) require(in.dv.allFinite(), what, ": state.dv is not finite");
   require_finite(in.t, what, ": state.t");

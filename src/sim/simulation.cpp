@@ -129,10 +129,7 @@ void Simulation::reset() {
 }
 
 void Simulation::set_state(const State& s) {
-  const Index n = body_->model().num_nodes();
-  require(s.x.rows() == n && s.v.rows() == n, "simulation: state has ", s.x.rows(), " nodes, the model has ",
-          n);
-  require(s.x.allFinite() && s.v.allFinite(), "simulation: state positions/velocities must be finite");
+  require_state_in_reach(body_->model(), s.x, s.v, "simulation");
   State t = make_state(body_->model());
   t.x = s.x;
   t.v = s.v;

@@ -327,6 +327,28 @@ TEST(ExtremeNaN, NaNPositionsAndLoadsAreRefusedAtTheApi) {
   EXPECT_TRUE(finite(sim));
 }
 
+TEST(ExtremeNaN, StatesBeyondReachAreRefusedAtTheApi) {
+  // finite but absurd (found by fuzz_checkpoint: 1e307 mm overflowed the SMRM surface map to NaN)
+  Simulation sim(kidney());
+  State s = sim.state();
+  s.x(7, 1) = 1e307;
+  try {
+    sim.set_state(s);
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("state.x: node 7 is 1e+307 mm from its rest position"), std::string::npos)
+        << e.what();
+  }
+  s = sim.state();
+  s.v(3, 0) = 1e200;
+  EXPECT_THROW(sim.set_state(s), InvalidInput);
+  s = sim.state();
+  s.x(7, 1) += 1e3;  // far, but physical: accepted
+  s.v(3, 0) = 1e3;
+  EXPECT_NO_THROW(sim.set_state(s));
+  EXPECT_TRUE(finite(sim));
+}
+
 TEST(ExtremeNaN, NaNWrittenIntoThePositionsIsContainedAndReportedEveryFrame) {
   // A caller writing NaN straight into state().x bypasses set_state: every frame is then dropped
   // and reported, and the NaN does not spread to any other node.

@@ -114,4 +114,14 @@ Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& param
 /// doubles). Two models with the same fingerprint simulate identically.
 std::uint64_t model_fingerprint(const Model& model);
 
+/// How far a state may stray before it is refused: positions within kStateReach x (1 + model size) mm
+/// of their rest positions, velocities under kStateReach x (1 + model size) mm/ms, where the model size
+/// is the diagonal of the rest bounding box. Far beyond anything the guarded integrator produces; a
+/// state outside (e.g. 1e300 mm from a checkpoint file) would overflow the surface map and the normals.
+inline constexpr double kStateReach = 1e6;
+
+/// InvalidInput "<what>: state.x: node i is D mm from its rest position (…)" when x or v is not finite,
+/// has the wrong size, or is outside the reach above.
+void require_state_in_reach(const Model& model, const MatX3& x, const MatX3& v, const std::string& what);
+
 }  // namespace medspring

@@ -88,7 +88,7 @@ struct SceneLoad {
   Vec3 point = Vec3::Zero();  // Pick::Point: the surface node nearest to this point (mm) is loaded
   Index ring = 0, spoke = 0;  // Pick::RingSpoke: node ring * spokes + spoke of a structured grid
   Direction direction = Direction::InwardNormal;
-  Vec3 vector = Vec3::Zero();  // Direction::Vector (normalised by the parser)
+  Vec3 vector = Vec3::Zero();  // Direction::Vector, as written (normalised by build_scene)
   Index target_atom = -1;      // Direction::TowardsAtom on a hybrid: atom (-1 = the middle atom)
   double magnitude = 0.0;      // N
   double t_on = 0.0;           // ms
