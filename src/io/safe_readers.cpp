@@ -1054,7 +1054,10 @@ void check_vtk_xml(const fs::path& path) {
   const std::string_view root_tag = file.substr(root, root_end - root);
   const std::string header_type = xml_attribute(root_tag, "header_type");
   const std::size_t H = header_type == "UInt64" ? 8 : 4;
-  const bool compressed = !xml_attribute(root_tag, "compressor").empty();
+  const std::string compressor = xml_attribute(root_tag, "compressor");
+  const bool compressed = !compressor.empty();
+  // the most a compressed byte can expand to: zlib ~1032:1, LZ4 255:1; LZMA more (16384:1 bounds real files)
+  const double ratio = compressor == "vtkZLibDataCompressor" ? 1100 : compressor == "vtkLZ4DataCompressor" ? 260 : 16384;
   const bool big = xml_attribute(root_tag, "byte_order") == "BigEndian";
 
   // the appended section: data from the '_' after <AppendedData ...> to the end of the file
@@ -1105,13 +1108,35 @@ void check_vtk_xml(const fs::path& path) {
     if (packed > left_after(header))
       bad(path, "VTK XML: DataArray '", what, "' declares ", packed, " compressed bytes, the file holds ",
           left_after(header));
-    // zlib expands at most ~1032:1, LZ4 255:1; LZMA more: 16384:1 bounds what a real file needs
     const long double unpacked = blocks == 0 ? 0.0L : static_cast<long double>(block) * (blocks - 1) + (last ? last : block);
-    const long double limit = 16384.0L * static_cast<long double>(packed) + 65536.0L;
+    const long double limit = static_cast<long double>(ratio) * static_cast<long double>(packed) + 65536.0L;
     if (static_cast<long double>(block) > limit || unpacked > limit)
       bad(path, "VTK XML: DataArray '", what, "' declares ", static_cast<double>(std::max<long double>(unpacked, block)),
           " uncompressed bytes from ", packed, " compressed bytes");
   };
+
+  // Counts VTK allocates for before it reads a byte: each element needs at least one byte of data (of
+  // uncompressed data: `ratio` per byte of the file), so a count the file cannot hold is refused here.
+  const std::uint64_t max_count =
+      static_cast<std::uint64_t>(compressed ? ratio : 1.0) * static_cast<std::uint64_t>(file.size()) + 1024;
+  auto count = [&](std::string_view tag, const char* attribute, const char* element) -> std::uint64_t {
+    const std::string text = xml_attribute(tag, attribute);
+    if (text.empty()) return 0;
+    std::uint64_t v = 0;
+    const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (r.ec != std::errc() || r.ptr != text.data() + text.size())
+      bad(path, "VTK XML: ", element, " ", attribute, " '", shown(text), "' is not a count (0 to 2^64 - 1)");
+    if (v > max_count)
+      bad(path, "VTK XML: ", element, " ", attribute, " = ", v, ": more than a ", file.size(), "-byte file can hold");
+    return v;
+  };
+  for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos; at = xml.find("<Piece", at + 1)) {
+    const std::size_t gt = xml.find('>', at);
+    if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <Piece> tag");
+    for (const char* a : {"NumberOfPoints", "NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys",
+                          "NumberOfCells"})
+      count(xml.substr(at, gt - at), a, "Piece");
+  }
 
   for (std::size_t at = xml.find("<DataArray"); at != std::string_view::npos; at = xml.find("<DataArray", at + 1)) {
     const std::size_t gt = xml.find('>', at);
@@ -1119,6 +1144,9 @@ void check_vtk_xml(const fs::path& path) {
     const std::string_view tag = xml.substr(at, gt - at);
     const std::string format = xml_attribute(tag, "format");
     const std::string name = xml_attribute(tag, "Name");
+    count(tag, "NumberOfTuples", "DataArray");
+    if (count(tag, "NumberOfComponents", "DataArray") > 4096)
+      bad(path, "VTK XML: DataArray '", name, "' has more than 4096 components");
     if (format == "appended") {
       if (appended == std::string_view::npos) bad(path, "VTK XML: DataArray '", name, "' is appended, the file has no <AppendedData>");
       std::uint64_t offset = 0;
