@@ -6,6 +6,11 @@
 #include "safe_readers.hpp"
 
 #include <vtkCellArray.h>
+#include <vtkDataCompressor.h>
+#include <vtkLZ4DataCompressor.h>
+#include <vtkLZMADataCompressor.h>
+#include <vtkSmartPointer.h>
+#include <vtkZLibDataCompressor.h>
 #include <vtkDoubleArray.h>
 #include <vtkIdTypeArray.h>
 #include <vtkNew.h>
@@ -24,6 +29,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -1044,6 +1050,118 @@ std::size_t base64_length(std::string_view text) {
   return n;
 }
 
+/// The base64 characters of `text` up to the first '<', whitespace removed.
+std::string base64_chars(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '<') break;
+    if (!is_space(c)) out.push_back(c);
+  }
+  return out;
+}
+
+/// The element type of a VTK XML DataArray ("Int32", "UInt64", "Float32", ...).
+std::optional<NumType> vtk_xml_type(const std::string& type) {
+  static const std::map<std::string, NumType> types = {
+      {"Int8", kI8},   {"UInt8", kU8},   {"Int16", kI16},  {"UInt16", kU16},  {"Int32", kI32},
+      {"UInt32", kU32}, {"Int64", kI64}, {"UInt64", kU64}, {"Float32", kF32}, {"Float64", kF64}};
+  const auto it = types.find(type);
+  if (it == types.end()) return std::nullopt;
+  return it->second;
+}
+
+/// How the binary DataArrays of one VTK XML file are written: header word size, byte order, compressor.
+struct VtkXmlCodec {
+  std::size_t H = 4;
+  bool big = false;
+  vtkSmartPointer<vtkDataCompressor> compressor;  // null: uncompressed
+  bool unknown_compressor = false;
+
+  std::uint64_t word(std::string_view h, std::size_t k) const {
+    std::uint64_t v = 0;
+    for (std::size_t b = 0; b < H; ++b) v = (v << 8) | static_cast<unsigned char>(h[k * H + (big ? b : H - 1 - b)]);
+    return v;
+  }
+
+  /// The decoded bytes of one binary DataArray whose header starts at `data` (base64 characters
+  /// when `base64`: one stream uncompressed; the header and the data two streams with a compressor, as
+  /// vtkXMLWriter writes them), at
+  /// most `limit` of them; nullopt when they cannot be decoded here (VTK's reader then fails on its own).
+  std::optional<std::string> decode(std::string_view data, bool base64, std::size_t limit) const {
+    std::string chars;
+    if (base64) chars = base64_chars(data);
+    // the header (n header bytes) and where the data starts
+    auto header = [&](std::size_t n) -> std::optional<std::string> {
+      std::string h = base64 ? base64_prefix(chars, n) : std::string(data.substr(0, std::min(n, data.size())));
+      if (h.size() < n) return std::nullopt;
+      return h;
+    };
+    auto payload = [&](std::size_t header_bytes, std::size_t n) -> std::string {
+      if (!base64) return std::string(data.substr(std::min(header_bytes, data.size()), n));
+      const std::size_t skip = (header_bytes + 2) / 3 * 4;
+      return skip >= chars.size() ? std::string() : base64_prefix(std::string_view(chars).substr(skip), n);
+    };
+    if (unknown_compressor) return std::nullopt;
+    if (!compressor) {
+      const auto h = header(H);
+      if (!h) return std::nullopt;
+      const std::uint64_t n = word(*h, 0);
+      if (n > limit) return std::nullopt;
+      // uncompressed: the header and the data are one base64 stream
+      std::string out;
+      if (base64) {
+        out = base64_prefix(chars, H + static_cast<std::size_t>(n));
+        out.erase(0, std::min(H, out.size()));
+      } else {
+        out = payload(H, static_cast<std::size_t>(n));
+      }
+      if (out.size() < n) return std::nullopt;
+      return out;
+    }
+    const auto h3 = header(3 * H);
+    if (!h3) return std::nullopt;
+    const std::uint64_t blocks = word(*h3, 0), block = word(*h3, 1), last = word(*h3, 2);
+    if (blocks == 0) return std::string();
+    if (blocks > limit || block == 0 || block > limit) return std::nullopt;
+    const std::size_t header_bytes = (3 + static_cast<std::size_t>(blocks)) * H;
+    const auto h = header(header_bytes);
+    if (!h) return std::nullopt;
+    std::uint64_t packed = 0;
+    for (std::uint64_t k = 0; k < blocks; ++k) {
+      packed += word(*h, 3 + k);
+      if (packed > limit) return std::nullopt;
+    }
+    const std::string in = payload(header_bytes, static_cast<std::size_t>(packed));
+    if (in.size() < packed) return std::nullopt;
+    std::string out;
+    std::size_t at = 0;
+    for (std::uint64_t k = 0; k < blocks; ++k) {
+      const std::size_t size = k + 1 == blocks && last != 0 ? last : block;
+      const auto csize = static_cast<std::size_t>(word(*h, 3 + k));
+      if (out.size() + size > limit) return std::nullopt;
+      const std::size_t start = out.size();
+      out.resize(start + size);
+      const std::size_t got = compressor->Uncompress(reinterpret_cast<const unsigned char*>(in.data() + at), csize,
+                                                     reinterpret_cast<unsigned char*>(out.data() + start), size);
+      if (got != size) return std::nullopt;
+      at += csize;
+    }
+    return out;
+  }
+
+  /// The uncompressed byte count a binary DataArray's header declares (nullopt: unreadable header).
+  std::optional<std::uint64_t> declared_bytes(std::string_view data, bool base64) const {
+    if (unknown_compressor) return std::nullopt;
+    const std::string h = base64 ? base64_prefix(data, 3 * H) : std::string(data.substr(0, std::min(3 * H, data.size())));
+    if (!compressor) return h.size() >= H ? std::optional<std::uint64_t>(word(h, 0)) : std::nullopt;
+    if (h.size() < 3 * H) return std::nullopt;
+    const std::uint64_t blocks = word(h, 0), block = word(h, 1), last = word(h, 2);
+    if (blocks == 0) return 0;
+    const long double n = static_cast<long double>(block) * static_cast<long double>(blocks - 1) + (last ? last : block);
+    return n >= 1.8e19L ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(n);
+  }
+};
+
 void check_vtk_xml(const fs::path& path) {
   const std::string bytes = read_all(path);
   const std::string_view file(bytes);
@@ -1170,6 +1288,120 @@ void check_vtk_xml(const fs::path& path) {
       const std::uint64_t chars = base64_length(data);
       check(name, [&](std::size_t n) { return base64_prefix(data, n); },
             [&](std::size_t used) { return chars * 3 / 4 >= used ? chars * 3 / 4 - used + 3 : 0; });
+    }
+  }
+
+  // Cell arrays. vtkXMLUnstructuredDataReader reads a cell block's "offsets" first and then sizes the
+  // connectivity array by the last offset: an offset of 3e9 in a small file made it allocate 24 GB
+  // before it found the connectivity short. The last offset is decoded here and must fit in the
+  // connectivity array the file declares.
+  VtkXmlCodec codec;
+  codec.H = H;
+  codec.big = big;
+  if (compressor == "vtkZLibDataCompressor") codec.compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
+  else if (compressor == "vtkLZ4DataCompressor") codec.compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
+  else if (compressor == "vtkLZMADataCompressor") codec.compressor = vtkSmartPointer<vtkLZMADataCompressor>::New();
+  else codec.unknown_compressor = compressed;  // VTK refuses a compressor it does not know
+  const auto decode_limit = static_cast<std::size_t>(std::min<long double>(
+      static_cast<long double>(compressed ? ratio : 1.0) * static_cast<long double>(file.size()) + 65536.0L, 1e12L));
+
+  // one DataArray: its type, its format, and where its data starts (binary and appended)
+  struct ArrayRef {
+    std::string type, format;
+    std::string_view data;  // binary / appended: header + data; ascii: the text
+    bool base64 = false;
+  };
+  auto array_named = [&](std::string_view section, std::size_t base, const char* wanted) -> std::optional<ArrayRef> {
+    for (std::size_t at = section.find("<DataArray"); at != std::string_view::npos;
+         at = section.find("<DataArray", at + 1)) {
+      const std::size_t gt = section.find('>', at);
+      if (gt == std::string_view::npos) return std::nullopt;
+      const std::string_view tag = section.substr(at, gt - at);
+      if (xml_attribute(tag, "Name") != wanted) continue;
+      ArrayRef a;
+      a.type = xml_attribute(tag, "type");
+      a.format = xml_attribute(tag, "format");
+      if (a.format == "appended") {
+        if (appended == std::string_view::npos) return std::nullopt;
+        std::uint64_t offset = 0;
+        const std::string off = xml_attribute(tag, "offset");
+        std::from_chars(off.data(), off.data() + off.size(), offset);
+        a.data = file.substr(appended + static_cast<std::size_t>(std::min<std::uint64_t>(offset, file.size() - appended)));
+        a.base64 = appended_base64;
+      } else {
+        a.data = xml.substr(base + gt + 1);
+        a.base64 = a.format == "binary";
+        if (a.format == "ascii") a.data = a.data.substr(0, a.data.find('<'));
+      }
+      return a;
+    }
+    return std::nullopt;
+  };
+  auto ascii_tokens = [](std::string_view text, std::vector<std::string_view>* keep) {
+    std::uint64_t n = 0;
+    for (std::size_t i = 0; i < text.size();) {
+      while (i < text.size() && is_space(text[i])) ++i;
+      const std::size_t start = i;
+      while (i < text.size() && !is_space(text[i])) ++i;
+      if (i > start) {
+        ++n;
+        if (keep) keep->push_back(text.substr(start, i - start));
+      }
+    }
+    return n;
+  };
+
+  int piece_index = 0;
+  for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos; at = xml.find("<Piece", at + 1), ++piece_index) {
+    const std::size_t gt = xml.find('>', at);
+    const std::size_t end = std::min(xml.find("</Piece>", at), xml.size());
+    const std::string_view piece_tag = xml.substr(at, gt - at);
+    const std::string_view piece = xml.substr(at, end - at);
+    for (const char* kind : {"Verts", "Lines", "Strips", "Polys"}) {
+      const std::uint64_t cells = count(piece_tag, cat("NumberOf", kind).c_str(), "Piece");
+      if (cells == 0) continue;
+      const std::string open = cat("<", kind), close = cat("</", kind, ">");
+      std::size_t s = piece.find(open);
+      while (s != std::string_view::npos && s + open.size() < piece.size() && piece[s + open.size()] != '>' &&
+             !is_space(piece[s + open.size()]))
+        s = piece.find(open, s + 1);
+      if (s == std::string_view::npos) continue;
+      const std::size_t e = std::min(piece.find(close, s), piece.size());
+      const std::string_view section = piece.substr(s, e - s);
+      const std::size_t base = at + s;  // offset of `section` in `xml`
+      const auto offsets = array_named(section, base, "offsets");
+      const auto connectivity = array_named(section, base, "connectivity");
+      if (!offsets || !connectivity) continue;  // VTK's reader names what is missing
+      const auto ot = vtk_xml_type(offsets->type), ct = vtk_xml_type(connectivity->type);
+      if (!ot || !ct || ot->is_float || ct->is_float) continue;  // VTK refuses these itself
+
+      // the last offset: the number of connectivity values VTK allocates
+      double last = 0;
+      if (offsets->format == "ascii") {
+        std::vector<std::string_view> tokens;
+        ascii_tokens(offsets->data, &tokens);
+        if (tokens.size() < cells || !parse_number(tokens[cells - 1], false, last)) continue;
+      } else if (offsets->format == "binary" || offsets->format == "appended") {
+        const auto decoded = codec.decode(offsets->data, offsets->base64, decode_limit);
+        if (!decoded || decoded->size() / static_cast<std::size_t>(ot->size) < cells) continue;
+        last = decode(decoded->data() + (cells - 1) * static_cast<std::size_t>(ot->size), *ot, big);
+      } else {
+        continue;
+      }
+      // the connectivity values the file declares
+      std::uint64_t capacity = 0;
+      if (connectivity->format == "ascii") {
+        capacity = ascii_tokens(connectivity->data, nullptr);
+      } else if (connectivity->format == "binary" || connectivity->format == "appended") {
+        const auto n = codec.declared_bytes(connectivity->data, connectivity->base64);
+        if (!n) continue;
+        capacity = *n / static_cast<std::uint64_t>(ct->size);
+      } else {
+        continue;
+      }
+      if (!(last >= 0) || last > static_cast<double>(capacity))
+        bad(path, "VTK XML: piece ", piece_index, ": ", kind, " offsets end at ", last,
+            " connectivity values, the connectivity array holds ", capacity);
     }
   }
 }

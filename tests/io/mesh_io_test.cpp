@@ -19,6 +19,7 @@
 #include <limits>
 
 #include "io_test_util.hpp"
+#include "medspring/core/check.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "test_support.hpp"
 
@@ -515,6 +516,109 @@ TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
   write_text(dir_ / "raw-big.vtp", xml + raw + tail);
   expect_error_naming([&] { read_mesh(dir_ / "raw-big.vtp"); },
                       "raw-big.vtp: VTK XML: DataArray '' declares 2147483647 bytes, the file holds");
+}
+
+TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllocates) {
+  // vtkXMLUnstructuredDataReader sizes the connectivity array by the last cell offset before it reads
+  // it (fuzz_mesh_vtp: an offset of 3e9 allocated 24 GB). check_vtk_xml decodes the offsets (raw,
+  // base64; zlib, LZ4, LZMA) and compares the last one with what the connectivity array declares.
+  const SurfaceMesh kidney = kidney_phantom();
+  const std::string last_offset = std::to_string(3 * kidney.num_faces());
+  struct Mode {
+    const char* name;
+    int compressor;  // vtkXMLWriter::CompressorType
+    bool appended, base64;
+  };
+  for (const Mode& mode : {Mode{"zlib-appended-base64", vtkXMLWriter::ZLIB, true, true},
+                           Mode{"lz4-appended-base64", vtkXMLWriter::LZ4, true, true},
+                           Mode{"lzma-binary", vtkXMLWriter::LZMA, false, true},
+                           Mode{"zlib-binary", vtkXMLWriter::ZLIB, false, true},
+                           Mode{"none-binary", vtkXMLWriter::NONE, false, true}}) {
+    SCOPED_TRACE(mode.name);
+    vtkNew<vtkXMLPolyDataWriter> writer;
+    writer->SetInputData(to_polydata(kidney));
+    writer->SetCompressorType(mode.compressor);
+    writer->SetHeaderTypeToUInt64();
+    if (mode.appended) writer->SetDataModeToAppended();
+    else writer->SetDataModeToBinary();
+    writer->SetEncodeAppendedData(mode.base64);
+    const fs::path good = dir_ / cat(mode.name, ".vtp");
+    writer->SetFileName(good.string().c_str());
+    ASSERT_EQ(writer->Write(), 1);
+    EXPECT_EQ(read_mesh(good).num_faces(), kidney.num_faces());  // the check refuses no valid file
+
+    // the connectivity array's header: 4 UInt64 words (1 block; uncompressed: 1 word), 44 base64 chars
+    std::string vtp = testing::read_text(good);
+    const std::size_t tag = vtp.find("Name=\"connectivity\"", vtp.find("<Polys"));
+    ASSERT_NE(tag, std::string::npos);
+    std::size_t data = 0;
+    if (mode.appended) {
+      const std::size_t off = vtp.find("offset=\"", tag) + 8;
+      data = vtp.find('_', vtp.find("<AppendedData")) + 1 + std::stoul(vtp.substr(off));
+    } else {
+      data = vtp.find_first_not_of(" \t\r\n", vtp.find('>', tag) + 1);
+    }
+    const bool compressed = mode.compressor != vtkXMLWriter::NONE;
+    const std::size_t header_chars = compressed ? 44 : 12;
+    std::string h = base64_decode(std::string_view(vtp).substr(data, header_chars));
+    // compressed: the header is a base64 stream of its own (32 bytes); uncompressed: one stream with
+    // the data (12 characters = the 8-byte size and the first data byte)
+    ASSERT_EQ(h.size(), compressed ? 32u : 9u);
+    const std::uint64_t one_value = 8;  // the connectivity now declares one Int64 value
+    for (int k = 0; k < 8; ++k) h[(compressed ? 16 : 0) + k] = static_cast<char>((one_value >> (8 * k)) & 0xff);
+    vtp.replace(data, header_chars, base64_encode(h));
+    const fs::path bad = dir_ / cat(mode.name, "-short.vtp");
+    write_text(bad, vtp);
+    expect_error_naming([&] { read_mesh(bad); }, cat(bad.filename().string(), ": VTK XML: piece 0: Polys offsets end at ",
+                                                     last_offset, " connectivity values, the connectivity array holds 1"));
+  }
+
+  // ascii, and appended raw with a 2e9 offset (the fuzzer's case): one triangle
+  const std::string ascii =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n"
+      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 0 1 0</DataArray></Points>\n"
+      "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">0 1 2</DataArray>\n"
+      "<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">OFFSET</DataArray></Polys>\n"
+      "</Piece>\n</PolyData>\n</VTKFile>\n";
+  auto with_offset = [&](const std::string& v) {
+    std::string s = ascii;
+    s.replace(s.find("OFFSET"), 6, v);
+    return s;
+  };
+  write_text(dir_ / "ascii.vtp", with_offset("3"));
+  EXPECT_EQ(read_mesh(dir_ / "ascii.vtp").num_faces(), 1);
+  write_text(dir_ / "ascii-huge.vtp", with_offset("2000000000"));
+  expect_error_naming([&] { read_mesh(dir_ / "ascii-huge.vtp"); },
+                      "ascii-huge.vtp: VTK XML: piece 0: Polys offsets end at 2000000000 connectivity values, "
+                      "the connectivity array holds 3");
+  write_text(dir_ / "ascii-negative.vtp", with_offset("-5"));
+  expect_error_naming([&] { read_mesh(dir_ / "ascii-negative.vtp"); }, "Polys offsets end at -5 connectivity values");
+
+  std::string raw;
+  auto put = [&](const auto& v) { raw.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  const std::string xml =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n"
+      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/></Points>\n"
+      "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"40\"/>\n"
+      "<DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"56\"/></Polys>\n"
+      "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_";
+  put(std::uint32_t{36});
+  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(v);
+  put(std::uint32_t{12});
+  for (std::int32_t v : {0, 1, 2}) put(v);
+  put(std::uint32_t{8});
+  const std::string tail = "\n</AppendedData>\n</VTKFile>\n";
+  write_text(dir_ / "raw3.vtp", xml + raw + std::string("\x03\0\0\0\0\0\0\0", 8) + tail);
+  EXPECT_EQ(read_mesh(dir_ / "raw3.vtp").num_faces(), 1);
+  std::string huge;
+  const std::int64_t v = 3'000'000'000;
+  huge.append(reinterpret_cast<const char*>(&v), 8);
+  write_text(dir_ / "raw-huge.vtp", xml + raw + huge + tail);
+  expect_error_naming([&] { read_mesh(dir_ / "raw-huge.vtp"); },
+                      "raw-huge.vtp: VTK XML: piece 0: Polys offsets end at 3000000000 connectivity values, "
+                      "the connectivity array holds 3");
 }
 
 TEST_F(MalformedMesh, VtpWithOutOfRangeIndexOrNanPointIsNamed) {
