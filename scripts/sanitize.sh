@@ -5,7 +5,8 @@
 # libraries once with ASan/UBSan and libFuzzer's coverage hooks, the tests and the fuzz binaries link
 # against them. Any sanitizer report, failed test or fuzz crash fails the step.
 #
-#   bash scripts/sanitize.sh               # FUZZ_SECONDS=15 per target (0: no fuzzing), JOBS=$(nproc)
+#   bash scripts/sanitize.sh               # fuzz/ci-runs.txt inputs per target, at most FUZZ_SECONDS=60 each
+#                                          # (0: no fuzzing; FUZZ_RUNS_FILE= : time only), JOBS=$(nproc)
 #
 # Left out of the sanitized suite, with the reason (docs/reliability.md): label `long` (the 80-cycle
 # press/release runs: minutes under ASan; the plain build runs them), label `web` (the WebAssembly build
@@ -15,7 +16,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build-asan}
 jobs=${JOBS:-$(nproc)}
-secs=${FUZZ_SECONDS:-15}
+secs=${FUZZ_SECONDS:-60}
 export MEDSPRING_DATA=${MEDSPRING_DATA:-$(cd "$root/.." && pwd)/shared/data}
 
 bash "$root/scripts/install-fuzz-deps.sh"
@@ -39,9 +40,13 @@ t2=$(date +%s)
 
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS  # fuzz/run sets its own
 if [ "$secs" != 0 ]; then
-  # a fixed seed: the same inputs every run, so that a CI failure is a regression, not a new random find
-  FUZZ_ARGS=${FUZZ_ARGS:--seed=1} FUZZ_BUILD_DIR=$build FUZZ_NO_BUILD=1 FUZZ_CORPUS_DIR=$build/fuzz-corpus \
-    bash "$root/fuzz/run" "$secs"
+  # A fixed seed and a fixed number of inputs per target (fuzz/ci-runs.txt): the same inputs on every
+  # machine, so that a CI failure is a regression, not a new random find (a time budget alone made the
+  # inputs tried depend on the machine's speed). FUZZ_SECONDS only caps each target; a slower machine
+  # then tries a prefix of the same inputs.
+  rm -rf "$build/fuzz-corpus"
+  FUZZ_ARGS=${FUZZ_ARGS:--seed=1} FUZZ_RUNS_FILE=${FUZZ_RUNS_FILE-$root/fuzz/ci-runs.txt} \
+    FUZZ_BUILD_DIR=$build FUZZ_NO_BUILD=1 FUZZ_CORPUS_DIR=$build/fuzz-corpus bash "$root/fuzz/run" "$secs"
 fi
 t3=$(date +%s)
 echo "sanitize.sh: build $((t1 - t0)) s, sanitized tests $((t2 - t1)) s, fuzz $((t3 - t2)) s" \

@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "io_test_util.hpp"
 #include "medspring/core/check.hpp"
@@ -465,6 +466,29 @@ std::string base64_encode(std::string_view bytes) {
   return out;
 }
 
+/// One triangle in VTK XML, appended raw and uncompressed with UInt32 headers: the points (the
+/// size header says `points_bytes`), connectivity Int32 {0, 1, 2}, and the one cell offset `offset`
+/// (Int32 or Int64).
+template <class Offset>
+std::string one_triangle_raw_vtp(Offset offset, std::uint32_t points_bytes = 36) {
+  static_assert(std::is_same_v<Offset, std::int32_t> || std::is_same_v<Offset, std::int64_t>);
+  std::string raw;
+  auto put = [&](const auto& v) { raw.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  put(points_bytes);
+  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(v);
+  put(std::uint32_t{12});
+  for (std::int32_t v : {0, 1, 2}) put(v);
+  put(static_cast<std::uint32_t>(sizeof(Offset)));
+  put(offset);
+  return cat("<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" ",
+             "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n",
+             "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/></Points>\n",
+             "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"40\"/>\n",
+             "<DataArray type=\"", sizeof(Offset) == 8 ? "Int64" : "Int32",
+             "\" Name=\"offsets\" format=\"appended\" offset=\"56\"/></Polys>\n",
+             "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_", raw, "\n</AppendedData>\n</VTKFile>\n");
+}
+
 TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
   // write_vtp: appended base64 data, zlib, UInt64 headers [blocks, block size, last size, compressed
   // sizes], the header its own base64 stream; the Points array is at offset 0
@@ -491,29 +515,9 @@ TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
   expect_error_naming([&] { read_mesh(dir_ / "unpacked.vtp"); }, "uncompressed bytes from");
 
   // appended raw, uncompressed, UInt32 headers: one triangle
-  std::string raw;
-  auto put = [&](const auto& v) { raw.append(reinterpret_cast<const char*>(&v), sizeof v); };
-  const std::string xml =
-      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-      "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n"
-      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/></Points>\n"
-      "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"40\"/>\n"
-      "<DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\"56\"/></Polys>\n"
-      "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_";
-  put(std::uint32_t{36});
-  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(v);
-  put(std::uint32_t{12});
-  for (std::int32_t v : {0, 1, 2}) put(v);
-  put(std::uint32_t{4});
-  put(std::int32_t{3});
-  const std::string tail = "\n</AppendedData>\n</VTKFile>\n";
-  write_text(dir_ / "raw.vtp", xml + raw + tail);
+  write_text(dir_ / "raw.vtp", one_triangle_raw_vtp(std::int32_t{3}));
   EXPECT_EQ(read_mesh(dir_ / "raw.vtp").num_faces(), 1);
-  raw[0] = '\xff';
-  raw[1] = '\xff';
-  raw[2] = '\xff';
-  raw[3] = '\x7f';
-  write_text(dir_ / "raw-big.vtp", xml + raw + tail);
+  write_text(dir_ / "raw-big.vtp", one_triangle_raw_vtp(std::int32_t{3}, 0x7fffffff));
   expect_error_naming([&] { read_mesh(dir_ / "raw-big.vtp"); },
                       "raw-big.vtp: VTK XML: DataArray '' declares 2147483647 bytes, the file holds");
 }
@@ -595,27 +599,9 @@ TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllo
   write_text(dir_ / "ascii-negative.vtp", with_offset("-5"));
   expect_error_naming([&] { read_mesh(dir_ / "ascii-negative.vtp"); }, "Polys offsets end at -5 connectivity values");
 
-  std::string raw;
-  auto put = [&](const auto& v) { raw.append(reinterpret_cast<const char*>(&v), sizeof v); };
-  const std::string xml =
-      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-      "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n"
-      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/></Points>\n"
-      "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"40\"/>\n"
-      "<DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"56\"/></Polys>\n"
-      "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_";
-  put(std::uint32_t{36});
-  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(v);
-  put(std::uint32_t{12});
-  for (std::int32_t v : {0, 1, 2}) put(v);
-  put(std::uint32_t{8});
-  const std::string tail = "\n</AppendedData>\n</VTKFile>\n";
-  write_text(dir_ / "raw3.vtp", xml + raw + std::string("\x03\0\0\0\0\0\0\0", 8) + tail);
+  write_text(dir_ / "raw3.vtp", one_triangle_raw_vtp(std::int64_t{3}));
   EXPECT_EQ(read_mesh(dir_ / "raw3.vtp").num_faces(), 1);
-  std::string huge;
-  const std::int64_t v = 3'000'000'000;
-  huge.append(reinterpret_cast<const char*>(&v), 8);
-  write_text(dir_ / "raw-huge.vtp", xml + raw + huge + tail);
+  write_text(dir_ / "raw-huge.vtp", one_triangle_raw_vtp(std::int64_t{3'000'000'000}));
   expect_error_naming([&] { read_mesh(dir_ / "raw-huge.vtp"); },
                       "raw-huge.vtp: VTK XML: piece 0: Polys offsets end at 3000000000 connectivity values, "
                       "the connectivity array holds 3");
