@@ -437,6 +437,9 @@ async function loadModel(id) {
     `${engine.numMasses()} masses, ${engine.numSprings()} springs`;
   buildModelObjects();
   showError('');
+  // a notice about the previous model (a divergence reset) does not carry over to this one
+  $('message').hidden = true;
+  S.messageUntil = 0;
   S.ticks = 0;
   S.batches = [];
   S.forces = [];

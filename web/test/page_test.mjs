@@ -210,6 +210,8 @@ try {
     atoms: window.medspring.engine.numAtoms(), error: window.medspring.error, canvas: window.medspring.canvasStats() }));
   assert.equal(vessel.kind, 'smrm');
   assert.equal(vessel.error, '');
+  // the kidney's divergence notice is not shown over the vessel
+  assert.equal(await page.evaluate(() => document.getElementById('message').hidden), true);
   assert.ok(vessel.canvas.foreground > 0.01, JSON.stringify(vessel.canvas));
   await page.locator('#show-spokes').check();
   await page.locator('#show-atoms').check();
