@@ -996,8 +996,8 @@ RawVolume read_nrrd_file(const fs::path& path) {
 
 // --- VTK XML binary data ------------------------------------------------------------------------------
 
-/// The value of attribute `name` in the XML start tag `tag` ("" when absent).
-std::string xml_attribute(std::string_view tag, std::string_view name) {
+/// The value of attribute `name` in the XML start tag `tag` (nullopt when absent).
+std::optional<std::string> find_xml_attribute(std::string_view tag, std::string_view name) {
   for (std::size_t at = tag.find(name); at != std::string_view::npos; at = tag.find(name, at + 1)) {
     if (at == 0 || !is_space(tag[at - 1])) continue;
     std::size_t i = at + name.size();
@@ -1007,10 +1007,40 @@ std::string xml_attribute(std::string_view tag, std::string_view name) {
     while (i < tag.size() && is_space(tag[i])) ++i;
     if (i >= tag.size() || (tag[i] != '"' && tag[i] != '\'')) continue;
     const std::size_t end = tag.find(tag[i], i + 1);
-    if (end == std::string_view::npos) return "";
+    if (end == std::string_view::npos) return std::string();
     return std::string(tag.substr(i + 1, end - i - 1));
   }
-  return "";
+  return std::nullopt;
+}
+
+/// The value of attribute `name` in the XML start tag `tag` ("" when absent).
+std::string xml_attribute(std::string_view tag, std::string_view name) {
+  return find_xml_attribute(tag, name).value_or("");
+}
+
+/// The '>' that ends the start tag at `at` ('>' inside quoted attribute values do not count, as for
+/// the XML parser); npos when the tag does not end.
+std::size_t xml_tag_end(std::string_view text, std::size_t at) {
+  char quote = 0;
+  for (std::size_t i = at; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quote) {
+      if (c == quote) quote = 0;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '>') {
+      return i;
+    }
+  }
+  return std::string_view::npos;
+}
+
+/// Where vtkXMLDataReader reads a DataArray from: the appended section when the tag has an `offset`
+/// attribute (whatever its `format` says), inline base64 when `format` is "binary", inline text otherwise.
+enum class XmlArrayMode { Appended, Binary, Ascii };
+XmlArrayMode xml_array_mode(std::string_view tag) {
+  if (find_xml_attribute(tag, "offset")) return XmlArrayMode::Appended;
+  return xml_attribute(tag, "format") == "binary" ? XmlArrayMode::Binary : XmlArrayMode::Ascii;
 }
 
 /// Decodes base64 from `text` until `need` bytes are out, a '=' or a '<' (whitespace skipped).
@@ -1167,7 +1197,7 @@ void check_vtk_xml(const fs::path& path) {
   const std::string_view file(bytes);
   const std::size_t root = file.find("<VTKFile");
   if (root == std::string_view::npos) return;  // not VTK XML: the reader says so
-  const std::size_t root_end = file.find('>', root);
+  const std::size_t root_end = xml_tag_end(file, root);
   if (root_end == std::string_view::npos) bad(path, "VTK XML: unterminated <VTKFile> tag");
   const std::string_view root_tag = file.substr(root, root_end - root);
   const std::string header_type = xml_attribute(root_tag, "header_type");
@@ -1183,7 +1213,7 @@ void check_vtk_xml(const fs::path& path) {
   std::size_t appended = std::string_view::npos;
   bool appended_base64 = false;
   if (appended_tag != std::string_view::npos) {
-    const std::size_t gt = file.find('>', appended_tag);
+    const std::size_t gt = xml_tag_end(file, appended_tag);
     if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <AppendedData> tag");
     appended_base64 = xml_attribute(file.substr(appended_tag, gt - appended_tag), "encoding") == "base64";
     appended = file.find('_', gt);
@@ -1249,7 +1279,7 @@ void check_vtk_xml(const fs::path& path) {
     return v;
   };
   for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos; at = xml.find("<Piece", at + 1)) {
-    const std::size_t gt = xml.find('>', at);
+    const std::size_t gt = xml_tag_end(xml, at);
     if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <Piece> tag");
     for (const char* a : {"NumberOfPoints", "NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys",
                           "NumberOfCells"})
@@ -1257,15 +1287,15 @@ void check_vtk_xml(const fs::path& path) {
   }
 
   for (std::size_t at = xml.find("<DataArray"); at != std::string_view::npos; at = xml.find("<DataArray", at + 1)) {
-    const std::size_t gt = xml.find('>', at);
+    const std::size_t gt = xml_tag_end(xml, at);
     if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <DataArray> tag");
     const std::string_view tag = xml.substr(at, gt - at);
-    const std::string format = xml_attribute(tag, "format");
+    const XmlArrayMode mode = xml_array_mode(tag);
     const std::string name = xml_attribute(tag, "Name");
     count(tag, "NumberOfTuples", "DataArray");
     if (count(tag, "NumberOfComponents", "DataArray") > 4096)
       bad(path, "VTK XML: DataArray '", name, "' has more than 4096 components");
-    if (format == "appended") {
+    if (mode == XmlArrayMode::Appended) {
       if (appended == std::string_view::npos) bad(path, "VTK XML: DataArray '", name, "' is appended, the file has no <AppendedData>");
       std::uint64_t offset = 0;
       const std::string off = xml_attribute(tag, "offset");
@@ -1283,7 +1313,7 @@ void check_vtk_xml(const fs::path& path) {
         check(name, [&](std::size_t n) { return std::string(data.substr(0, n)); },
               [&](std::size_t used) { return data.size() >= used ? data.size() - used : 0; });
       }
-    } else if (format == "binary") {
+    } else if (mode == XmlArrayMode::Binary) {
       const std::string_view data = xml.substr(gt + 1);
       const std::uint64_t chars = base64_length(data);
       check(name, [&](std::size_t n) { return base64_prefix(data, n); },
@@ -1307,21 +1337,22 @@ void check_vtk_xml(const fs::path& path) {
 
   // one DataArray: its type, its format, and where its data starts (binary and appended)
   struct ArrayRef {
-    std::string type, format;
+    std::string type;
+    XmlArrayMode mode = XmlArrayMode::Ascii;
     std::string_view data;  // binary / appended: header + data; ascii: the text
     bool base64 = false;
   };
   auto array_named = [&](std::string_view section, std::size_t base, const char* wanted) -> std::optional<ArrayRef> {
     for (std::size_t at = section.find("<DataArray"); at != std::string_view::npos;
          at = section.find("<DataArray", at + 1)) {
-      const std::size_t gt = section.find('>', at);
+      const std::size_t gt = xml_tag_end(section, at);
       if (gt == std::string_view::npos) return std::nullopt;
       const std::string_view tag = section.substr(at, gt - at);
       if (xml_attribute(tag, "Name") != wanted) continue;
       ArrayRef a;
       a.type = xml_attribute(tag, "type");
-      a.format = xml_attribute(tag, "format");
-      if (a.format == "appended") {
+      a.mode = xml_array_mode(tag);
+      if (a.mode == XmlArrayMode::Appended) {
         if (appended == std::string_view::npos) return std::nullopt;
         std::uint64_t offset = 0;
         const std::string off = xml_attribute(tag, "offset");
@@ -1330,8 +1361,8 @@ void check_vtk_xml(const fs::path& path) {
         a.base64 = appended_base64;
       } else {
         a.data = xml.substr(base + gt + 1);
-        a.base64 = a.format == "binary";
-        if (a.format == "ascii") a.data = a.data.substr(0, a.data.find('<'));
+        a.base64 = a.mode == XmlArrayMode::Binary;
+        if (a.mode == XmlArrayMode::Ascii) a.data = a.data.substr(0, a.data.find('<'));
       }
       return a;
     }
@@ -1353,7 +1384,7 @@ void check_vtk_xml(const fs::path& path) {
 
   int piece_index = 0;
   for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos; at = xml.find("<Piece", at + 1), ++piece_index) {
-    const std::size_t gt = xml.find('>', at);
+    const std::size_t gt = xml_tag_end(xml, at);
     const std::size_t end = std::min(xml.find("</Piece>", at), xml.size());
     const std::string_view piece_tag = xml.substr(at, gt - at);
     const std::string_view piece = xml.substr(at, end - at);
@@ -1377,27 +1408,23 @@ void check_vtk_xml(const fs::path& path) {
 
       // the last offset: the number of connectivity values VTK allocates
       double last = 0;
-      if (offsets->format == "ascii") {
+      if (offsets->mode == XmlArrayMode::Ascii) {
         std::vector<std::string_view> tokens;
         ascii_tokens(offsets->data, &tokens);
         if (tokens.size() < cells || !parse_number(tokens[cells - 1], false, last)) continue;
-      } else if (offsets->format == "binary" || offsets->format == "appended") {
+      } else {
         const auto decoded = codec.decode(offsets->data, offsets->base64, decode_limit);
         if (!decoded || decoded->size() / static_cast<std::size_t>(ot->size) < cells) continue;
         last = decode(decoded->data() + (cells - 1) * static_cast<std::size_t>(ot->size), *ot, big);
-      } else {
-        continue;
       }
       // the connectivity values the file declares
       std::uint64_t capacity = 0;
-      if (connectivity->format == "ascii") {
+      if (connectivity->mode == XmlArrayMode::Ascii) {
         capacity = ascii_tokens(connectivity->data, nullptr);
-      } else if (connectivity->format == "binary" || connectivity->format == "appended") {
+      } else {
         const auto n = codec.declared_bytes(connectivity->data, connectivity->base64);
         if (!n) continue;
         capacity = *n / static_cast<std::uint64_t>(ct->size);
-      } else {
-        continue;
       }
       if (!(last >= 0) || last > static_cast<double>(capacity))
         bad(path, "VTK XML: piece ", piece_index, ": ", kind, " offsets end at ", last,

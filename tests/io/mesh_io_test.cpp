@@ -602,6 +602,12 @@ TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllo
   write_text(dir_ / "raw3.vtp", one_triangle_raw_vtp(std::int64_t{3}));
   EXPECT_EQ(read_mesh(dir_ / "raw3.vtp").num_faces(), 1);
   write_text(dir_ / "raw-huge.vtp", one_triangle_raw_vtp(std::int64_t{3'000'000'000}));
+  // VTK reads an array with an `offset` attribute from the appended section whatever its `format` says
+  // (fuzz_centerline: format="1ppended")
+  std::string misspelled = one_triangle_raw_vtp(std::int64_t{3'000'000'000});
+  misspelled.replace(misspelled.find("format=\"appended\" offset=\"56\""), 17, "format=\"1ppended\"");
+  write_text(dir_ / "raw-misspelled.vtp", misspelled);
+  expect_error_naming([&] { read_mesh(dir_ / "raw-misspelled.vtp"); }, "Polys offsets end at 3000000000 connectivity values");
   expect_error_naming([&] { read_mesh(dir_ / "raw-huge.vtp"); },
                       "raw-huge.vtp: VTK XML: piece 0: Polys offsets end at 3000000000 connectivity values, "
                       "the connectivity array holds 3");
