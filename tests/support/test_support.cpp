@@ -4,6 +4,8 @@
 
 #include <cstdlib>
 #include <random>
+#include <system_error>
+#include <vector>
 
 namespace medspring::testing {
 
@@ -22,11 +24,29 @@ std::filesystem::path require_data_file(const std::string& name) {
   return p;
 }
 
+namespace {
+
+/// The folders made by temp_dir, removed when the process exits — unless a test failed (they are then
+/// kept for a look) or MEDSPRING_KEEP_TEST_FILES is set.
+struct TempDirs {
+  std::vector<std::filesystem::path> dirs;
+  ~TempDirs() {
+    if (const char* keep = std::getenv("MEDSPRING_KEEP_TEST_FILES"); keep && *keep) return;
+    if (::testing::UnitTest::GetInstance()->Failed()) return;
+    std::error_code ec;
+    for (const auto& d : dirs) std::filesystem::remove_all(d, ec);
+  }
+};
+
+}  // namespace
+
 std::filesystem::path temp_dir(const std::string& tag) {
+  static TempDirs made;
   std::random_device rd;
   auto p = std::filesystem::temp_directory_path() / ("medspring-test-" + tag + "-" + std::to_string(rd()));
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
+  made.dirs.push_back(p);
   return p;
 }
 

@@ -17,7 +17,8 @@ std::filesystem::path data_file(const std::string& name);
 /// Like data_file, but fails the current test (ADD_FAILURE) when the file does not exist.
 std::filesystem::path require_data_file(const std::string& name);
 
-/// A fresh, empty temporary folder for one test (removed at exit of the process).
+/// A fresh, empty temporary folder for one test, removed at exit of the process when every test passed
+/// (kept after a failure, or always with MEDSPRING_KEEP_TEST_FILES=1).
 std::filesystem::path temp_dir(const std::string& tag);
 
 }  // namespace medspring::testing
