@@ -15,6 +15,7 @@
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -513,6 +514,15 @@ TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
   expect_error_naming([&] { read_mesh(dir_ / "packed.vtp"); }, "compressed bytes, the file holds");
   write_text(dir_ / "unpacked.vtp", patched(1, std::uint64_t(1) << 39));  // uncompressed block size
   expect_error_naming([&] { read_mesh(dir_ / "unpacked.vtp"); }, "uncompressed bytes from");
+  {  // no blocks and block size 0: vtkXMLDataParser still divides by the block size (fuzz_mesh_vtp, SIGFPE)
+    std::string h = base64_decode(std::string_view(vtp).substr(data, header_chars));
+    std::fill(h.begin(), h.begin() + 16, '\0');
+    std::string b = vtp;
+    b.replace(data, header_chars, base64_encode(h));
+    write_text(dir_ / "no-blocks.vtp", b);
+    expect_error_naming([&] { read_mesh(dir_ / "no-blocks.vtp"); },
+                        "no-blocks.vtp: VTK XML: DataArray 'Points': compression header with block size 0");
+  }
 
   // appended raw, uncompressed, UInt32 headers: one triangle
   write_text(dir_ / "raw.vtp", one_triangle_raw_vtp(std::int32_t{3}));
