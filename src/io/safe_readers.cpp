@@ -1280,12 +1280,19 @@ void check_vtk_xml(const fs::path& path) {
       bad(path, "VTK XML: ", element, " ", attribute, " = ", v, ": more than a ", file.size(), "-byte file can hold");
     return v;
   };
+  // VTK allocates the whole output for the sum over the pieces: the sums are bounded as each count is
+  constexpr const char* kPieceCounts[] = {"NumberOfPoints", "NumberOfVerts", "NumberOfLines",
+                                          "NumberOfStrips", "NumberOfPolys",  "NumberOfCells"};
+  std::uint64_t totals[std::size(kPieceCounts)] = {};
   for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos; at = xml.find("<Piece", at + 1)) {
     const std::size_t gt = xml_tag_end(xml, at);
     if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <Piece> tag");
-    for (const char* a : {"NumberOfPoints", "NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys",
-                          "NumberOfCells"})
-      count(xml.substr(at, gt - at), a, "Piece");
+    for (std::size_t k = 0; k < std::size(kPieceCounts); ++k) {
+      totals[k] += count(xml.substr(at, gt - at), kPieceCounts[k], "Piece");
+      if (totals[k] > max_count)
+        bad(path, "VTK XML: the pieces' ", kPieceCounts[k], " add up to ", totals[k], ": more than a ", file.size(),
+            "-byte file can hold");
+    }
   }
 
   for (std::size_t at = xml.find("<DataArray"); at != std::string_view::npos; at = xml.find("<DataArray", at + 1)) {

@@ -514,6 +514,15 @@ TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
   expect_error_naming([&] { read_mesh(dir_ / "packed.vtp"); }, "compressed bytes, the file holds");
   write_text(dir_ / "unpacked.vtp", patched(1, std::uint64_t(1) << 39));  // uncompressed block size
   expect_error_naming([&] { read_mesh(dir_ / "unpacked.vtp"); }, "uncompressed bytes from");
+  {  // pieces whose point counts each fit in the file, but not together: VTK allocates for the sum
+    std::string pieces =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\">\n<PolyData>\n";
+    for (int k = 0; k < 3; ++k) pieces += "<Piece NumberOfPoints=\"900\" NumberOfPolys=\"0\"></Piece>\n";
+    pieces += "</PolyData>\n</VTKFile>\n";
+    write_text(dir_ / "pieces.vtp", pieces);
+    expect_error_naming([&] { read_mesh(dir_ / "pieces.vtp"); },
+                        "pieces.vtp: VTK XML: the pieces' NumberOfPoints add up to 1800: more than a");
+  }
   {  // no blocks and block size 0: vtkXMLDataParser still divides by the block size (fuzz_mesh_vtp, SIGFPE)
     std::string h = base64_decode(std::string_view(vtp).substr(data, header_chars));
     std::fill(h.begin(), h.begin() + 16, '\0');
