@@ -1412,20 +1412,42 @@ void check_vtk_xml(const fs::path& path) {
       const auto offsets = array_named(section, base, "offsets");
       const auto connectivity = array_named(section, base, "connectivity");
       if (!offsets || !connectivity) continue;  // VTK's reader names what is missing
+      // Bit arrays hold 0 and 1 only; other names VTK refuses itself (floats are converted: checked)
       const auto ot = vtk_xml_type(offsets->type), ct = vtk_xml_type(connectivity->type);
-      if (!ot || !ct || ot->is_float || ct->is_float) continue;  // VTK refuses these itself
+      if (!ot || !ct) continue;
 
-      // the last offset: the number of connectivity values VTK allocates
-      double last = 0;
+      // The offsets VTK may take as the connectivity length: the cell ends (n values; VTK reads the last)
+      // or, in the layout with a leading 0, n + 1 values. The largest of the first n + 1 values counts.
+      double last = 0;       // the largest offset
+      double invalid = 0;    // the first negative or NaN offset
+      bool any = false, bad_value = false;
+      auto take = [&](double v) {
+        if (!(v >= 0)) {
+          if (!bad_value) invalid = v;
+          bad_value = true;
+        } else if (!any || v > last) {
+          last = v;
+        }
+        any = true;
+      };
       if (offsets->mode == XmlArrayMode::Ascii) {
         std::vector<std::string_view> tokens;
         ascii_tokens(offsets->data, &tokens);
-        if (tokens.size() < cells || !parse_number(tokens[cells - 1], false, last)) continue;
+        if (tokens.size() < cells) continue;
+        for (std::size_t k = 0; k < std::min<std::size_t>(tokens.size(), cells + 1); ++k) {
+          double v = 0;
+          if (!parse_number(tokens[k], false, v)) break;  // VTK's reading stops here too
+          take(v);
+        }
       } else {
         const auto decoded = codec.decode(offsets->data, offsets->base64, decode_limit);
-        if (!decoded || decoded->size() / static_cast<std::size_t>(ot->size) < cells) continue;
-        last = decode(decoded->data() + (cells - 1) * static_cast<std::size_t>(ot->size), *ot, big);
+        const std::size_t size = static_cast<std::size_t>(ot->size);
+        if (!decoded || decoded->size() / size < cells) continue;
+        for (std::size_t k = 0; k < std::min<std::size_t>(decoded->size() / size, cells + 1); ++k)
+          take(decode(decoded->data() + k * size, *ot, big));
       }
+      if (!any) continue;
+      if (bad_value) bad(path, "VTK XML: piece ", piece_index, ": ", kind, " offsets hold ", invalid, " (offsets are >= 0)");
       // the connectivity values the file declares
       std::uint64_t capacity = 0;
       if (connectivity->mode == XmlArrayMode::Ascii) {
@@ -1435,7 +1457,7 @@ void check_vtk_xml(const fs::path& path) {
         if (!n) continue;
         capacity = *n / static_cast<std::uint64_t>(ct->size);
       }
-      if (!(last >= 0) || last > static_cast<double>(capacity))
+      if (last > static_cast<double>(capacity))
         bad(path, "VTK XML: piece ", piece_index, ": ", kind, " offsets end at ", last,
             " connectivity values, the connectivity array holds ", capacity);
     }

@@ -616,7 +616,7 @@ TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllo
                       "ascii-huge.vtp: VTK XML: piece 0: Polys offsets end at 2000000000 connectivity values, "
                       "the connectivity array holds 3");
   write_text(dir_ / "ascii-negative.vtp", with_offset("-5"));
-  expect_error_naming([&] { read_mesh(dir_ / "ascii-negative.vtp"); }, "Polys offsets end at -5 connectivity values");
+  expect_error_naming([&] { read_mesh(dir_ / "ascii-negative.vtp"); }, "ascii-negative.vtp: VTK XML: piece 0: Polys offsets hold -5 (offsets are >= 0)");
 
   write_text(dir_ / "raw3.vtp", one_triangle_raw_vtp(std::int64_t{3}));
   EXPECT_EQ(read_mesh(dir_ / "raw3.vtp").num_faces(), 1);
