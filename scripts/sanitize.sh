@@ -40,10 +40,9 @@ t2=$(date +%s)
 
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS  # fuzz/run sets its own
 if [ "$secs" != 0 ]; then
-  # A fixed seed and a fixed number of inputs per target (fuzz/ci-runs.txt): the same inputs on every
-  # machine, so that a CI failure is a regression, not a new random find (a time budget alone made the
-  # inputs tried depend on the machine's speed). FUZZ_SECONDS only caps each target; a slower machine
-  # then tries a prefix of the same inputs.
+  # A fixed seed and a fixed number of inputs per target (fuzz/ci-runs.txt) from a fresh corpus: the same
+  # amount of fuzzing on every machine (a time budget alone let a faster CI machine go further than any
+  # run made before the submission; fuzz/README.md). FUZZ_SECONDS only caps each target.
   rm -rf "$build/fuzz-corpus"
   FUZZ_ARGS=${FUZZ_ARGS:--seed=1} FUZZ_RUNS_FILE=${FUZZ_RUNS_FILE-$root/fuzz/ci-runs.txt} \
     FUZZ_BUILD_DIR=$build FUZZ_NO_BUILD=1 FUZZ_CORPUS_DIR=$build/fuzz-corpus bash "$root/fuzz/run" "$secs"
