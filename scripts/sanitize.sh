@@ -49,4 +49,4 @@ if [ "$secs" != 0 ]; then
 fi
 t3=$(date +%s)
 echo "sanitize.sh: build $((t1 - t0)) s, sanitized tests $((t2 - t1)) s, fuzz $((t3 - t2)) s" \
-  "($secs s x $(wc -l < "$build/fuzz/targets.txt") targets)"
+  "($(wc -l < "$build/fuzz/targets.txt") targets, inputs per target from ${FUZZ_RUNS_FILE-fuzz/ci-runs.txt}, at most $secs s each)"
