@@ -7,16 +7,16 @@
 
 #include <vtkCellArray.h>
 #include <vtkDataCompressor.h>
-#include <vtkLZ4DataCompressor.h>
-#include <vtkLZMADataCompressor.h>
-#include <vtkSmartPointer.h>
-#include <vtkZLibDataCompressor.h>
 #include <vtkDoubleArray.h>
 #include <vtkIdTypeArray.h>
+#include <vtkLZ4DataCompressor.h>
+#include <vtkLZMADataCompressor.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkSmartPointer.h>
 #include <vtkType.h>
+#include <vtkZLibDataCompressor.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -87,7 +87,8 @@ struct NumType {
 constexpr NumType kI8{1, false, true, VTK_SIGNED_CHAR}, kU8{1, false, false, VTK_UNSIGNED_CHAR},
     kI16{2, false, true, VTK_SHORT}, kU16{2, false, false, VTK_UNSIGNED_SHORT}, kI32{4, false, true, VTK_INT},
     kU32{4, false, false, VTK_UNSIGNED_INT}, kI64{8, false, true, VTK_LONG_LONG},
-    kU64{8, false, false, VTK_UNSIGNED_LONG_LONG}, kF32{4, true, true, VTK_FLOAT}, kF64{8, true, true, VTK_DOUBLE};
+    kU64{8, false, false, VTK_UNSIGNED_LONG_LONG}, kF32{4, true, true, VTK_FLOAT},
+    kF64{8, true, true, VTK_DOUBLE};
 
 /// Reads one binary value (little- or big-endian) as double (integers above 2^53 lose precision).
 double decode(const char* p, const NumType& t, bool big_endian) {
@@ -190,13 +191,30 @@ class Cursor {
 // --- legacy VTK ----------------------------------------------------------------------------------------
 
 bool legacy_type(std::string_view name, NumType& t) {
-  static const std::map<std::string, NumType> types = {
-      {"unsigned_char", kU8},      {"char", kI8},           {"signed_char", kI8},       {"unsigned_short", kU16},
-      {"short", kI16},             {"unsigned_int", kU32},  {"int", kI32},              {"unsigned_long", kU64},
-      {"long", kI64},              {"unsigned_long_long", kU64}, {"long_long", kI64},   {"float", kF32},
-      {"double", kF64},            {"vtkidtype", kI32},     {"vtktypeint8", kI8},       {"vtktypeuint8", kU8},
-      {"vtktypeint16", kI16},      {"vtktypeuint16", kU16}, {"vtktypeint32", kI32},     {"vtktypeuint32", kU32},
-      {"vtktypeint64", kI64},      {"vtktypeuint64", kU64}, {"vtktypefloat32", kF32},   {"vtktypefloat64", kF64}};
+  static const std::map<std::string, NumType> types = {{"unsigned_char", kU8},
+                                                       {"char", kI8},
+                                                       {"signed_char", kI8},
+                                                       {"unsigned_short", kU16},
+                                                       {"short", kI16},
+                                                       {"unsigned_int", kU32},
+                                                       {"int", kI32},
+                                                       {"unsigned_long", kU64},
+                                                       {"long", kI64},
+                                                       {"unsigned_long_long", kU64},
+                                                       {"long_long", kI64},
+                                                       {"float", kF32},
+                                                       {"double", kF64},
+                                                       {"vtkidtype", kI32},
+                                                       {"vtktypeint8", kI8},
+                                                       {"vtktypeuint8", kU8},
+                                                       {"vtktypeint16", kI16},
+                                                       {"vtktypeuint16", kU16},
+                                                       {"vtktypeint32", kI32},
+                                                       {"vtktypeuint32", kU32},
+                                                       {"vtktypeint64", kI64},
+                                                       {"vtktypeuint64", kU64},
+                                                       {"vtktypefloat32", kF32},
+                                                       {"vtktypefloat64", kF64}};
   const auto it = types.find(lower(name));
   if (it == types.end()) return false;
   t = it->second;
@@ -246,8 +264,8 @@ class LegacyVtk {
         section_count = count(key == "point_data" ? "POINT_DATA count" : "CELL_DATA count");
         const std::uint64_t expected = static_cast<std::uint64_t>(key == "point_data" ? npts : ncells);
         if (section_count != expected)
-          bad(path_, key == "point_data" ? "POINT_DATA " : "CELL_DATA ", section_count, " values for ", expected,
-              key == "point_data" ? " points" : " cells");
+          bad(path_, key == "point_data" ? "POINT_DATA " : "CELL_DATA ", section_count, " values for ",
+              expected, key == "point_data" ? " points" : " cells");
       } else if (!section.empty()) {
         attribute(key, section_count, section == "point_data" ? poly->GetPointData() : nullptr);
       } else {
@@ -272,7 +290,8 @@ class LegacyVtk {
     major_ = static_cast<int>(version);
     c_.line();  // title
     const std::string mode = lower(c_.need_token("ASCII or BINARY"));
-    if (mode != "ascii" && mode != "binary") bad(path_, "legacy VTK: expected ASCII or BINARY, got '", shown(mode), "'");
+    if (mode != "ascii" && mode != "binary")
+      bad(path_, "legacy VTK: expected ASCII or BINARY, got '", shown(mode), "'");
     binary_ = mode == "binary";
     const std::string dataset = lower(c_.need_token("DATASET"));
     if (dataset != "dataset") bad(path_, "not a legacy VTK POLYDATA file");
@@ -312,7 +331,8 @@ class LegacyVtk {
       for (std::uint64_t k = 0; k < total; ++k) {
         const std::string_view tok = c_.need_token(what);
         if (!parse_number(tok, !t.is_float, out[k]))
-          bad(path_, what, ": value ", k, " '", shown(tok), "' is not ", t.is_float ? "a number" : "an integer");
+          bad(path_, what, ": value ", k, " '", shown(tok), "' is not ",
+              t.is_float ? "a number" : "an integer");
       }
     }
     return out;
@@ -340,13 +360,15 @@ class LegacyVtk {
       std::size_t k = 0;
       while (k < v.size()) {
         const auto m = static_cast<std::size_t>(v[k]);
-        if (m > v.size() - k - 1) bad(path_, what, ": cell ", off.size() - 1, " lists ", m, " points past the end");
+        if (m > v.size() - k - 1)
+          bad(path_, what, ": cell ", off.size() - 1, " lists ", m, " points past the end");
         cn.insert(cn.end(), v.begin() + static_cast<std::ptrdiff_t>(k + 1),
                   v.begin() + static_cast<std::ptrdiff_t>(k + 1 + m));
         off.push_back(static_cast<vtkIdType>(cn.size()));
         k += m + 1;
       }
-      if (off.size() - 1 != a) bad(path_, what, ": ", off.size() - 1, " cells in the list, the header says ", a);
+      if (off.size() - 1 != a)
+        bad(path_, what, ": ", off.size() - 1, " cells in the list, the header says ", a);
       fill(offsets, off);
       fill(conn, cn);
     } else {  // "offsets_count connectivity_count", OFFSETS type ..., CONNECTIVITY type ...
@@ -466,10 +488,10 @@ class LegacyVtk {
 
 bool ply_type(std::string_view name, NumType& t) {
   static const std::map<std::string, NumType> types = {
-      {"char", kI8},   {"int8", kI8},     {"uchar", kU8},    {"uint8", kU8},   {"short", kI16},
-      {"int16", kI16}, {"ushort", kU16},  {"uint16", kU16},  {"int", kI32},    {"int32", kI32},
-      {"uint", kU32},  {"uint32", kU32},  {"float", kF32},   {"float32", kF32}, {"double", kF64},
-      {"float64", kF64}};
+      {"char", kI8},   {"int8", kI8},     {"uchar", kU8},   {"uint8", kU8},
+      {"short", kI16}, {"int16", kI16},   {"ushort", kU16}, {"uint16", kU16},
+      {"int", kI32},   {"int32", kI32},   {"uint", kU32},   {"uint32", kU32},
+      {"float", kF32}, {"float32", kF32}, {"double", kF64}, {"float64", kF64}};
   const auto it = types.find(std::string(name));
   if (it == types.end()) return false;
   t = it->second;
@@ -559,7 +581,9 @@ vtkSmartPointer<vtkPolyData> read_ply(const fs::path& path) {
     if (!parse_number(tok, !t.is_float, v)) bad(path, "PLY ", what, ": '", shown(tok), "' is not a number");
     return v;
   };
-  auto fits = [&](std::uint64_t n, std::uint64_t min_bytes) { return n <= c.left() / std::max<std::uint64_t>(min_bytes, 1); };
+  auto fits = [&](std::uint64_t n, std::uint64_t min_bytes) {
+    return n <= c.left() / std::max<std::uint64_t>(min_bytes, 1);
+  };
 
   vtkNew<vtkPoints> pts;
   pts->SetDataTypeToDouble();
@@ -569,9 +593,11 @@ vtkSmartPointer<vtkPolyData> read_ply(const fs::path& path) {
   std::vector<vtkIdType> face;
   for (const PlyElement& e : elements) {
     std::uint64_t row_bytes = 0;  // smallest size of one instance
-    for (const PlyProperty& p : e.props) row_bytes += binary ? static_cast<std::uint64_t>(p.list ? p.count_type.size : p.type.size) : 2;
+    for (const PlyProperty& p : e.props)
+      row_bytes += binary ? static_cast<std::uint64_t>(p.list ? p.count_type.size : p.type.size) : 2;
     if (!e.props.empty() && !fits(e.count, row_bytes))
-      bad(path, "PLY element '", shown(e.name), "': ", e.count, " instances do not fit in the ", c.left(), " bytes left");
+      bad(path, "PLY element '", shown(e.name), "': ", e.count, " instances do not fit in the ", c.left(),
+          " bytes left");
     const bool is_vertex = e.name == "vertex" && !have_vertices;
     const bool is_face = e.name == "face";
     int ix = -1, iy = -1, iz = -1, ifaces = -1;
@@ -582,7 +608,8 @@ vtkSmartPointer<vtkPolyData> read_ply(const fs::path& path) {
         if (n == "y") iy = static_cast<int>(k);
         if (n == "z") iz = static_cast<int>(k);
       }
-      if (is_face && e.props[k].list && (n == "vertex_indices" || n == "vertex_index")) ifaces = static_cast<int>(k);
+      if (is_face && e.props[k].list && (n == "vertex_indices" || n == "vertex_index"))
+        ifaces = static_cast<int>(k);
     }
     if (is_vertex) {
       if (ix < 0 || iy < 0 || iz < 0) bad(path, "PLY element 'vertex' lacks x, y or z");
@@ -603,8 +630,10 @@ vtkSmartPointer<vtkPolyData> read_ply(const fs::path& path) {
           continue;
         }
         const double m = value(p.count_type, "list length");
-        if (!exact_integer(m, 0, 1e9) || !fits(static_cast<std::uint64_t>(m), binary ? static_cast<std::uint64_t>(p.type.size) : 1))
-          bad(path, "PLY element '", shown(e.name), "' ", i, ": list length ", m, " is invalid or past the end");
+        if (!exact_integer(m, 0, 1e9) ||
+            !fits(static_cast<std::uint64_t>(m), binary ? static_cast<std::uint64_t>(p.type.size) : 1))
+          bad(path, "PLY element '", shown(e.name), "' ", i, ": list length ", m,
+              " is invalid or past the end");
         const auto len = static_cast<std::size_t>(m);
         const bool keep_face = is_face && static_cast<int>(k) == ifaces;
         if (keep_face && len < 3) bad(path, "PLY face ", i, " has ", len, " vertices (a polygon needs 3)");
@@ -679,8 +708,8 @@ std::string inflate_prefix(std::string_view in, std::size_t max_out, const fs::p
 
 /// A vtkImageData of `dims` with one component of type t, filled from `count` binary values at p
 /// (byte-swapped when the file's order differs from the host's, which is little-endian here).
-vtkSmartPointer<vtkImageData> image_from_binary(const std::array<Index, 3>& dims, const NumType& t, const char* p,
-                                                bool big_endian) {
+vtkSmartPointer<vtkImageData> image_from_binary(const std::array<Index, 3>& dims, const NumType& t,
+                                                const char* p, bool big_endian) {
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->SetDimensions(dims[0], dims[1], dims[2]);
   image->AllocateScalars(t.vtk, 1);
@@ -706,7 +735,8 @@ void set_voxels(RawVolume& out, const NumType& t, std::string_view data, std::si
 vtkSmartPointer<vtkImageData> image_from_text(const std::array<Index, 3>& dims, const NumType& t,
                                               std::string_view text, const fs::path& path, const char* what) {
   const std::size_t n = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
-  if (n > (text.size() + 1) / 2) bad(path, what, ": ", n, " text values cannot fit in ", text.size(), " bytes");
+  if (n > (text.size() + 1) / 2)
+    bad(path, what, ": ", n, " text values cannot fit in ", text.size(), " bytes");
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->SetDimensions(dims[0], dims[1], dims[2]);
   image->AllocateScalars(t.vtk, 1);
@@ -771,7 +801,8 @@ fs::path data_file_of(const fs::path& header, std::string_view name, const char*
   fs::path p(n);
   if (p.is_relative()) p = header.parent_path() / p;
   std::error_code ec;
-  if (!fs::is_regular_file(p, ec)) bad(header, what, ": data file ", p.string(), " does not exist or is not a file");
+  if (!fs::is_regular_file(p, ec))
+    bad(header, what, ": data file ", p.string(), " does not exist or is not a file");
   return p;
 }
 
@@ -791,7 +822,8 @@ RawVolume read_metaimage_file(const fs::path& path) {
     if (std::any_of(l.begin(), l.end(), [](char ch) { return ch == '\0'; }))
       bad(path, "not a MetaImage file (NUL byte in the header)");
     const auto eq = l.find('=');
-    if (eq == std::string_view::npos) bad(path, "not a MetaImage file (header line '", shown(l), "' has no '=')");
+    if (eq == std::string_view::npos)
+      bad(path, "not a MetaImage file (header line '", shown(l), "' has no '=')");
     std::string_view k = l.substr(0, eq), v = l.substr(eq + 1);
     while (!k.empty() && is_space(k.back())) k.remove_suffix(1);
     while (!k.empty() && is_space(k.front())) k.remove_prefix(1);
@@ -813,23 +845,26 @@ RawVolume read_metaimage_file(const fs::path& path) {
     return v == "true" || v == "1";
   };
   const std::string object = field("ObjectType");
-  if (!object.empty() && object != "Image") bad(path, "MetaImage ObjectType '", shown(object), "' is not Image");
+  if (!object.empty() && object != "Image")
+    bad(path, "MetaImage ObjectType '", shown(object), "' is not Image");
 
   RawVolume out;
   std::uint64_t nd = 0;
-  if (!parse_count(field("NDims"), nd) || nd < 1 || nd > 16) bad(path, "MetaImage: NDims '", shown(field("NDims")), "'");
+  if (!parse_count(field("NDims"), nd) || nd < 1 || nd > 16)
+    bad(path, "MetaImage: NDims '", shown(field("NDims")), "'");
   out.ndims = static_cast<int>(nd);
   if (nd < 2 || nd > 3) bad(path, nd, "-D MetaImage; a label volume is 3-D");
   out.dims = parse_dims(field("DimSize"), out.ndims, path, "MetaImage DimSize");
   std::uint64_t channels = 1;
-  if (const std::string ch = field("ElementNumberOfChannels"); !ch.empty() && (!parse_count(ch, channels) || channels < 1))
+  if (const std::string ch = field("ElementNumberOfChannels");
+      !ch.empty() && (!parse_count(ch, channels) || channels < 1))
     bad(path, "MetaImage: ElementNumberOfChannels '", shown(ch), "'");
   out.channels = static_cast<int>(std::min<std::uint64_t>(channels, 1u << 20));
   if (channels != 1) bad(path, channels, " channels per voxel; a label volume needs 1");
 
   static const std::map<std::string, NumType> types = {
-      {"MET_CHAR", kI8},   {"MET_UCHAR", kU8},  {"MET_SHORT", kI16},     {"MET_USHORT", kU16},
-      {"MET_INT", kI32},   {"MET_UINT", kU32},  {"MET_LONG", kI32},      {"MET_ULONG", kU32},
+      {"MET_CHAR", kI8},       {"MET_UCHAR", kU8},       {"MET_SHORT", kI16}, {"MET_USHORT", kU16},
+      {"MET_INT", kI32},       {"MET_UINT", kU32},       {"MET_LONG", kI32},  {"MET_ULONG", kU32},
       {"MET_LONG_LONG", kI64}, {"MET_ULONG_LONG", kU64}, {"MET_FLOAT", kF32}, {"MET_DOUBLE", kF64}};
   const auto ti = types.find(field("ElementType"));
   if (ti == types.end()) bad(path, "MetaImage: unsupported ElementType '", shown(field("ElementType")), "'");
@@ -857,7 +892,8 @@ RawVolume read_metaimage_file(const fs::path& path) {
   for (std::size_t a = 0; a < n; ++a) {
     out.spacing(static_cast<Index>(a)) = spacing[a];
     out.origin(static_cast<Index>(a)) = origin[a];
-    for (std::size_t b = 0; b < n; ++b) out.axes(static_cast<Index>(b), static_cast<Index>(a)) = m[a * n + b];  // row a = axis a
+    for (std::size_t b = 0; b < n; ++b)
+      out.axes(static_cast<Index>(b), static_cast<Index>(a)) = m[a * n + b];  // row a = axis a
   }
 
   // the data: LOCAL (after the header) or a file beside the header
@@ -874,7 +910,8 @@ RawVolume read_metaimage_file(const fs::path& path) {
     double skip = 0;
     if (!parse_number(hs, true, skip) || skip < -1) bad(path, "MetaImage: HeaderSize '", shown(hs), "'");
     if (skip > 0) {
-      if (skip > static_cast<double>(data.size())) bad(path, "MetaImage: HeaderSize ", hs, " is past the end of the data");
+      if (skip > static_cast<double>(data.size()))
+        bad(path, "MetaImage: HeaderSize ", hs, " is past the end of the data");
       data.remove_prefix(static_cast<std::size_t>(skip));
     }
   }
@@ -893,7 +930,8 @@ RawVolume read_metaimage_file(const fs::path& path) {
       std::uint64_t size = 0;
       if (!parse_count(cs, size)) bad(path, "MetaImage: CompressedDataSize '", shown(cs), "'");
       if (size > data.size())
-        bad(path, "MetaImage: truncated data (CompressedDataSize ", size, ", the file holds ", data.size(), " bytes)");
+        bad(path, "MetaImage: truncated data (CompressedDataSize ", size, ", the file holds ", data.size(),
+            " bytes)");
       data = data.substr(0, static_cast<std::size_t>(size));
     }
     inflated = inflate_prefix(data, need, path, "MetaImage");
@@ -915,7 +953,8 @@ RawVolume read_nrrd_file(const fs::path& path) {
     const std::string_view l = c.line();
     if (l.empty()) break;
     if (l.size() > 4096) bad(path, "NRRD: header line longer than 4096 bytes");
-    if (std::any_of(l.begin(), l.end(), [](char ch) { return ch == '\0'; })) bad(path, "NRRD: NUL byte in the header");
+    if (std::any_of(l.begin(), l.end(), [](char ch) { return ch == '\0'; }))
+      bad(path, "NRRD: NUL byte in the header");
     if (l.front() == '#') continue;
     const auto colon = l.find(": ");
     if (colon == std::string_view::npos) {
@@ -928,15 +967,46 @@ RawVolume read_nrrd_file(const fs::path& path) {
     const auto it = f.find(k);
     return it == f.end() ? std::string() : it->second;
   };
-  static const std::map<std::string, NumType> types = {
-      {"signed char", kI8}, {"int8", kI8}, {"int8_t", kI8}, {"uchar", kU8}, {"unsigned char", kU8}, {"uint8", kU8},
-      {"uint8_t", kU8}, {"short", kI16}, {"short int", kI16}, {"signed short", kI16}, {"signed short int", kI16},
-      {"int16", kI16}, {"int16_t", kI16}, {"ushort", kU16}, {"unsigned short", kU16}, {"unsigned short int", kU16},
-      {"uint16", kU16}, {"uint16_t", kU16}, {"int", kI32}, {"signed int", kI32}, {"int32", kI32}, {"int32_t", kI32},
-      {"uint", kU32}, {"unsigned int", kU32}, {"uint32", kU32}, {"uint32_t", kU32}, {"longlong", kI64},
-      {"long long", kI64}, {"long long int", kI64}, {"signed long long", kI64}, {"signed long long int", kI64},
-      {"int64", kI64}, {"int64_t", kI64}, {"ulonglong", kU64}, {"unsigned long long", kU64},
-      {"unsigned long long int", kU64}, {"uint64", kU64}, {"uint64_t", kU64}, {"float", kF32}, {"double", kF64}};
+  static const std::map<std::string, NumType> types = {{"signed char", kI8},
+                                                       {"int8", kI8},
+                                                       {"int8_t", kI8},
+                                                       {"uchar", kU8},
+                                                       {"unsigned char", kU8},
+                                                       {"uint8", kU8},
+                                                       {"uint8_t", kU8},
+                                                       {"short", kI16},
+                                                       {"short int", kI16},
+                                                       {"signed short", kI16},
+                                                       {"signed short int", kI16},
+                                                       {"int16", kI16},
+                                                       {"int16_t", kI16},
+                                                       {"ushort", kU16},
+                                                       {"unsigned short", kU16},
+                                                       {"unsigned short int", kU16},
+                                                       {"uint16", kU16},
+                                                       {"uint16_t", kU16},
+                                                       {"int", kI32},
+                                                       {"signed int", kI32},
+                                                       {"int32", kI32},
+                                                       {"int32_t", kI32},
+                                                       {"uint", kU32},
+                                                       {"unsigned int", kU32},
+                                                       {"uint32", kU32},
+                                                       {"uint32_t", kU32},
+                                                       {"longlong", kI64},
+                                                       {"long long", kI64},
+                                                       {"long long int", kI64},
+                                                       {"signed long long", kI64},
+                                                       {"signed long long int", kI64},
+                                                       {"int64", kI64},
+                                                       {"int64_t", kI64},
+                                                       {"ulonglong", kU64},
+                                                       {"unsigned long long", kU64},
+                                                       {"unsigned long long int", kU64},
+                                                       {"uint64", kU64},
+                                                       {"uint64_t", kU64},
+                                                       {"float", kF32},
+                                                       {"double", kF64}};
   const auto ti = types.find(field("type"));
   if (ti == types.end()) bad(path, "NRRD: unsupported or missing type '", shown(field("type")), "'");
   const NumType t = ti->second;
@@ -959,7 +1029,8 @@ RawVolume read_nrrd_file(const fs::path& path) {
     if (!parse_count(ls, line_skip)) bad(path, "NRRD: line skip '", shown(ls), "'");
   for (std::uint64_t k = 0; k < line_skip; ++k) {
     const auto nl = data.find('\n');
-    if (nl == std::string_view::npos) bad(path, "NRRD: line skip ", line_skip, " is past the end of the data");
+    if (nl == std::string_view::npos)
+      bad(path, "NRRD: line skip ", line_skip, " is past the end of the data");
     data.remove_prefix(nl + 1);
   }
   double byte_skip = 0;
@@ -971,14 +1042,16 @@ RawVolume read_nrrd_file(const fs::path& path) {
   const std::size_t need = voxels * static_cast<std::size_t>(t.size);
   const std::string enc = lower(field("encoding"));
   const std::string endian = lower(field("endian"));
-  if (!endian.empty() && endian != "little" && endian != "big") bad(path, "NRRD: endian '", shown(endian), "'");
+  if (!endian.empty() && endian != "little" && endian != "big")
+    bad(path, "NRRD: endian '", shown(endian), "'");
   const bool big = endian == "big";
   if (enc == "ascii" || enc == "text" || enc == "txt") {
     out.image = image_from_text(out.dims, t, data, path, "NRRD");
     return out;
   }
   if (byte_skip > 0) {
-    if (byte_skip > static_cast<double>(data.size())) bad(path, "NRRD: byte skip is past the end of the data");
+    if (byte_skip > static_cast<double>(data.size()))
+      bad(path, "NRRD: byte skip is past the end of the data");
     data.remove_prefix(static_cast<std::size_t>(byte_skip));
   }
   std::string inflated;
@@ -1093,7 +1166,7 @@ std::string base64_chars(std::string_view text) {
 /// The element type of a VTK XML DataArray ("Int32", "UInt64", "Float32", ...).
 std::optional<NumType> vtk_xml_type(const std::string& type) {
   static const std::map<std::string, NumType> types = {
-      {"Int8", kI8},   {"UInt8", kU8},   {"Int16", kI16},  {"UInt16", kU16},  {"Int32", kI32},
+      {"Int8", kI8},    {"UInt8", kU8},  {"Int16", kI16},  {"UInt16", kU16},  {"Int32", kI32},
       {"UInt32", kU32}, {"Int64", kI64}, {"UInt64", kU64}, {"Float32", kF32}, {"Float64", kF64}};
   const auto it = types.find(type);
   if (it == types.end()) return std::nullopt;
@@ -1109,7 +1182,8 @@ struct VtkXmlCodec {
 
   std::uint64_t word(std::string_view h, std::size_t k) const {
     std::uint64_t v = 0;
-    for (std::size_t b = 0; b < H; ++b) v = (v << 8) | static_cast<unsigned char>(h[k * H + (big ? b : H - 1 - b)]);
+    for (std::size_t b = 0; b < H; ++b)
+      v = (v << 8) | static_cast<unsigned char>(h[k * H + (big ? b : H - 1 - b)]);
     return v;
   }
 
@@ -1122,7 +1196,8 @@ struct VtkXmlCodec {
     if (base64) chars = base64_chars(data);
     // the header (n header bytes) and where the data starts
     auto header = [&](std::size_t n) -> std::optional<std::string> {
-      std::string h = base64 ? base64_prefix(chars, n) : std::string(data.substr(0, std::min(n, data.size())));
+      std::string h =
+          base64 ? base64_prefix(chars, n) : std::string(data.substr(0, std::min(n, data.size())));
       if (h.size() < n) return std::nullopt;
       return h;
     };
@@ -1171,8 +1246,9 @@ struct VtkXmlCodec {
       if (out.size() + size > limit) return std::nullopt;
       const std::size_t start = out.size();
       out.resize(start + size);
-      const std::size_t got = compressor->Uncompress(reinterpret_cast<const unsigned char*>(in.data() + at), csize,
-                                                     reinterpret_cast<unsigned char*>(out.data() + start), size);
+      const std::size_t got =
+          compressor->Uncompress(reinterpret_cast<const unsigned char*>(in.data() + at), csize,
+                                 reinterpret_cast<unsigned char*>(out.data() + start), size);
       if (got != size) return std::nullopt;
       at += csize;
     }
@@ -1182,12 +1258,14 @@ struct VtkXmlCodec {
   /// The uncompressed byte count a binary DataArray's header declares (nullopt: unreadable header).
   std::optional<std::uint64_t> declared_bytes(std::string_view data, bool base64) const {
     if (unknown_compressor) return std::nullopt;
-    const std::string h = base64 ? base64_prefix(data, 3 * H) : std::string(data.substr(0, std::min(3 * H, data.size())));
+    const std::string h =
+        base64 ? base64_prefix(data, 3 * H) : std::string(data.substr(0, std::min(3 * H, data.size())));
     if (!compressor) return h.size() >= H ? std::optional<std::uint64_t>(word(h, 0)) : std::nullopt;
     if (h.size() < 3 * H) return std::nullopt;
     const std::uint64_t blocks = word(h, 0), block = word(h, 1), last = word(h, 2);
     if (blocks == 0) return 0;
-    const long double n = static_cast<long double>(block) * static_cast<long double>(blocks - 1) + (last ? last : block);
+    const long double n =
+        static_cast<long double>(block) * static_cast<long double>(blocks - 1) + (last ? last : block);
     return n >= 1.8e19L ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(n);
   }
 };
@@ -1205,7 +1283,9 @@ void check_vtk_xml(const fs::path& path) {
   const std::string compressor = xml_attribute(root_tag, "compressor");
   const bool compressed = !compressor.empty();
   // the most a compressed byte can expand to: zlib ~1032:1, LZ4 255:1; LZMA more (16384:1 bounds real files)
-  const double ratio = compressor == "vtkZLibDataCompressor" ? 1100 : compressor == "vtkLZ4DataCompressor" ? 260 : 16384;
+  const double ratio = compressor == "vtkZLibDataCompressor"  ? 1100
+                       : compressor == "vtkLZ4DataCompressor" ? 260
+                                                              : 16384;
   const bool big = xml_attribute(root_tag, "byte_order") == "BigEndian";
 
   // the appended section: data from the '_' after <AppendedData ...> to the end of the file
@@ -1249,20 +1329,24 @@ void check_vtk_xml(const fs::path& path) {
       bad(path, "VTK XML: DataArray '", what, "': compression header with block size ", block,
           " and last block size ", last);
     if (blocks > left_after(3 * H) / H)
-      bad(path, "VTK XML: DataArray '", what, "' declares ", blocks, " compressed blocks, more than the file holds");
+      bad(path, "VTK XML: DataArray '", what, "' declares ", blocks,
+          " compressed blocks, more than the file holds");
     const std::size_t header = (3 + static_cast<std::size_t>(blocks)) * H;
     h = header_bytes(header);
     if (h.size() < header) bad(path, "VTK XML: DataArray '", what, "': truncated compression header");
     std::uint64_t packed = 0;
-    for (std::uint64_t k = 0; k < blocks; ++k) packed += std::min<std::uint64_t>(word(h, 3 + k), std::uint64_t(1) << 62);
+    for (std::uint64_t k = 0; k < blocks; ++k)
+      packed += std::min<std::uint64_t>(word(h, 3 + k), std::uint64_t(1) << 62);
     if (packed > left_after(header))
       bad(path, "VTK XML: DataArray '", what, "' declares ", packed, " compressed bytes, the file holds ",
           left_after(header));
-    const long double unpacked = blocks == 0 ? 0.0L : static_cast<long double>(block) * (blocks - 1) + (last ? last : block);
+    const long double unpacked =
+        blocks == 0 ? 0.0L : static_cast<long double>(block) * (blocks - 1) + (last ? last : block);
     const long double limit = static_cast<long double>(ratio) * static_cast<long double>(packed) + 65536.0L;
     if (static_cast<long double>(block) > limit || unpacked > limit)
-      bad(path, "VTK XML: DataArray '", what, "' declares ", static_cast<double>(std::max<long double>(unpacked, block)),
-          " uncompressed bytes from ", packed, " compressed bytes");
+      bad(path, "VTK XML: DataArray '", what, "' declares ",
+          static_cast<double>(std::max<long double>(unpacked, block)), " uncompressed bytes from ", packed,
+          " compressed bytes");
   };
 
   // Counts VTK allocates for before it reads a byte: each element needs at least one byte of data (of
@@ -1277,12 +1361,13 @@ void check_vtk_xml(const fs::path& path) {
     if (r.ec != std::errc() || r.ptr != text.data() + text.size())
       bad(path, "VTK XML: ", element, " ", attribute, " '", shown(text), "' is not a count (0 to 2^64 - 1)");
     if (v > max_count)
-      bad(path, "VTK XML: ", element, " ", attribute, " = ", v, ": more than a ", file.size(), "-byte file can hold");
+      bad(path, "VTK XML: ", element, " ", attribute, " = ", v, ": more than a ", file.size(),
+          "-byte file can hold");
     return v;
   };
   // VTK allocates the whole output for the sum over the pieces: the sums are bounded as each count is
   constexpr const char* kPieceCounts[] = {"NumberOfPoints", "NumberOfVerts", "NumberOfLines",
-                                          "NumberOfStrips", "NumberOfPolys",  "NumberOfCells"};
+                                          "NumberOfStrips", "NumberOfPolys", "NumberOfCells"};
   std::uint64_t totals[std::size(kPieceCounts)] = {};
   for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos; at = xml.find("<Piece", at + 1)) {
     const std::size_t gt = xml_tag_end(xml, at);
@@ -1290,12 +1375,13 @@ void check_vtk_xml(const fs::path& path) {
     for (std::size_t k = 0; k < std::size(kPieceCounts); ++k) {
       totals[k] += count(xml.substr(at, gt - at), kPieceCounts[k], "Piece");
       if (totals[k] > max_count)
-        bad(path, "VTK XML: the pieces' ", kPieceCounts[k], " add up to ", totals[k], ": more than a ", file.size(),
-            "-byte file can hold");
+        bad(path, "VTK XML: the pieces' ", kPieceCounts[k], " add up to ", totals[k], ": more than a ",
+            file.size(), "-byte file can hold");
     }
   }
 
-  for (std::size_t at = xml.find("<DataArray"); at != std::string_view::npos; at = xml.find("<DataArray", at + 1)) {
+  for (std::size_t at = xml.find("<DataArray"); at != std::string_view::npos;
+       at = xml.find("<DataArray", at + 1)) {
     const std::size_t gt = xml_tag_end(xml, at);
     if (gt == std::string_view::npos) bad(path, "VTK XML: unterminated <DataArray> tag");
     const std::string_view tag = xml.substr(at, gt - at);
@@ -1305,7 +1391,8 @@ void check_vtk_xml(const fs::path& path) {
     if (count(tag, "NumberOfComponents", "DataArray") > 4096)
       bad(path, "VTK XML: DataArray '", name, "' has more than 4096 components");
     if (mode == XmlArrayMode::Appended) {
-      if (appended == std::string_view::npos) bad(path, "VTK XML: DataArray '", name, "' is appended, the file has no <AppendedData>");
+      if (appended == std::string_view::npos)
+        bad(path, "VTK XML: DataArray '", name, "' is appended, the file has no <AppendedData>");
       std::uint64_t offset = 0;
       const std::string off = xml_attribute(tag, "offset");
       const auto r = std::from_chars(off.data(), off.data() + off.size(), offset);
@@ -1316,17 +1403,20 @@ void check_vtk_xml(const fs::path& path) {
       const std::string_view data = file.substr(appended + static_cast<std::size_t>(offset));
       if (appended_base64) {
         const std::uint64_t chars = base64_length(data);
-        check(name, [&](std::size_t n) { return base64_prefix(data, n); },
-              [&](std::size_t used) { return chars * 3 / 4 >= used ? chars * 3 / 4 - used + 3 : 0; });
+        check(
+            name, [&](std::size_t n) { return base64_prefix(data, n); },
+            [&](std::size_t used) { return chars * 3 / 4 >= used ? chars * 3 / 4 - used + 3 : 0; });
       } else {
-        check(name, [&](std::size_t n) { return std::string(data.substr(0, n)); },
-              [&](std::size_t used) { return data.size() >= used ? data.size() - used : 0; });
+        check(
+            name, [&](std::size_t n) { return std::string(data.substr(0, n)); },
+            [&](std::size_t used) { return data.size() >= used ? data.size() - used : 0; });
       }
     } else if (mode == XmlArrayMode::Binary) {
       const std::string_view data = xml.substr(gt + 1);
       const std::uint64_t chars = base64_length(data);
-      check(name, [&](std::size_t n) { return base64_prefix(data, n); },
-            [&](std::size_t used) { return chars * 3 / 4 >= used ? chars * 3 / 4 - used + 3 : 0; });
+      check(
+          name, [&](std::size_t n) { return base64_prefix(data, n); },
+          [&](std::size_t used) { return chars * 3 / 4 >= used ? chars * 3 / 4 - used + 3 : 0; });
     }
   }
 
@@ -1337,12 +1427,17 @@ void check_vtk_xml(const fs::path& path) {
   VtkXmlCodec codec;
   codec.H = H;
   codec.big = big;
-  if (compressor == "vtkZLibDataCompressor") codec.compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
-  else if (compressor == "vtkLZ4DataCompressor") codec.compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
-  else if (compressor == "vtkLZMADataCompressor") codec.compressor = vtkSmartPointer<vtkLZMADataCompressor>::New();
-  else codec.unknown_compressor = compressed;  // VTK refuses a compressor it does not know
+  if (compressor == "vtkZLibDataCompressor")
+    codec.compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
+  else if (compressor == "vtkLZ4DataCompressor")
+    codec.compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
+  else if (compressor == "vtkLZMADataCompressor")
+    codec.compressor = vtkSmartPointer<vtkLZMADataCompressor>::New();
+  else
+    codec.unknown_compressor = compressed;  // VTK refuses a compressor it does not know
   const auto decode_limit = static_cast<std::size_t>(std::min<long double>(
-      static_cast<long double>(compressed ? ratio : 1.0) * static_cast<long double>(file.size()) + 65536.0L, 1e12L));
+      static_cast<long double>(compressed ? ratio : 1.0) * static_cast<long double>(file.size()) + 65536.0L,
+      1e12L));
 
   // one DataArray: its type, its format, and where its data starts (binary and appended)
   struct ArrayRef {
@@ -1351,7 +1446,8 @@ void check_vtk_xml(const fs::path& path) {
     std::string_view data;  // binary / appended: header + data; ascii: the text
     bool base64 = false;
   };
-  auto array_named = [&](std::string_view section, std::size_t base, const char* wanted) -> std::optional<ArrayRef> {
+  auto array_named = [&](std::string_view section, std::size_t base,
+                         const char* wanted) -> std::optional<ArrayRef> {
     for (std::size_t at = section.find("<DataArray"); at != std::string_view::npos;
          at = section.find("<DataArray", at + 1)) {
       const std::size_t gt = xml_tag_end(section, at);
@@ -1366,7 +1462,8 @@ void check_vtk_xml(const fs::path& path) {
         std::uint64_t offset = 0;
         const std::string off = xml_attribute(tag, "offset");
         std::from_chars(off.data(), off.data() + off.size(), offset);
-        a.data = file.substr(appended + static_cast<std::size_t>(std::min<std::uint64_t>(offset, file.size() - appended)));
+        a.data = file.substr(
+            appended + static_cast<std::size_t>(std::min<std::uint64_t>(offset, file.size() - appended)));
         a.base64 = appended_base64;
       } else {
         a.data = xml.substr(base + gt + 1);
@@ -1392,7 +1489,8 @@ void check_vtk_xml(const fs::path& path) {
   };
 
   int piece_index = 0;
-  for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos; at = xml.find("<Piece", at + 1), ++piece_index) {
+  for (std::size_t at = xml.find("<Piece"); at != std::string_view::npos;
+       at = xml.find("<Piece", at + 1), ++piece_index) {
     const std::size_t gt = xml_tag_end(xml, at);
     const std::size_t end = std::min(xml.find("</Piece>", at), xml.size());
     const std::string_view piece_tag = xml.substr(at, gt - at);
@@ -1418,8 +1516,8 @@ void check_vtk_xml(const fs::path& path) {
 
       // The offsets VTK may take as the connectivity length: the cell ends (n values; VTK reads the last)
       // or, in the layout with a leading 0, n + 1 values. The largest of the first n + 1 values counts.
-      double last = 0;       // the largest offset
-      double invalid = 0;    // the first negative or NaN offset
+      double last = 0;     // the largest offset
+      double invalid = 0;  // the first negative or NaN offset
       bool any = false, bad_value = false;
       auto take = [&](double v) {
         if (!(v >= 0)) {
@@ -1447,7 +1545,9 @@ void check_vtk_xml(const fs::path& path) {
           take(decode(decoded->data() + k * size, *ot, big));
       }
       if (!any) continue;
-      if (bad_value) bad(path, "VTK XML: piece ", piece_index, ": ", kind, " offsets hold ", invalid, " (offsets are >= 0)");
+      if (bad_value)
+        bad(path, "VTK XML: piece ", piece_index, ": ", kind, " offsets hold ", invalid,
+            " (offsets are >= 0)");
       // the connectivity values the file declares
       std::uint64_t capacity = 0;
       if (connectivity->mode == XmlArrayMode::Ascii) {
@@ -1477,7 +1577,9 @@ void check_nifti(const fs::path& path) {
     b = inflated;
   }
   if (b.size() < 348) bad(path, "NIfTI file is truncated (", b.size(), " bytes, the header alone has 348)");
-  auto i32 = [&](std::size_t at, bool swap) { return static_cast<std::int32_t>(decode(b.data() + at, kI32, swap)); };
+  auto i32 = [&](std::size_t at, bool swap) {
+    return static_cast<std::int32_t>(decode(b.data() + at, kI32, swap));
+  };
   bool swap = false;
   int version = 0;
   for (const bool s : {false, true}) {
@@ -1486,14 +1588,17 @@ void check_nifti(const fs::path& path) {
     if (version) break;
   }
   if (version == 0) bad(path, "not a NIfTI-1 or NIfTI-2 file (header size field)");
-  if (version == 2 && b.size() < 540) bad(path, "NIfTI file is truncated (", b.size(), " bytes, the header alone has 540)");
+  if (version == 2 && b.size() < 540)
+    bad(path, "NIfTI file is truncated (", b.size(), " bytes, the header alone has 540)");
   const bool v1 = version == 1;
-  if (v1 ? b.substr(344, 4) != std::string_view("n+1\0", 4) : b.substr(4, 8) != std::string_view("n+2\0\r\n\x1a\n", 8))
+  if (v1 ? b.substr(344, 4) != std::string_view("n+1\0", 4)
+         : b.substr(4, 8) != std::string_view("n+2\0\r\n\x1a\n", 8))
     bad(path, "not a single-file NIfTI-", version, " image (magic)");
   // vtkNIFTIImageReader takes a NIfTI-2 magic at byte 4 ('n+2'..'n+9', 'ni2'..'ni9') before the size
   // field and would read this 348-byte header as a 540-byte one
   if (v1 && b[4] == 'n' && (b[5] == '+' || b[5] == 'i') && b[6] >= '2' && b[6] <= '9' && b[7] == '\0')
-    bad(path, "NIfTI: a NIfTI-1 header (348 bytes) with the NIfTI-", b[6], " magic '", b.substr(4, 3), "' at byte 4");
+    bad(path, "NIfTI: a NIfTI-1 header (348 bytes) with the NIfTI-", b[6], " magic '", b.substr(4, 3),
+        "' at byte 4");
   // dim[0..7], datatype, bitpix, vox_offset
   double dim[8];
   for (int a = 0; a < 8; ++a)
@@ -1507,10 +1612,11 @@ void check_nifti(const fs::path& path) {
     if (!(dim[a] >= 1 && dim[a] <= 1e9)) bad(path, "NIfTI: dim[", a, "] = ", dim[a], " (must be >= 1)");
     voxels *= dim[a];
   }
-  static const std::map<int, int> bits = {{2, 8},    {4, 16},   {8, 32},   {16, 32},  {64, 64},
-                                          {256, 8},  {512, 16}, {768, 32}, {1024, 64}, {1280, 64}};
+  static const std::map<int, int> bits = {{2, 8},   {4, 16},   {8, 32},   {16, 32},   {64, 64},
+                                          {256, 8}, {512, 16}, {768, 32}, {1024, 64}, {1280, 64}};
   const auto it = bits.find(datatype);
-  if (it == bits.end()) bad(path, "NIfTI: unsupported datatype ", datatype, " (a label volume needs scalar voxels)");
+  if (it == bits.end())
+    bad(path, "NIfTI: unsupported datatype ", datatype, " (a label volume needs scalar voxels)");
   if (bitpix != it->second) bad(path, "NIfTI: bitpix ", bitpix, " does not match datatype ", datatype);
   const double header = v1 ? 348 : 540;
   if (!(std::isfinite(vox_offset) && vox_offset >= header && vox_offset <= 1e12))

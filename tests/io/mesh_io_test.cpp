@@ -461,7 +461,8 @@ std::string base64_encode(std::string_view bytes) {
   for (std::size_t i = 0; i < bytes.size(); i += 3) {
     std::uint32_t v = 0;
     const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);
-    for (std::size_t k = 0; k < 3; ++k) v = (v << 8) | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0u);
+    for (std::size_t k = 0; k < 3; ++k)
+      v = (v << 8) | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0u);
     for (std::size_t k = 0; k < 4; ++k) out.push_back(k <= n ? A[(v >> (18 - 6 * k)) & 63] : '=');
   }
   return out;
@@ -481,13 +482,15 @@ std::string one_triangle_raw_vtp(Offset offset, std::uint32_t points_bytes = 36)
   for (std::int32_t v : {0, 1, 2}) put(v);
   put(static_cast<std::uint32_t>(sizeof(Offset)));
   put(offset);
-  return cat("<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" ",
-             "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n",
-             "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/></Points>\n",
-             "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"40\"/>\n",
-             "<DataArray type=\"", sizeof(Offset) == 8 ? "Int64" : "Int32",
-             "\" Name=\"offsets\" format=\"appended\" offset=\"56\"/></Polys>\n",
-             "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_", raw, "\n</AppendedData>\n</VTKFile>\n");
+  return cat(
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" ",
+      "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n",
+      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" "
+      "offset=\"0\"/></Points>\n",
+      "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"40\"/>\n",
+      "<DataArray type=\"", sizeof(Offset) == 8 ? "Int64" : "Int32",
+      "\" Name=\"offsets\" format=\"appended\" offset=\"56\"/></Polys>\n",
+      "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_", raw, "\n</AppendedData>\n</VTKFile>\n");
 }
 
 TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
@@ -508,15 +511,17 @@ TEST_F(MalformedMesh, VtpSizeHeadersBeyondTheFileAreRefusedBeforeVtkAllocates) {
   write_text(dir_ / "same.vtp", patched(0, 1));  // the helpers re-encode the header faithfully
   EXPECT_EQ(testing::read_text(dir_ / "same.vtp"), vtp);
   write_text(dir_ / "blocks.vtp", patched(0, std::uint64_t(1) << 60));  // block count
-  expect_error_naming([&] { read_mesh(dir_ / "blocks.vtp"); },
-                      "blocks.vtp: VTK XML: DataArray 'Points' declares 1152921504606846976 compressed blocks");
+  expect_error_naming(
+      [&] { read_mesh(dir_ / "blocks.vtp"); },
+      "blocks.vtp: VTK XML: DataArray 'Points' declares 1152921504606846976 compressed blocks");
   write_text(dir_ / "packed.vtp", patched(3, std::uint64_t(1) << 40));  // compressed size of block 0
   expect_error_naming([&] { read_mesh(dir_ / "packed.vtp"); }, "compressed bytes, the file holds");
   write_text(dir_ / "unpacked.vtp", patched(1, std::uint64_t(1) << 39));  // uncompressed block size
   expect_error_naming([&] { read_mesh(dir_ / "unpacked.vtp"); }, "uncompressed bytes from");
   {  // pieces whose point counts each fit in the file, but not together: VTK allocates for the sum
     std::string pieces =
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\">\n<PolyData>\n";
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" "
+        "byte_order=\"LittleEndian\">\n<PolyData>\n";
     for (int k = 0; k < 3; ++k) pieces += "<Piece NumberOfPoints=\"900\" NumberOfPolys=\"0\"></Piece>\n";
     pieces += "</PolyData>\n</VTKFile>\n";
     write_text(dir_ / "pieces.vtp", pieces);
@@ -562,8 +567,10 @@ TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllo
     writer->SetInputData(to_polydata(kidney));
     writer->SetCompressorType(mode.compressor);
     writer->SetHeaderTypeToUInt64();
-    if (mode.appended) writer->SetDataModeToAppended();
-    else writer->SetDataModeToBinary();
+    if (mode.appended)
+      writer->SetDataModeToAppended();
+    else
+      writer->SetDataModeToBinary();
     writer->SetEncodeAppendedData(mode.base64);
     const fs::path good = dir_ / cat(mode.name, ".vtp");
     writer->SetFileName(good.string().c_str());
@@ -588,19 +595,22 @@ TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllo
     // the data (12 characters = the 8-byte size and the first data byte)
     ASSERT_EQ(h.size(), compressed ? 32u : 9u);
     const std::uint64_t one_value = 8;  // the connectivity now declares one Int64 value
-    for (int k = 0; k < 8; ++k) h[(compressed ? 16 : 0) + k] = static_cast<char>((one_value >> (8 * k)) & 0xff);
+    for (int k = 0; k < 8; ++k)
+      h[(compressed ? 16 : 0) + k] = static_cast<char>((one_value >> (8 * k)) & 0xff);
     vtp.replace(data, header_chars, base64_encode(h));
     const fs::path bad = dir_ / cat(mode.name, "-short.vtp");
     write_text(bad, vtp);
-    expect_error_naming([&] { read_mesh(bad); }, cat(bad.filename().string(), ": VTK XML: piece 0: Polys offsets end at ",
-                                                     last_offset, " connectivity values, the connectivity array holds 1"));
+    expect_error_naming([&] { read_mesh(bad); },
+                        cat(bad.filename().string(), ": VTK XML: piece 0: Polys offsets end at ", last_offset,
+                            " connectivity values, the connectivity array holds 1"));
   }
 
   // ascii, and appended raw with a 2e9 offset (the fuzzer's case): one triangle
   const std::string ascii =
       "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
       "<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n"
-      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 0 1 0</DataArray></Points>\n"
+      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 0 1 "
+      "0</DataArray></Points>\n"
       "<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">0 1 2</DataArray>\n"
       "<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">OFFSET</DataArray></Polys>\n"
       "</Piece>\n</PolyData>\n</VTKFile>\n";
@@ -612,11 +622,13 @@ TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllo
   write_text(dir_ / "ascii.vtp", with_offset("3"));
   EXPECT_EQ(read_mesh(dir_ / "ascii.vtp").num_faces(), 1);
   write_text(dir_ / "ascii-huge.vtp", with_offset("2000000000"));
-  expect_error_naming([&] { read_mesh(dir_ / "ascii-huge.vtp"); },
-                      "ascii-huge.vtp: VTK XML: piece 0: Polys offsets end at 2000000000 connectivity values, "
-                      "the connectivity array holds 3");
+  expect_error_naming(
+      [&] { read_mesh(dir_ / "ascii-huge.vtp"); },
+      "ascii-huge.vtp: VTK XML: piece 0: Polys offsets end at 2000000000 connectivity values, "
+      "the connectivity array holds 3");
   write_text(dir_ / "ascii-negative.vtp", with_offset("-5"));
-  expect_error_naming([&] { read_mesh(dir_ / "ascii-negative.vtp"); }, "ascii-negative.vtp: VTK XML: piece 0: Polys offsets hold -5 (offsets are >= 0)");
+  expect_error_naming([&] { read_mesh(dir_ / "ascii-negative.vtp"); },
+                      "ascii-negative.vtp: VTK XML: piece 0: Polys offsets hold -5 (offsets are >= 0)");
 
   write_text(dir_ / "raw3.vtp", one_triangle_raw_vtp(std::int64_t{3}));
   EXPECT_EQ(read_mesh(dir_ / "raw3.vtp").num_faces(), 1);
@@ -626,7 +638,8 @@ TEST_F(MalformedMesh, VtpCellOffsetsBeyondTheConnectivityAreRefusedBeforeVtkAllo
   std::string misspelled = one_triangle_raw_vtp(std::int64_t{3'000'000'000});
   misspelled.replace(misspelled.find("format=\"appended\" offset=\"56\""), 17, "format=\"1ppended\"");
   write_text(dir_ / "raw-misspelled.vtp", misspelled);
-  expect_error_naming([&] { read_mesh(dir_ / "raw-misspelled.vtp"); }, "Polys offsets end at 3000000000 connectivity values");
+  expect_error_naming([&] { read_mesh(dir_ / "raw-misspelled.vtp"); },
+                      "Polys offsets end at 3000000000 connectivity values");
   expect_error_naming([&] { read_mesh(dir_ / "raw-huge.vtp"); },
                       "raw-huge.vtp: VTK XML: piece 0: Polys offsets end at 3000000000 connectivity values, "
                       "the connectivity array holds 3");
