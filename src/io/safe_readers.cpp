@@ -1302,14 +1302,18 @@ void check_vtk_xml(const fs::path& path) {
   }
   const std::string_view xml = file.substr(0, appended_tag);  // DataArray tags live before the raw data
 
-  auto word = [&](std::string_view h, std::size_t k) {
-    std::uint64_t v = 0;
-    for (std::size_t b = 0; b < H; ++b) {
-      const auto byte = static_cast<unsigned char>(h[k * H + (big ? b : H - 1 - b)]);
-      v = (v << 8) | byte;
-    }
-    return v;
-  };
+  VtkXmlCodec codec;
+  codec.H = H;
+  codec.big = big;
+  if (compressor == "vtkZLibDataCompressor")
+    codec.compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
+  else if (compressor == "vtkLZ4DataCompressor")
+    codec.compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
+  else if (compressor == "vtkLZMADataCompressor")
+    codec.compressor = vtkSmartPointer<vtkLZMADataCompressor>::New();
+  else
+    codec.unknown_compressor = compressed;  // VTK refuses a compressor it does not know
+  auto word = [&](std::string_view h, std::size_t k) { return codec.word(h, k); };
   // header: the decoded header bytes available; left: data bytes after the header
   auto check = [&](const std::string& name, auto&& header_bytes, auto&& left_after) {
     const std::string_view what = name;
@@ -1424,17 +1428,6 @@ void check_vtk_xml(const fs::path& path) {
   // connectivity array by the last offset: an offset of 3e9 in a small file made it allocate 24 GB
   // before it found the connectivity short. The last offset is decoded here and must fit in the
   // connectivity array the file declares.
-  VtkXmlCodec codec;
-  codec.H = H;
-  codec.big = big;
-  if (compressor == "vtkZLibDataCompressor")
-    codec.compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
-  else if (compressor == "vtkLZ4DataCompressor")
-    codec.compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
-  else if (compressor == "vtkLZMADataCompressor")
-    codec.compressor = vtkSmartPointer<vtkLZMADataCompressor>::New();
-  else
-    codec.unknown_compressor = compressed;  // VTK refuses a compressor it does not know
   const auto decode_limit = static_cast<std::size_t>(std::min<long double>(
       static_cast<long double>(compressed ? ratio : 1.0) * static_cast<long double>(file.size()) + 65536.0L,
       1e12L));
