@@ -149,6 +149,20 @@ const std::vector<Command>& commands() {
        "  --quiet         no request log on stderr\n",
        {"quiet"},
        cmd_view},
+      {"study",
+       "usage: medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]\n"
+       "                      [--quiet] [--no-report] [--scaling RUNS]\n\n"
+       "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters (grids,\n"
+       "lists, seeded random or Latin-hypercube samples), every run a task on the engine in a worker process;\n"
+       "results stream into DIR/results.zarr and DIR/summary.csv, the report is DIR/study.md.\n"
+       "  --scheduler ADDR  a running dask-scheduler (default: a local cluster of every core)\n"
+       "  --workers N       local worker processes (0: in this process, without Dask)\n"
+       "  --resume          complete the study already in DIR (redoes only the missing runs)\n"
+       "  --yes             run a study with more runs than its max_runs (default 100000)\n"
+       "  --scaling RUNS    also time RUNS runs on 1..N local workers for the report\n"
+       "Runs the Python package medspring.study (python3 -m medspring.study takes the same arguments).\n",
+       {"resume", "yes", "quiet", "no-report"},
+       cmd_study},
   };
   return list;
 }
@@ -158,6 +172,7 @@ void extra_usage(std::ostream& os) {
   os << "  export   write built models as packages the engine alone (and the web page) rebuilds\n";
   os << "  view     serve the browser page on 127.0.0.1: poke the models with the mouse (docs/web.md)\n";
   os << "  build    build a model from real anatomy: build kidney | build centerline (--help)\n";
+  os << "  study    parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md\n";
   os << "  run      run a scene file (docs/scenes.md): ParaView series, traces, summary\n";
   os << "  paper    reproduce the paper: Fig. 9, Fig. 10 A-F, Tables I-II -> report.md, figures, "
         "tables.json\n";

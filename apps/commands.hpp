@@ -30,5 +30,6 @@ int cmd_paper(const Args& args);    // cmd_paper.cpp
 int cmd_haptics(const Args& args);  // cmd_haptics.cpp
 int cmd_export(const Args& args);   // cmd_export.cpp
 int cmd_view(const Args& args);     // cmd_view.cpp
+int cmd_study(const Args& args);    // cmd_study.cpp
 
 }  // namespace medspring::cli

@@ -138,3 +138,10 @@ def press_release(
         contact[i] = np.linalg.norm(surface[node] - rest[node])
         max_disp[i] = np.sqrt(((surface - rest) ** 2).sum(axis=1).max())
     return {"time": time, "contact": contact, "max_displacement": max_disp, "sim": sim}
+
+
+# Scenes in-process (medspring.scenes) and parameter studies on Dask (medspring.study, docs/studies.md).
+if getattr(_medspring, "has_scene", False):
+    from .scenes import run_scene, scene_document  # noqa: E402,F401
+
+    __all__ += ["run_scene", "scene_document"]

@@ -59,6 +59,9 @@ void bind_exceptions(py::module_& m) {
 }
 
 }  // namespace
+#ifdef MEDSPRING_PYTHON_WITH_SCENE
+void bind_scene(py::module_& m);  // bind_scene.cpp
+#endif
 }  // namespace medspring::python
 
 PYBIND11_MODULE(_medspring, m) {
@@ -79,5 +82,11 @@ PYBIND11_MODULE(_medspring, m) {
   m.attr("has_io") = true;
 #else
   m.attr("has_io") = false;
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_SCENE
+  bind_scene(m);
+  m.attr("has_scene") = true;
+#else
+  m.attr("has_scene") = false;
 #endif
 }

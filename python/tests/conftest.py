@@ -50,3 +50,7 @@ def reference():
 def bits(a) -> np.ndarray:
     """The IEEE-754 bit patterns of a float64 array (for bit-for-bit comparisons)."""
     return np.ascontiguousarray(a, dtype=np.float64).view(np.uint64)
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: a test of several seconds (real Dask clusters); -m 'not slow' skips it")

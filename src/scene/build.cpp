@@ -326,17 +326,11 @@ struct Builder {
 
 }  // namespace
 
-BuiltScene build_scene(const Scene& scene, SceneLoader* loader) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Builder b{scene, loader, scene.file.empty() ? "scene" : scene.file.string(), {}, 0, {}, nullptr};
-  b.out.scene = scene;
-  try {
-    b.out.body = b.build_body();
-  } catch (const InvalidInput& e) {
-    const std::string what = e.what();
-    if (what.rfind(b.origin + ":", 0) == 0) throw;
-    b.fail("model", what);
-  }
+namespace {
+
+// Everything after the model exists: settings, loads, the probe, notes and timing.
+BuiltScene finish_build(Builder& b, std::chrono::steady_clock::time_point t0) {
+  const Scene& scene = b.scene;
   b.settings();
   b.resolve_loads();
   b.out.atoms_rest = b.atoms_rest;
@@ -354,6 +348,35 @@ BuiltScene build_scene(const Scene& scene, SceneLoader* loader) {
                             " ms"));
   b.out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return std::move(b.out);
+}
+
+}  // namespace
+
+BuiltScene build_scene(const Scene& scene, SceneLoader* loader) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Builder b{scene, loader, scene.file.empty() ? "scene" : scene.file.string(), {}, 0, {}, nullptr};
+  b.out.scene = scene;
+  try {
+    b.out.body = b.build_body();
+  } catch (const InvalidInput& e) {
+    const std::string what = e.what();
+    if (what.rfind(b.origin + ":", 0) == 0) throw;
+    b.fail("model", what);
+  }
+  return finish_build(b, t0);
+}
+
+BuiltScene build_scene_reusing(const Scene& scene, const BuiltScene& prior) {
+  const auto t0 = std::chrono::steady_clock::now();
+  require(prior.body != nullptr, "build_scene_reusing: the prior scene has no model");
+  Builder b{scene, nullptr, scene.file.empty() ? "scene" : scene.file.string(), {}, 0, {}, nullptr};
+  b.out.scene = scene;
+  b.out.body = prior.body;
+  b.num_atoms = static_cast<Index>(prior.atoms_rest.rows());
+  b.atoms_rest = prior.atoms_rest;
+  b.vessel = std::dynamic_pointer_cast<const SmrmVessel>(prior.body);
+  b.out.notes.push_back(cat("model reused from an earlier build (", prior.build_seconds, " s)"));
+  return finish_build(b, t0);
 }
 
 }  // namespace medspring

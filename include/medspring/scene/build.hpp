@@ -59,4 +59,9 @@ struct BuiltScene {
 /// the organ implausibly small or large, an integrator.dt above the stable step with substep off.
 BuiltScene build_scene(const Scene& scene, SceneLoader* loader);
 
+/// As build_scene, but on the model of `prior` (built by build_scene from a scene with the same `model`
+/// section): only settings and loads are resolved, so a study running many loads on one model builds it
+/// once. The caller guarantees the model sections agree (the body is shared, not copied).
+BuiltScene build_scene_reusing(const Scene& scene, const BuiltScene& prior);
+
 }  // namespace medspring

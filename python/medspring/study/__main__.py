@@ -1,0 +1,63 @@
+"""`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]`:
+runs a parameter study (docs/studies.md). Errors are one line on stderr with exit code 2."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(
+        prog="medspring study",
+        description="Run a parameter study on Dask distributed: every run a task on the C++ engine, results "
+        "streamed to DIR/results.zarr and DIR/summary.csv, a report in DIR/study.md.",
+    )
+    p.add_argument("study", help="study file (JSON, docs/studies.md)")
+    p.add_argument("--out", required=True, help="output folder (new, empty, or this study's with --resume)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", help="address of a running dask-scheduler, tcp://HOST:PORT")
+    where.add_argument("--workers", type=int, help="local worker processes (default: every core; 0: in this process, no Dask)")
+    p.add_argument("--resume", action="store_true", help="complete the study already in --out (only missing runs)")
+    p.add_argument("--yes", action="store_true", help="run a study with more runs than its max_runs")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--no-report", action="store_true", help="do not write study.md")
+    p.add_argument("--scaling", type=int, metavar="RUNS", default=0,
+                   help="also time RUNS runs on 1..N local workers (N = --workers or every core) for the report")
+    p.add_argument("--max-batches", type=int, default=None, help=argparse.SUPPRESS)
+    a = p.parse_args(argv)
+    if a.workers is not None and a.workers < 0:
+        print("medspring study: --workers: must be >= 0", file=sys.stderr)
+        return 2
+
+    from .. import Error
+    from . import measure_scaling, run
+    from .report import write_report
+    from .spec import load_study
+    from .store import Store
+
+    try:
+        st = load_study(a.study)
+        df = run(st, out=a.out, scheduler=a.scheduler, workers=a.workers, resume=a.resume, yes=a.yes,
+                 progress=not a.quiet, report=not a.no_report, max_batches=a.max_batches)
+        if a.scaling > 0:
+            n = a.workers or os.cpu_count() or 1
+            store = Store(__import__("pathlib").Path(a.out), st, create=False)
+            store.g.attrs["scaling"] = measure_scaling(st, list(range(1, n + 1)), a.scaling)
+            if not a.no_report:
+                write_report(store, store.frame())
+    except (Error, OSError) as e:
+        msg = str(e).splitlines()[0] if str(e) else type(e).__name__
+        print(f"medspring study: {msg}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("medspring study: interrupted (the folder is resumable: --resume)", file=sys.stderr)
+        return 130
+    failed = int(df["failed"].sum())
+    print(f"{a.out}: {len(df)} runs done, {failed} failed", file=sys.stderr if a.quiet else sys.stdout)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,428 @@
+"""Study files (docs/studies.md): a base scene plus the varied quantities and what each run reports.
+Parsed and validated here; every error is a medspring.InvalidInput whose message starts with the study
+file and the JSON path at fault ("kidney.json: vary[1].grid.num: must be >= 1 (got 0)").
+
+Runs are numbered 0..N-1: run i = grid point i // count, sample i % count, where the grid is the product
+of every `values`/`grid` entry (in file order) and count is samples.count (1 without sampled entries).
+Every sampled value of run i is drawn from numpy's PCG64 seeded with SeedSequence([seed, i]) (random),
+or from a stratified permutation seeded by [seed, grid point, dimension] (latin_hypercube), so a run's
+parameters depend only on the study and i: reruns and resumed runs are bit-identical.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import _medspring
+from .._medspring import InvalidInput, IoError
+from ..scenes import apply_overrides, parse_path, scene_document
+
+METRICS = (
+    "contact_peak_mm",
+    "contact_hold_mm",
+    "max_disp_peak_mm",
+    "atom_hold_mm",
+    "local_hold_mm",
+    "return_ms",
+    "final_max_disp_mm",
+    "warnings",
+    "substeps",
+    "median_update_us",
+)
+
+STUDY_KEYS = ("name", "description", "scene", "set", "vary", "samples", "seed", "outputs", "batch", "max_runs")
+SAMPLED_KINDS = ("uniform", "log_uniform", "integers", "choice", "surface_node", "unit_vector")
+LISTED_KINDS = ("values", "grid")
+DEFAULT_MAX_RUNS = 100_000
+
+
+class _Where:
+    def __init__(self, origin: str):
+        self.origin = origin
+
+    def fail(self, path: str, message: str):
+        raise InvalidInput(f"{self.origin}: {path}: {message}")
+
+
+def _keys(w: _Where, obj: Any, path: str, allowed: tuple, required: tuple = ()) -> dict:
+    if not isinstance(obj, dict):
+        w.fail(path, f"expected an object; got {json.dumps(obj)[:60]}")
+    for k in obj:
+        if k not in allowed:
+            w.fail(f"{path}.{k}" if path else k, f"unknown key (expected one of {', '.join(allowed)})")
+    for k in required:
+        if k not in obj:
+            w.fail(path or "study", f"missing key '{k}'")
+    return obj
+
+
+def _number(w: _Where, v: Any, path: str, integer: bool = False) -> float:
+    ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    if integer:
+        ok = ok and float(v).is_integer()
+    if not ok:
+        w.fail(path, f"expected a finite {'integer' if integer else 'number'}; got {json.dumps(v)}")
+    return int(v) if integer else float(v)
+
+
+@dataclass
+class Vary:
+    """One varied quantity."""
+
+    path: str  # scene parameter path, e.g. "loads[0].magnitude"
+    kind: str  # values | grid | uniform | log_uniform | integers | choice | surface_node | unit_vector
+    where: str  # "vary[k]"
+    values: list = field(default_factory=list)  # listed kinds: every value; choice: the options
+    low: float = 0.0
+    high: float = 0.0
+
+    @property
+    def name(self) -> str:
+        """Column / array name: the path with brackets and dots as underscores."""
+        return "".join(c if c.isalnum() else "_" for c in self.path).strip("_").replace("__", "_")
+
+    @property
+    def sampled(self) -> bool:
+        return self.kind in SAMPLED_KINDS
+
+    @property
+    def width(self) -> int:
+        """Values per run: 3 for vectors, else 1."""
+        if self.kind == "unit_vector":
+            return 3
+        sample = self.values[0] if self.values else None
+        return len(sample) if isinstance(sample, list) else 1
+
+    def from_unit(self, u: np.ndarray, num_nodes: int):
+        """The value for uniform numbers u in [0, 1) (one, or two for a unit vector)."""
+        if self.kind == "uniform":
+            return self.low + (self.high - self.low) * float(u[0])
+        if self.kind == "log_uniform":
+            return float(math.exp(math.log(self.low) + (math.log(self.high) - math.log(self.low)) * float(u[0])))
+        if self.kind == "integers":
+            return int(self.low + min(int(u[0] * (self.high - self.low)), int(self.high - self.low) - 1))
+        if self.kind == "choice":
+            return self.values[min(int(u[0] * len(self.values)), len(self.values) - 1)]
+        if self.kind == "surface_node":
+            return min(int(u[0] * num_nodes), num_nodes - 1)
+        # unit_vector: uniform on the sphere
+        z = 2.0 * float(u[0]) - 1.0
+        phi = 2.0 * math.pi * float(u[1])
+        r = math.sqrt(max(0.0, 1.0 - z * z))
+        return [r * math.cos(phi), r * math.sin(phi), z]
+
+    @property
+    def dims(self) -> int:
+        return 2 if self.kind == "unit_vector" else 1
+
+
+@dataclass
+class Study:
+    """A parsed, validated study."""
+
+    name: str
+    description: str
+    origin: str  # the study file (messages)
+    scene: dict  # base scene document, every default filled in, paths absolute, `set` applied
+    vary: list  # [Vary]
+    count: int  # samples per grid point
+    method: str  # random | latin_hypercube
+    seed: int
+    metrics: list
+    field_times: list  # ms; empty: no fields
+    field_dtype: str  # float64 | float32
+    batch: int
+    max_runs: int
+    num_surface_nodes: int = 0  # of the base model (set by resolve_model)
+    grid_shape: tuple = ()
+
+    @property
+    def num_runs(self) -> int:
+        return int(np.prod(self.grid_shape, dtype=np.int64)) * self.count if self.grid_shape else self.count
+
+    @property
+    def num_batches(self) -> int:
+        return -(-self.num_runs // self.batch)
+
+    def fingerprint(self) -> str:
+        """What identifies the study's results: scene, varied quantities, samples, seed, outputs, batch."""
+        doc = {
+            "scene": self.scene,
+            "vary": [(v.path, v.kind, v.values, v.low, v.high) for v in self.vary],
+            "count": self.count,
+            "method": self.method,
+            "seed": self.seed,
+            "metrics": self.metrics,
+            "field_times": self.field_times,
+            "field_dtype": self.field_dtype,
+            "batch": self.batch,
+        }
+        return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:16]
+
+    def run_seed(self, i: int) -> int:
+        return int(np.random.SeedSequence([self.seed, i]).generate_state(1)[0])
+
+    def _unit_samples(self, g: int, s: int, i: int) -> list:
+        """u in [0, 1) for every sampled dimension of run i (grid point g, sample s)."""
+        sampled = [v for v in self.vary if v.sampled]
+        total = sum(v.dims for v in sampled)
+        rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([self.seed, i])))
+        jitter = rng.random(total)
+        if self.method == "random":
+            return list(jitter)
+        out = []
+        for d in range(total):  # latin hypercube: stratum of sample s along dimension d
+            perm = np.random.Generator(np.random.PCG64(np.random.SeedSequence([self.seed, g, d, 7]))).permutation(
+                self.count
+            )
+            out.append((perm[s] + jitter[d]) / self.count)
+        return out
+
+    def params(self, i: int) -> list:
+        """[(path, value)] of run i, in the order of `vary`."""
+        if not 0 <= i < self.num_runs:
+            raise InvalidInput(f"run {i}: out of range [0, {self.num_runs})")
+        g, s = divmod(i, self.count)
+        listed = [v for v in self.vary if not v.sampled]
+        idx = np.unravel_index(g, self.grid_shape) if listed else ()
+        u = self._unit_samples(g, s, i) if any(v.sampled for v in self.vary) else []
+        out, li, ui = [], 0, 0
+        for v in self.vary:
+            if v.sampled:
+                out.append((v.path, v.from_unit(np.asarray(u[ui : ui + v.dims]), self.num_surface_nodes)))
+                ui += v.dims
+            else:
+                out.append((v.path, v.values[int(idx[li])]))
+                li += 1
+        return out
+
+    def run_document(self, i: int) -> dict:
+        return apply_overrides(self.scene, self.params(i))
+
+
+def _parse_vary(w: _Where, k: int, e: Any) -> Vary:
+    where = f"vary[{k}]"
+    allowed = ("path",) + LISTED_KINDS + SAMPLED_KINDS + ("log",)
+    _keys(w, e, where, allowed, ("path",))
+    kinds = [x for x in LISTED_KINDS + SAMPLED_KINDS if x in e]
+    if len(kinds) != 1:
+        w.fail(where, f"give exactly one of {', '.join(LISTED_KINDS + SAMPLED_KINDS)} (got {len(kinds)})")
+    kind = kinds[0]
+    path = e["path"]
+    try:
+        parse_path(path)
+    except InvalidInput as err:
+        w.fail(f"{where}.path", str(err))
+    v = Vary(path=path, kind=kind, where=where)
+    spec = e[kind]
+    at = f"{where}.{kind}"
+    if kind == "values":
+        if not isinstance(spec, list):
+            w.fail(at, "expected a list of values")
+        if not spec:
+            w.fail(at, "is empty: a study needs at least one value")
+        v.values = list(spec)
+    elif kind == "grid":
+        _keys(w, spec, at, ("from", "to", "num", "log"), ("from", "to", "num"))
+        a, b = _number(w, spec["from"], f"{at}.from"), _number(w, spec["to"], f"{at}.to")
+        n = _number(w, spec["num"], f"{at}.num", integer=True)
+        if n < 1:
+            w.fail(f"{at}.num", f"must be >= 1 (got {n}): an empty grid has no runs")
+        if spec.get("log", False):
+            if a <= 0 or b <= 0:
+                w.fail(at, "a log grid needs from > 0 and to > 0")
+            v.values = [float(x) for x in np.geomspace(a, b, n)]
+        else:
+            v.values = [float(x) for x in np.linspace(a, b, n)]
+    elif kind in ("uniform", "log_uniform", "integers"):
+        if not (isinstance(spec, list) and len(spec) == 2):
+            w.fail(at, "expected [low, high]")
+        v.low = _number(w, spec[0], f"{at}[0]", integer=kind == "integers")
+        v.high = _number(w, spec[1], f"{at}[1]", integer=kind == "integers")
+        if not v.high > v.low:
+            w.fail(at, f"needs low < high (got {v.low}, {v.high})")
+        if kind == "log_uniform" and v.low <= 0:
+            w.fail(at, "log_uniform needs low > 0")
+    elif kind == "choice":
+        if not isinstance(spec, list) or not spec:
+            w.fail(at, "expected a non-empty list of options")
+        v.values = list(spec)
+    elif kind in ("surface_node", "unit_vector"):
+        if spec != "random":
+            w.fail(at, 'expected "random"')
+    return v
+
+
+def load_study(study: Any, base_dir: str | os.PathLike | None = None) -> Study:
+    """Parses and validates a study: a file name, JSON text or a dict. The base scene is parsed by the
+    C++ scene parser, every varied path is tried on it (with its first value) and the model is built
+    once to resolve surface-node samples. Raises InvalidInput / IoError naming the JSON path at fault."""
+    origin = "study"
+    if isinstance(study, (str, os.PathLike)) and not os.fspath(study).lstrip().startswith("{"):
+        p = Path(study)
+        origin = str(study)
+        try:
+            text = p.read_text()
+        except OSError as e:
+            raise IoError(f"{study}: cannot read the study file ({e.strerror})") from None
+        try:
+            doc = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise InvalidInput(f"{study}: invalid JSON at line {e.lineno}, column {e.colno}: {e.msg}") from None
+        base = p.resolve().parent
+    elif isinstance(study, dict):
+        doc = copy.deepcopy(study)
+        base = Path(base_dir or ".").resolve()
+    elif isinstance(study, str):
+        try:
+            doc = json.loads(study)
+        except json.JSONDecodeError as e:
+            raise InvalidInput(f"study: invalid JSON at line {e.lineno}, column {e.colno}: {e.msg}") from None
+        base = Path(base_dir or ".").resolve()
+    else:
+        raise InvalidInput(f"study: expected a file name, JSON text or a dict; got a {type(study).__name__}")
+    w = _Where(origin)
+    _keys(w, doc, "", STUDY_KEYS, ("scene",))
+
+    # The base scene: a file (relative to the study) or an inline object.
+    sc = doc["scene"]
+    try:
+        if isinstance(sc, str):
+            f = Path(sc) if Path(sc).is_absolute() else base / sc
+            scene = scene_document(f)
+        elif isinstance(sc, dict):
+            scene = scene_document(sc, base, f"{origin}: scene")
+        else:
+            w.fail("scene", "expected a scene file name or an inline scene object")
+    except (InvalidInput, IoError) as e:
+        if str(e).startswith(origin + ":"):
+            raise
+        raise type(e)(f"{origin}: scene: {e}") from None
+
+    fixed = doc.get("set", {})
+    if not isinstance(fixed, dict):
+        w.fail("set", "expected an object {parameter path: value}")
+    for path, value in fixed.items():
+        try:
+            scene = apply_overrides(scene, [(path, value)])
+        except InvalidInput as e:
+            w.fail(f"set.{path}", str(e))
+    if fixed:  # all at once: a new duration and new key times are checked together
+        try:
+            scene = json.loads(_medspring.scene_json(json.dumps(scene), str(base), "scene"))
+        except InvalidInput as e:
+            w.fail("set", str(e))
+
+    vary_doc = doc.get("vary", [])
+    if not isinstance(vary_doc, list):
+        w.fail("vary", "expected a list")
+    vary = [_parse_vary(w, k, e) for k, e in enumerate(vary_doc)]
+    paths = [v.path for v in vary]
+    for k, p in enumerate(paths):
+        if p in paths[:k]:
+            w.fail(f"vary[{k}].path", f"'{p}' is varied twice")
+
+    samples = doc.get("samples", {})
+    _keys(w, samples, "samples", ("count", "method"))
+    has_sampled = any(v.sampled for v in vary)
+    count = _number(w, samples.get("count", 1), "samples.count", integer=True)
+    if count < 1:
+        w.fail("samples.count", f"must be >= 1 (got {count})")
+    if "count" in samples and not has_sampled:
+        w.fail("samples.count", "the study varies nothing by sampling (uniform, choice, surface_node, ...)")
+    if has_sampled and "count" not in samples:
+        w.fail("samples", "sampled quantities need samples.count")
+    method = samples.get("method", "random")
+    if method not in ("random", "latin_hypercube"):
+        w.fail("samples.method", f"expected 'random' or 'latin_hypercube'; got {json.dumps(method)}")
+    seed = _number(w, doc.get("seed", 0), "seed", integer=True)
+    if seed < 0:
+        w.fail("seed", f"must be >= 0 (got {seed})")
+
+    outputs = doc.get("outputs", {})
+    _keys(w, outputs, "outputs", ("metrics", "fields"))
+    metrics = outputs.get("metrics", list(METRICS))
+    if not isinstance(metrics, list) or not metrics:
+        w.fail("outputs.metrics", "expected a non-empty list of metric names")
+    for k, mname in enumerate(metrics):
+        if mname not in METRICS:
+            w.fail(f"outputs.metrics[{k}]", f"unknown metric {json.dumps(mname)} (expected one of {', '.join(METRICS)})")
+    fields = outputs.get("fields", None)
+    field_times: list = []
+    field_dtype = "float64"
+    if fields is not None:
+        _keys(w, fields, "outputs.fields", ("times", "dtype"), ("times",))
+        if not isinstance(fields["times"], list) or not fields["times"]:
+            w.fail("outputs.fields.times", "expected a non-empty list of times (ms)")
+        for k, t in enumerate(fields["times"]):
+            t = _number(w, t, f"outputs.fields.times[{k}]")
+            if not 0 <= t <= scene["duration"]:
+                w.fail(f"outputs.fields.times[{k}]", f"{t} ms is outside the scene's [0, {scene['duration']}] ms")
+            field_times.append(t)
+        field_dtype = fields.get("dtype", "float64")
+        if field_dtype not in ("float64", "float32"):
+            w.fail("outputs.fields.dtype", f"expected 'float64' or 'float32'; got {json.dumps(field_dtype)}")
+    batch = _number(w, doc.get("batch", 16), "batch", integer=True)
+    if not 1 <= batch <= 100_000:
+        w.fail("batch", f"must be in [1, 100000] (got {batch})")
+    max_runs = _number(w, doc.get("max_runs", DEFAULT_MAX_RUNS), "max_runs", integer=True)
+    name = doc.get("name", Path(origin).stem if origin != "study" else "study")
+    if not isinstance(name, str) or not name:
+        w.fail("name", "expected non-empty text")
+
+    listed = [v for v in vary if not v.sampled]
+    st = Study(
+        name=name,
+        description=str(doc.get("description", "")),
+        origin=origin,
+        scene=scene,
+        vary=vary,
+        count=count if has_sampled else 1,
+        method=method,
+        seed=seed,
+        metrics=list(metrics),
+        field_times=field_times,
+        field_dtype=field_dtype,
+        batch=batch,
+        max_runs=max_runs,
+        grid_shape=tuple(len(v.values) for v in listed),
+    )
+    resolve_model(st, w)
+    return st
+
+
+def resolve_model(st: Study, w: _Where) -> None:
+    """Builds the base model (in this process, cached) and tries every varied path with one value."""
+    from ..scenes import scene_runner
+
+    try:
+        model = scene_runner().model(json.dumps(st.scene), "/", f"{st.origin}: scene")
+    except InvalidInput as e:
+        raise InvalidInput(f"{st.origin}: scene: {e}") from None
+    st.num_surface_nodes = int(model["num_surface_nodes"])
+    if st.num_runs == 0:
+        w.fail("vary", "the study has no runs")
+    # Every varied path on its own, with its first (or a sampled) value: unknown paths fail here.
+    for v in st.vary:
+        value = v.values[0] if v.values else v.from_unit(np.full(v.dims, 0.5), st.num_surface_nodes)
+        try:
+            d = apply_overrides(st.scene, [(v.path, value)])
+            _medspring.scene_json(json.dumps(d), "/", "scene")
+        except InvalidInput as e:
+            w.fail(f"{v.where}.path", f"'{v.path}': {e}")
+        if v.kind == "values":
+            for k, value in enumerate(v.values[1:], 1):
+                try:
+                    d = apply_overrides(st.scene, [(v.path, value)])
+                    _medspring.scene_json(json.dumps(d), "/", "scene")
+                except InvalidInput as e:
+                    w.fail(f"{v.where}.values[{k}]", str(e))

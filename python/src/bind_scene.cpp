@@ -1,0 +1,325 @@
+// Scenes from Python (docs/scenes.md, docs/studies.md): parse and validate a scene from JSON text, build
+// its model once and run it many times with other loads or parameters, returning the summary metrics and
+// the surface displacement at requested times. Parsing, building and running release the GIL, so threads
+// (and Dask workers with several threads) run scenes in parallel.
+//
+//   r = SceneRunner()
+//   out = r.run(json_text, base_dir, "study run 17", field_times=[500.0])
+//   out["summary"]["contact_hold_mm"], out["fields"]  # (T, S, 3) float64 displacement, mm
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bind_common.hpp"
+#include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/scene/build.hpp"
+#include "medspring/scene/runner.hpp"
+#include "medspring/scene/scene.hpp"
+#ifdef MEDSPRING_PYTHON_WITH_IO
+#include "medspring/io/centerline_io.hpp"
+#include "medspring/io/mesh_io.hpp"
+#include "medspring/io/volume_io.hpp"
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_MESHING
+#include "medspring/meshing/balloon.hpp"
+#include "medspring/meshing/isosurface.hpp"
+#endif
+
+namespace medspring::python {
+
+void bind_scene(py::module_& m);
+
+namespace {
+
+// File access of scenes with file sources: the io layer's readers and, when built, the meshing layer's
+// balloon surfaces and isosurfaces. Meshes and balloons are cached for the life of the runner, so a
+// worker builds the real kidney's 458-node balloon once for a whole study.
+class FileLoader final : public SceneLoader {
+ public:
+  SurfaceMesh read_mesh(const std::filesystem::path& file, LengthUnit unit) override {
+#ifdef MEDSPRING_PYTHON_WITH_IO
+    const std::string key = file.string() + "|" + to_string(unit);
+    auto it = meshes_.find(key);
+    if (it == meshes_.end()) it = meshes_.emplace(key, medspring::read_mesh(file, {.unit = unit})).first;
+    return it->second;
+#else
+    (void)unit;
+    throw InvalidInput(cat(file.string(), ": reading meshes needs the io layer (VTK) in this build"));
+#endif
+  }
+  std::vector<Centerline> read_centerlines(const std::filesystem::path& file, LengthUnit unit,
+                                           const std::string& radius_array) override {
+#ifdef MEDSPRING_PYTHON_WITH_IO
+    return medspring::read_centerlines(file, unit, radius_array);
+#else
+    (void)unit;
+    (void)radius_array;
+    throw InvalidInput(cat(file.string(), ": reading centerlines needs the io layer (VTK) in this build"));
+#endif
+  }
+  LabelVolume read_label_volume(const std::filesystem::path& file) override {
+#ifdef MEDSPRING_PYTHON_WITH_IO
+    return medspring::read_label_volume(file);
+#else
+    throw InvalidInput(cat(file.string(), ": reading volumes needs the io layer (VTK) in this build"));
+#endif
+  }
+  SurfaceMesh isosurface(const MaskVolume& mask) override {
+#ifdef MEDSPRING_PYTHON_WITH_MESHING
+    return medspring::isosurface(mask);
+#else
+    (void)mask;
+    throw InvalidInput("isosurfaces need the meshing layer (build with MEDSPRING_WITH_CGAL=ON)");
+#endif
+  }
+  SurfaceMesh balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) override {
+#ifdef MEDSPRING_PYTHON_WITH_MESHING
+    for (const Balloon& b : balloons_)
+      if (b.mesh.num_vertices() == nodes && b.organ.V == organ.V && b.organ.F == organ.F) {
+        notes = b.notes;
+        return b.mesh;
+      }
+    const BalloonResult r = build_balloon_surface(organ, {.target_nodes = nodes});
+    std::vector<std::string> n;
+    n.push_back(
+        cat(r.report.nodes, " nodes, Hausdorff ", r.report.hausdorff_mm, " mm, ", r.report.seconds, " s"));
+    for (const auto& w : r.report.warnings) n.push_back("warning: " + w);
+    balloons_.push_back({organ, r.mesh, n});
+    notes = n;
+    return r.mesh;
+#else
+    (void)organ;
+    (void)nodes;
+    (void)notes;
+    throw InvalidInput(
+        "model.surface_nodes: balloon remeshing needs the meshing layer (MEDSPRING_WITH_CGAL=ON)");
+#endif
+  }
+
+ private:
+  std::map<std::string, SurfaceMesh> meshes_;
+  struct Balloon {
+    SurfaceMesh organ, mesh;
+    std::vector<std::string> notes;
+  };
+  std::vector<Balloon> balloons_;
+};
+
+// The part of a scene that decides its model: equal keys build equal models.
+std::string model_key(const Scene& scene) {
+  Scene k;
+  k.name = scene.name;
+  k.file = scene.file;
+  k.model = scene.model;
+  return scene_to_json(k);
+}
+
+struct RunOutput {
+  RunSummary summary;
+  Index load_node = -1;
+  Vec3 load_force = Vec3::Zero();
+  std::vector<double> field_times;  // the frame times of the fields (>= the requested times)
+  std::vector<MatX3> fields;        // surface displacement at those frames, mm
+  double build_seconds = 0.0;       // this run's build (loads and settings; the model when first seen)
+  double run_seconds = 0.0;
+  bool model_built = false;  // the model was built by this run (not found in the cache)
+  Index num_surface_nodes = 0;
+};
+
+// Builds and runs scenes, keeping every model it built (by model key) for later runs.
+class SceneRunner {
+ public:
+  Scene parse(const std::string& text, const std::string& base_dir, const std::string& origin) const {
+    return parse_scene(text, base_dir, origin);
+  }
+
+  const BuiltScene& model_of(const Scene& scene, bool* built) {
+    const std::string key = model_key(scene);
+    auto it = models_.find(key);
+    if (it != models_.end()) {
+      *built = false;
+      return it->second;
+    }
+    *built = true;
+    return models_.emplace(key, build_scene(scene, &loader_)).first->second;
+  }
+
+  BuiltScene build(const Scene& scene, bool* built) {
+    const BuiltScene& prior = model_of(scene, built);
+    return *built ? prior : build_scene_reusing(scene, prior);
+  }
+
+  RunOutput run(const Scene& parsed, const std::vector<double>& times) {
+    RunOutput out;
+    Scene scene = parsed;
+    for (std::size_t i = 0; i < times.size(); ++i)
+      if (!(std::isfinite(times[i]) && times[i] >= 0 && times[i] <= scene.duration))
+        throw InvalidInput(cat("field_times[", i, "]: ", times[i], " ms is outside the scene's [0, ",
+                               scene.duration, "] ms"));
+    // Frames only where fields are asked for (the rest state and the last frame are always recorded).
+    scene.record.frames = !times.empty();
+    scene.record.every = std::numeric_limits<Index>::max() / 2;
+    scene.record.key_times = times;
+    const auto t0 = std::chrono::steady_clock::now();
+    const BuiltScene built = build(scene, &out.model_built);
+    const auto t1 = std::chrono::steady_clock::now();
+    out.num_surface_nodes = built.body->num_surface_nodes();
+    if (!built.loads.empty()) {
+      out.load_node = built.loads.front().node;
+      out.load_force = built.loads.front().force;
+    }
+    std::vector<double> frame_times;
+    std::vector<MatX3> frames;
+    const MatX3& rest = built.body->rest_surface();
+    RunHooks hooks;
+    if (!times.empty())
+      hooks.on_frame = [&](const Simulation& sim, const RecordedFrame& f) {
+        frame_times.push_back(f.time);
+        frames.push_back(sim.surface() - rest);
+      };
+    const SceneResult r = run_scene(built, hooks);
+    out.summary = r.summary;
+    for (double t : times) {
+      std::size_t j = 0;
+      while (j + 1 < frame_times.size() && frame_times[j] < t - 1e-9) ++j;
+      out.field_times.push_back(frame_times[j]);
+      out.fields.push_back(frames[j]);
+    }
+    out.build_seconds = std::chrono::duration<double>(t1 - t0).count();
+    out.run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    return out;
+  }
+
+  std::size_t cached_models() const { return models_.size(); }
+
+ private:
+  FileLoader loader_;
+  std::map<std::string, BuiltScene> models_;
+};
+
+py::dict summary_dict(const RunSummary& s) {
+  py::dict d;
+  d["updates"] = s.updates;
+  d["wall_seconds"] = s.wall_seconds;
+  d["median_update_us"] = s.median_update_us;
+  d["substeps"] = s.substeps;
+  d["warnings"] = s.warnings;
+  d["contact_peak_mm"] = s.contact_peak_mm;
+  d["contact_hold_mm"] = s.contact_hold_mm;
+  d["max_disp_peak_mm"] = s.max_disp_peak_mm;
+  d["atom_hold_mm"] = s.atom_hold_mm;
+  d["local_hold_mm"] = s.local_hold_mm;
+  d["return_ms"] = s.return_ms;
+  d["final_max_disp_mm"] = s.final_max_disp_mm;
+  return d;
+}
+
+py::dict output_dict(RunOutput& o, bool fields) {
+  py::dict d;
+  d["summary"] = summary_dict(o.summary);
+  d["load_node"] = o.load_node;
+  d["load_force"] = copy_of(o.load_force);
+  d["build_seconds"] = o.build_seconds;
+  d["run_seconds"] = o.run_seconds;
+  d["model_built"] = o.model_built;
+  d["field_times"] = copy_of(o.field_times);
+  if (fields) {
+    const auto T = static_cast<py::ssize_t>(o.fields.size());
+    const auto S = static_cast<py::ssize_t>(o.num_surface_nodes);
+    py::array_t<double> a({T, S, static_cast<py::ssize_t>(3)});
+    double* p = a.mutable_data();
+    for (const MatX3& f : o.fields) {
+      std::memcpy(p, f.data(), sizeof(double) * static_cast<std::size_t>(f.size()));
+      p += f.size();
+    }
+    d["fields"] = a;
+  }
+  return d;
+}
+
+}  // namespace
+
+void bind_scene(py::module_& m) {
+  m.def(
+      "scene_json",
+      [](const std::string& text, const std::string& base_dir, const std::string& origin) {
+        py::gil_scoped_release release;
+        return scene_to_json(parse_scene(text, base_dir, origin));
+      },
+      py::arg("text"), py::arg("base_dir") = ".", py::arg("origin") = "scene",
+      "Parses and validates scene JSON text (relative file names against base_dir; messages start with "
+      "origin) and returns the scene with every default filled in and every path absolute, as JSON text. "
+      "Raises InvalidInput naming the JSON path at fault.");
+  m.def(
+      "load_scene_json",
+      [](const std::filesystem::path& file) {
+        py::gil_scoped_release release;
+        return scene_to_json(load_scene(file));
+      },
+      py::arg("file"),
+      "Reads and validates a scene file; returns it with every default filled in and every path absolute "
+      "(JSON text). Raises IoError or InvalidInput naming the file and JSON path.");
+  m.def(
+      "scene_data_dir", [] { return scene_data_dir(); },
+      "The folder that ${MEDSPRING_DATA} in scene files stands for.");
+
+  py::class_<SceneRunner>(m, "SceneRunner",
+                          "Builds and runs scenes, keeping every model it built (keyed by the scene's "
+                          "`model` section and name) so that runs differing only in loads, integrator, "
+                          "duration or local settings reuse it. One runner per thread.")
+      .def(py::init<>())
+      .def(
+          "run",
+          [](SceneRunner& self, const std::string& text, const std::string& base_dir,
+             const std::string& origin, const std::vector<double>& field_times, bool fields) {
+            RunOutput o;
+            {
+              py::gil_scoped_release release;
+              o = self.run(self.parse(text, base_dir, origin), field_times);
+            }
+            return output_dict(o, fields);
+          },
+          py::arg("text"), py::arg("base_dir") = ".", py::arg("origin") = "scene",
+          py::arg("field_times") = std::vector<double>{}, py::arg("fields") = true,
+          "Parses, builds (the model only when not cached) and runs a scene given as JSON text, without "
+          "the GIL. Returns a dict: summary (updates, wall_seconds, median_update_us, substeps, warnings, "
+          "contact_peak_mm, contact_hold_mm, max_disp_peak_mm, atom_hold_mm, local_hold_mm, return_ms, "
+          "final_max_disp_mm), load_node and load_force (N) of the first load, build_seconds, "
+          "run_seconds, model_built, field_times (ms of the frames returned: the first frame reaching "
+          "each requested time) and, with fields=True, fields: (T, S, 3) surface displacement in mm.")
+      .def(
+          "model",
+          [](SceneRunner& self, const std::string& text, const std::string& base_dir,
+             const std::string& origin) {
+            const BuiltScene* built = nullptr;
+            {
+              py::gil_scoped_release release;
+              bool fresh = false;
+              built = &self.model_of(self.parse(text, base_dir, origin), &fresh);
+            }
+            const Body& body = *built->body;
+            MatX3 normals;
+            vertex_normals(body.rest_surface(), body.faces(), normals);
+            py::dict d;
+            d["rest_surface"] = copy_of(body.rest_surface());
+            d["faces"] = copy_of(body.faces());
+            d["normals"] = copy_of(normals);
+            d["atoms_rest"] = copy_of(built->atoms_rest);
+            d["num_surface_nodes"] = body.num_surface_nodes();
+            d["notes"] = built->notes;
+            d["build_seconds"] = built->build_seconds;
+            return d;
+          },
+          py::arg("text"), py::arg("base_dir") = ".", py::arg("origin") = "scene",
+          "Builds (or finds in the cache) the model of a scene: dict of rest_surface (S, 3), faces, rest "
+          "vertex normals, atoms_rest, num_surface_nodes, notes, build_seconds.")
+      .def_property_readonly("cached_models", &SceneRunner::cached_models,
+                             "How many models this runner holds.");
+}
+
+}  // namespace medspring::python
