@@ -24,7 +24,7 @@ from typing import Any, Iterable, Mapping
 from . import _medspring
 from ._medspring import InvalidInput
 
-__all__ = ["scene_document", "set_path", "get_path", "run_scene", "scene_runner", "parse_path"]
+__all__ = ["scene_document", "set_path", "get_path", "run_scene", "scene_runner", "parse_path", "without_key_times"]
 
 _local = threading.local()
 
@@ -129,6 +129,16 @@ def apply_overrides(doc: dict, overrides: Mapping[str, Any] | Iterable | None) -
     return out
 
 
+def without_key_times(doc: dict) -> dict:
+    """A shallow copy of a scene document whose record.key_times is empty: runs from Python record
+    frames only at their field_times, so the scene's own key times (which must lie within its duration)
+    are dropped before a duration is overridden."""
+    out = dict(doc)
+    if isinstance(out.get("record"), dict):
+        out["record"] = dict(out["record"], key_times=[])
+    return out
+
+
 def run_scene(
     scene: Any,
     overrides: Mapping[str, Any] | None = None,
@@ -146,7 +156,6 @@ def run_scene(
     scene: file name, JSON text, dict or an already expanded document (scene_document); overrides:
     {"loads[0].magnitude": 0.5, ...}. Raises InvalidInput naming the parameter path at fault."""
     doc = scene if isinstance(scene, dict) else scene_document(scene, base_dir, origin)
-    if overrides:
-        doc = apply_overrides(doc, overrides)
+    doc = apply_overrides(without_key_times(doc), overrides)
     times = [float(t) for t in field_times]
     return scene_runner().run(json.dumps(doc), str(base_dir or "."), origin, times, fields)

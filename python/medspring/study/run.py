@@ -21,7 +21,8 @@ from .spec import Study, load_study
 from .store import Store, check_folder
 from .worker import run_batch
 
-CONNECT_TIMEOUT_S = 10.0
+# Seconds to reach a scheduler before giving up ($MEDSPRING_STUDY_CONNECT_TIMEOUT overrides).
+CONNECT_TIMEOUT_S = float(os.environ.get("MEDSPRING_STUDY_CONNECT_TIMEOUT", "6"))
 
 
 class SchedulerUnreachable(InvalidInput):
@@ -185,7 +186,7 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
             return fut
 
         first = [f for f in (submit() for _ in range(window)) if f is not None]
-        ac = as_completed(first)
+        ac = as_completed(first, loop=pool.loop)
         for fut in ac:
             b, runs = tasks.pop(fut.key)
             finish(b, runs, fut.result())

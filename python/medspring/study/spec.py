@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import _medspring
 from .._medspring import InvalidInput, IoError
-from ..scenes import apply_overrides, parse_path, scene_document
+from ..scenes import apply_overrides, parse_path, scene_document, without_key_times
 
 METRICS = (
     "contact_peak_mm",
@@ -308,6 +308,7 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None) -> Study:
             raise
         raise type(e)(f"{origin}: scene: {e}") from None
 
+    scene = without_key_times(scene)  # a study records fields at outputs.fields.times only
     fixed = doc.get("set", {})
     if not isinstance(fixed, dict):
         w.fail("set", "expected an object {parameter path: value}")
