@@ -150,11 +150,12 @@ const std::vector<Command>& commands() {
        {"quiet"},
        cmd_view},
       {"study",
-       "usage: medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]\n"
-       "                      [--quiet] [--no-report] [--scaling RUNS]\n\n"
-       "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters (grids,\n"
-       "lists, seeded random or Latin-hypercube samples), every run a task on the engine in a worker process;\n"
-       "results stream into DIR/results.zarr and DIR/summary.csv, the report is DIR/study.md.\n"
+       "usage: medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N]\n"
+       "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]\n\n"
+       "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters\n"
+       "(grids, lists, seeded random or Latin-hypercube samples), every run a task on the engine in a\n"
+       "worker process; results stream into DIR/results.zarr and DIR/summary.csv, the report is\n"
+       "DIR/study.md.\n"
        "  --scheduler ADDR  a running dask-scheduler (default: a local cluster of every core)\n"
        "  --workers N       local worker processes (0: in this process, without Dask)\n"
        "  --resume          complete the study already in DIR (redoes only the missing runs)\n"
