@@ -67,6 +67,28 @@ def _task(st: Study, b: int, scene_json: str) -> tuple:
     }
 
 
+def _failed_batch(st: Study, b: int, runs: list, error: Exception) -> dict:
+    """The result of a batch whose task failed as a whole: every run failed with the task's error."""
+    import numpy as np
+
+    n = len(runs)
+    msg = f"task failed: {type(error).__name__}: {error}".splitlines()[0][:500]
+    return {
+        "batch": b,
+        "index": np.array([i for i, _ in runs], dtype=np.int64),
+        "metrics": np.full((n, len(st.metrics)), np.nan),
+        "failed": np.ones(n, dtype=np.uint8),
+        "errors": [msg] * n,
+        "load_node": np.full(n, -1, dtype=np.int64),
+        "load_force": np.full((n, 3), np.nan),
+        "fields": np.full((n, len(st.field_times), st.num_surface_nodes, 3), np.nan, dtype=st.field_dtype)
+        if st.field_times
+        else None,
+        "engine_seconds": np.zeros(n),
+        "task_seconds": 0.0,
+    }
+
+
 def _progress(total: int, initial: int, enabled: bool):
     from tqdm import tqdm
 
@@ -189,7 +211,11 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
         ac = as_completed(first, loop=pool.loop)
         for fut in ac:
             b, runs = tasks.pop(fut.key)
-            finish(b, runs, fut.result())
+            try:
+                result = fut.result()
+            except Exception as e:  # the task itself failed (e.g. it killed every worker it ran on)
+                result = _failed_batch(st, b, runs, e)
+            finish(b, runs, result)
             fut.release()
             nxt = submit()
             if nxt is not None:
