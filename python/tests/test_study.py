@@ -318,3 +318,21 @@ def test_folder_of_another_study_is_refused(tmp_path, reference):
     (tmp_path / "junk" / "x.txt").write_text("x")
     msg = one_line_error(cli(spec, "--out", tmp_path / "junk", "--workers", "0"))
     assert "holds no study" in msg
+
+
+def test_medspring_study_command_runs_from_the_build_tree(tmp_path):
+    exe = Path(PYTHONPATH).parent / "apps" / "medspring"
+    if not exe.is_file():
+        pytest.skip(f"{exe} is not built")
+    spec = write_study(tmp_path, small_study(runs_per_point=1, duration=20.0, batch=3))
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # the command sets it itself
+    r = subprocess.run([str(exe), "study", str(spec), "--out", str(tmp_path / "o"), "--workers", "0", "--quiet"],
+                       env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    import pandas as pd
+
+    df = pd.read_csv(tmp_path / "o" / "summary.csv")
+    assert list(df["run"]) == [0, 1, 2] and not df["failed"].any()
+    again = subprocess.run([str(exe), "study", str(spec), "--out", str(tmp_path / "o"), "--workers", "0"],
+                           env=env, capture_output=True, text=True, timeout=120)
+    assert again.returncode == 2 and len(again.stderr.strip().splitlines()) == 1 and "--resume" in again.stderr
