@@ -27,6 +27,8 @@ pytest.importorskip("distributed")
 KIDNEY = str(REPO / "scenes" / "phantom" / "kidney_1.0N_nonlinear.json")
 PYTHONPATH = str(Path(ms.__file__).resolve().parents[1])
 ENV = dict(os.environ, PYTHONPATH=PYTHONPATH + os.pathsep + os.environ.get("PYTHONPATH", ""))
+# Cluster workers stretch each task by 0.25 s, so that kills land mid-study however fast the machine.
+WORKER_ENV = dict(ENV, MEDSPRING_STUDY_TASK_DELAY="0.25")
 
 
 def small_study(runs_per_point=6, duration=150.0, batch=2):
@@ -146,7 +148,7 @@ class Cluster:
             w = subprocess.Popen(
                 ["dask-worker", self.address, "--nthreads", "1", "--nworkers", "1", "--no-nanny",
                  "--host", "127.0.0.1", "--no-dashboard", "--local-directory", str(tmp / f"w{k}")],
-                env=ENV, stdout=wlog, stderr=wlog,
+                env=WORKER_ENV, stdout=wlog, stderr=wlog,
             )
             self.workers.append(w)
             self.procs.append(w)

@@ -51,6 +51,10 @@ def main(argv=None) -> int:
         msg = str(e).splitlines()[0] if str(e) else type(e).__name__
         print(f"medspring study: {msg}", file=sys.stderr)
         return 2
+    except Exception as e:  # anything else (a lost scheduler, a full disk): one line, the folder stays resumable
+        msg = str(e).splitlines()[0] if str(e) else ""
+        print(f"medspring study: {type(e).__name__}: {msg} (resume with --resume)", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("medspring study: interrupted (the folder is resumable: --resume)", file=sys.stderr)
         return 130

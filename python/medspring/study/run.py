@@ -48,7 +48,7 @@ def local_client(workers: int | None):
 
     n = workers or os.cpu_count() or 1
     cluster = distributed.LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=40
+        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=40
     )
     return distributed.Client(cluster, set_as_default=False), cluster
 
@@ -190,7 +190,7 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
             runs, task = _task(st, b, scene_json)
             finish(b, runs, run_batch(task))
     else:
-        from distributed import as_completed
+        from distributed import KilledWorker, as_completed
 
         nworkers = max(1, len(pool.scheduler_info().get("workers", {})))
         window = max(4, 4 * nworkers)  # batches in flight: keeps every worker busy, memory bounded
@@ -213,7 +213,7 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
             b, runs = tasks.pop(fut.key)
             try:
                 result = fut.result()
-            except Exception as e:  # the task itself failed (e.g. it killed every worker it ran on)
+            except KilledWorker as e:  # the task killed every worker it ran on: its runs failed
                 result = _failed_batch(st, b, runs, e)
             finish(b, runs, result)
             fut.release()
