@@ -44,7 +44,7 @@ class CMakeBuild(build_ext):
 
 
 setup(
-    packages=["medspring"],
+    packages=["medspring", "medspring.study"],
     package_dir={"medspring": "python/medspring"},
     ext_modules=[CMakeExtension("medspring._medspring", target="medspring_python")],
     cmdclass={"build_ext": CMakeBuild},
