@@ -97,7 +97,7 @@ def write_report(store, df) -> Path:
     lines += [
         f"{st.num_runs} runs ({len(df)} finished, {n_failed} failed) of the base scene "
         f"`{st.scene.get('name', '')}`; seed {st.seed}; batches of {st.batch} runs; fingerprint "
-        f"`{st.fingerprint()}`. Results: `results.zarr` (xarray: `xarray.open_zarr('results.zarr')`), "
+        f"`{st.fingerprint()}`. Results: `results.zarr` (xarray: `xarray.open_zarr('results.zarr', consolidated=False, mask_and_scale=False)`), "
         "`summary.csv`.",
         "",
         "## Varied",
@@ -132,10 +132,11 @@ def write_report(store, df) -> Path:
     for k, s in enumerate(g.attrs.get("sessions", [])):
         runs, w, wall = s["runs_this_session"], max(1, s["workers"]), s["wall_seconds"]
         rate = runs / wall if wall > 0 else float("nan")
-        over = (wall * w / runs - engine) * 1e3 if runs else float("nan")
+        eng = s["engine_seconds"] / runs if runs and "engine_seconds" in s else engine
+        over = (wall * w / runs - eng) * 1e3 if runs else float("nan")
         lines.append(
             f"| {k + 1} | {runs} | {s['workers'] or '0 (in process)'} | {wall:.2f} | {rate:.1f} | {rate / w:.1f} | "
-            f"{engine * 1e3:.2f} | {over:.2f} |"
+            f"{eng * 1e3:.2f} | {over:.2f} |"
         )
     lines += [
         "",

@@ -167,15 +167,17 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
     t_start = time.perf_counter()
     last_csv = 0.0
     written: set = set()
+    engine_total = 0.0  # engine seconds of the runs written in this session
     duplicates = 0
     nworkers = 1
 
     def finish(b: int, runs, result):
-        nonlocal failed, last_csv, duplicates
+        nonlocal failed, last_csv, duplicates, engine_total
         if b in written:
             duplicates += 1  # a rescheduled task finishing twice: its result is already stored
             return
         store.write(b, runs, result)
+        engine_total += float(result["engine_seconds"].sum())
         written.add(b)
         failed += int(result["failed"].sum())
         bar.update(len(runs))
@@ -231,6 +233,7 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
         "wall_seconds": wall,
         "runs_this_session": sum(len(range(*store.batch_slice(b).indices(st.num_runs))) for b in written),
         "workers": nworkers if pool is not None else 0,
+        "engine_seconds": engine_total,
         "duplicates_ignored": duplicates,
         "host": socket.gethostname(),
     }

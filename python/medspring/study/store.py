@@ -1,7 +1,7 @@
 """The study folder: DIR/study.json (what was asked, with its fingerprint), DIR/results.zarr (every run,
 chunked one batch per chunk, written as batches complete) and DIR/summary.csv (pandas, rewritten from
-the store). The Zarr arrays carry xarray's `_ARRAY_DIMENSIONS`, so `xarray.open_zarr(DIR/results.zarr)`
-loads them as one Dataset over (run, time, node, xyz).
+the store). The Zarr arrays carry xarray's `_ARRAY_DIMENSIONS`, so
+`xarray.open_zarr(DIR/results.zarr, consolidated=False, mask_and_scale=False)` loads them as one Dataset over (run, time, node, xyz).
 
 A batch's arrays are written first and its `done` flags last; every chunk write is a file written under
 a temporary name and renamed (zarr's DirectoryStore), so a killed client leaves whole batches or none:
