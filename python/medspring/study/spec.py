@@ -95,12 +95,29 @@ class Vary:
         return self.kind in SAMPLED_KINDS
 
     @property
+    def layout(self) -> str:
+        """How the values are stored: "int", "float", "vec3" (3 numbers) or "text" (JSON of anything
+        else: names, mixed lists)."""
+        if self.kind in ("integers", "surface_node"):
+            return "int"
+        if self.kind in ("uniform", "log_uniform"):
+            return "float"
+        if self.kind == "unit_vector":
+            return "vec3"
+
+        def number(x):
+            return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+        if all(number(x) for x in self.values):
+            return "int" if all(isinstance(x, int) for x in self.values) else "float"
+        if all(isinstance(x, list) and len(x) == 3 and all(number(c) for c in x) for x in self.values):
+            return "vec3"
+        return "text"
+
+    @property
     def width(self) -> int:
         """Values per run: 3 for vectors, else 1."""
-        if self.kind == "unit_vector":
-            return 3
-        sample = self.values[0] if self.values else None
-        return len(sample) if isinstance(sample, list) else 1
+        return 3 if self.layout == "vec3" else 1
 
     def from_unit(self, u: np.ndarray, num_nodes: int):
         """The value for uniform numbers u in [0, 1) (one, or two for a unit vector)."""

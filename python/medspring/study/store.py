@@ -23,6 +23,7 @@ from .spec import Study
 STUDY_FILE = "study.json"
 STORE = "results.zarr"
 ERROR_LEN = 240
+TEXT_LEN = 128  # a varied value that is not a number or a 3-vector, as JSON text
 
 
 def _dims(arr, dims):
@@ -107,16 +108,15 @@ class Store:
         _dims(g.full("run", shape=(N,), chunks=(B,), dtype=np.int64, fill_value=-1), ["run"])
         _dims(g.zeros("seed", shape=(N,), chunks=(B,), dtype=np.uint32), ["run"])
         for v in st.vary:
-            w = v.width
-            if w == 1:
-                kind = v.values[0] if v.values else None
-                dtype = "<U64" if isinstance(kind, str) else np.float64
-                if v.kind in ("surface_node", "integers"):
-                    dtype = np.int64
-                a = g.full(f"param_{v.name}", shape=(N,), chunks=(B,), dtype=dtype, fill_value="" if dtype == "<U64" else 0)
-                _dims(a, ["run"])
+            name, lay = f"param_{v.name}", v.layout
+            if lay == "vec3":
+                a = _dims(g.full(name, shape=(N, 3), chunks=(B, 3), dtype=np.float64, fill_value=np.nan), ["run", "xyz"])
+            elif lay == "text":
+                a = _dims(g.full(name, shape=(N,), chunks=(B,), dtype=f"<U{TEXT_LEN}", fill_value=""), ["run"])
+            elif lay == "int":
+                a = _dims(g.full(name, shape=(N,), chunks=(B,), dtype=np.int64, fill_value=-1), ["run"])
             else:
-                a = _dims(g.zeros(f"param_{v.name}", shape=(N, w), chunks=(B, w), dtype=np.float64), ["run", "xyz"])
+                a = _dims(g.full(name, shape=(N,), chunks=(B,), dtype=np.float64, fill_value=np.nan), ["run"])
             a.attrs["path"] = v.path
         for m in st.metrics:
             _dims(g.full(m, shape=(N,), chunks=(B,), dtype=np.float64, fill_value=np.nan), ["run"])
@@ -175,7 +175,9 @@ class Store:
         for k, v in enumerate(st.vary):
             vals = [dict(ov)[v.path] for _, ov in task_runs]
             arr = g[f"param_{v.name}"]
-            g[f"param_{v.name}"][sl] = np.asarray(vals, dtype=arr.dtype).reshape((n,) + arr.shape[1:])
+            if v.layout == "text":
+                vals = [json.dumps(x)[:TEXT_LEN] for x in vals]
+            arr[sl] = np.asarray(vals, dtype=arr.dtype).reshape((n,) + arr.shape[1:])
         for j, m in enumerate(st.metrics):
             g[m][sl] = result["metrics"][:, j]
         g["load_node"][sl] = result["load_node"]
