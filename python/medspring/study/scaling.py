@@ -11,12 +11,15 @@ from .worker import run_batch
 
 def measure_scaling(st, workers_list, runs: int) -> list:
     """For each worker count: a LocalCluster, one warm-up task per worker (builds the model), then the
-    first `runs` runs of the study as tasks; returns [{"workers", "runs", "wall_seconds"}]. Nothing is
-    written to the study's store."""
+    first `runs` runs of the study as 4 x max(workers_list) equal tasks (so that every worker count
+    gets an even share); returns [{"workers", "runs", "wall_seconds"}]. Nothing is written to the
+    study's store."""
     scene_json = json.dumps(st.scene)
-    nb = min(st.num_batches, max(1, -(-runs // st.batch)))
-    tasks = [_task(st, b, scene_json)[1] for b in range(nb)]
-    n_runs = sum(len(t["runs"]) for t in tasks)
+    n_runs = min(runs, st.num_runs)
+    parts = max(1, min(n_runs, 4 * max(workers_list)))
+    every = [(i, st.params(i)) for i in range(n_runs)]
+    base = _task(st, 0, scene_json)[1]
+    tasks = [dict(base, batch=k, runs=every[k::parts]) for k in range(parts)]
     out = []
     for w in workers_list:
         client, cluster = local_client(w)
