@@ -101,6 +101,26 @@ def test_study_expands_deterministically():
     assert all(0 <= n < 458 for n in nodes) and len(set(nodes)) > 6
 
 
+def test_surface_point_samples_lie_on_the_surface_and_load_the_nearest_node():
+    doc = small_study(runs_per_point=4, duration=20.0)
+    doc["vary"][1] = {"path": "loads[0].point", "surface_point": "random"}
+    st = study.load_study(doc)
+    V, F = st.surface.V, st.surface.F
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+
+    def area(x, y, z):
+        return 0.5 * np.linalg.norm(np.cross(y - x, z - x), axis=-1)
+
+    for i in range(st.num_runs):
+        p = np.asarray(dict(st.params(i))["loads[0].point"])
+        # inside some triangle: its three sub-triangles add up to the triangle's area
+        excess = area(p, b, c) + area(a, p, c) + area(a, b, p) - area(a, b, c)
+        assert excess.min() < 1e-9 * area(a, b, c).max(), f"run {i}: {p} is not on the surface"
+    out = ms.run_scene(st.run_document(0))
+    p = np.asarray(dict(st.params(0))["loads[0].point"])
+    assert out["load_node"] == int(np.argmin(np.linalg.norm(V - p, axis=1)))
+
+
 def test_reference_run_is_complete_and_physical(reference):
     out, df = reference
     r = results(out)

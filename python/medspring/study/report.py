@@ -84,6 +84,8 @@ def _how(st, v) -> str:
         return f"choice of {v.values}"
     if v.kind == "surface_node":
         return f"random surface node of {st.num_surface_nodes}"
+    if v.kind == "surface_point":
+        return "random point on the rest surface (uniform by area)"
     return "random unit vector"
 
 

@@ -40,7 +40,7 @@ METRICS = (
 )
 
 STUDY_KEYS = ("name", "description", "scene", "set", "vary", "samples", "seed", "outputs", "batch", "max_runs")
-SAMPLED_KINDS = ("uniform", "log_uniform", "integers", "choice", "surface_node", "unit_vector")
+SAMPLED_KINDS = ("uniform", "log_uniform", "integers", "choice", "surface_node", "surface_point", "unit_vector")
 LISTED_KINDS = ("values", "grid")
 DEFAULT_MAX_RUNS = 100_000
 
@@ -79,7 +79,7 @@ class Vary:
     """One varied quantity."""
 
     path: str  # scene parameter path, e.g. "loads[0].magnitude"
-    kind: str  # values | grid | uniform | log_uniform | integers | choice | surface_node | unit_vector
+    kind: str  # values | grid | uniform | log_uniform | integers | choice | surface_node | surface_point | unit_vector
     where: str  # "vary[k]"
     values: list = field(default_factory=list)  # listed kinds: every value; choice: the options
     low: float = 0.0
@@ -102,7 +102,7 @@ class Vary:
             return "int"
         if self.kind in ("uniform", "log_uniform"):
             return "float"
-        if self.kind == "unit_vector":
+        if self.kind in ("unit_vector", "surface_point"):
             return "vec3"
 
         def number(x):
@@ -119,8 +119,8 @@ class Vary:
         """Values per run: 3 for vectors, else 1."""
         return 3 if self.layout == "vec3" else 1
 
-    def from_unit(self, u: np.ndarray, num_nodes: int):
-        """The value for uniform numbers u in [0, 1) (one, or two for a unit vector)."""
+    def from_unit(self, u: np.ndarray, surface: "Surface"):
+        """The value for uniform numbers u in [0, 1) (self.dims of them)."""
         if self.kind == "uniform":
             return self.low + (self.high - self.low) * float(u[0])
         if self.kind == "log_uniform":
@@ -130,7 +130,9 @@ class Vary:
         if self.kind == "choice":
             return self.values[min(int(u[0] * len(self.values)), len(self.values) - 1)]
         if self.kind == "surface_node":
-            return min(int(u[0] * num_nodes), num_nodes - 1)
+            return min(int(u[0] * surface.num_nodes), surface.num_nodes - 1)
+        if self.kind == "surface_point":
+            return surface.point(u)
         # unit_vector: uniform on the sphere
         z = 2.0 * float(u[0]) - 1.0
         phi = 2.0 * math.pi * float(u[1])
@@ -139,7 +141,27 @@ class Vary:
 
     @property
     def dims(self) -> int:
-        return 2 if self.kind == "unit_vector" else 1
+        return {"unit_vector": 2, "surface_point": 3}.get(self.kind, 1)
+
+
+class Surface:
+    """The base model's rest surface, for surface_node / surface_point samples."""
+
+    def __init__(self, V=None, F=None):
+        self.V = np.zeros((0, 3)) if V is None else np.asarray(V, dtype=np.float64)
+        self.F = np.zeros((0, 3), dtype=np.int64) if F is None else np.asarray(F, dtype=np.int64)
+        self.num_nodes = len(self.V)
+        if len(self.F):
+            a, b, c = self.V[self.F[:, 0]], self.V[self.F[:, 1]], self.V[self.F[:, 2]]
+            area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+            self.cumulative = np.cumsum(area) / area.sum()
+
+    def point(self, u) -> list:
+        """A point uniform over the surface area: triangle by area (u[0]), then uniform in it."""
+        f = min(int(np.searchsorted(self.cumulative, float(u[0]), side="right")), len(self.F) - 1)
+        r1, r2 = math.sqrt(float(u[1])), float(u[2])
+        a, b, c = self.V[self.F[f]]
+        return [float(x) for x in (1 - r1) * a + r1 * (1 - r2) * b + r1 * r2 * c]
 
 
 @dataclass
@@ -160,6 +182,7 @@ class Study:
     batch: int
     max_runs: int
     num_surface_nodes: int = 0  # of the base model (set by resolve_model)
+    surface: Surface = field(default_factory=Surface)  # its rest surface (set by resolve_model)
     grid_shape: tuple = ()
 
     @property
@@ -215,7 +238,7 @@ class Study:
         out, li, ui = [], 0, 0
         for v in self.vary:
             if v.sampled:
-                out.append((v.path, v.from_unit(np.asarray(u[ui : ui + v.dims]), self.num_surface_nodes)))
+                out.append((v.path, v.from_unit(np.asarray(u[ui : ui + v.dims]), self.surface)))
                 ui += v.dims
             else:
                 out.append((v.path, v.values[int(idx[li])]))
@@ -273,7 +296,7 @@ def _parse_vary(w: _Where, k: int, e: Any) -> Vary:
         if not isinstance(spec, list) or not spec:
             w.fail(at, "expected a non-empty list of options")
         v.values = list(spec)
-    elif kind in ("surface_node", "unit_vector"):
+    elif kind in ("surface_node", "surface_point", "unit_vector"):
         if spec != "random":
             w.fail(at, 'expected "random"')
     return v
@@ -427,11 +450,12 @@ def resolve_model(st: Study, w: _Where) -> None:
     except InvalidInput as e:
         raise InvalidInput(f"{st.origin}: scene: {e}") from None
     st.num_surface_nodes = int(model["num_surface_nodes"])
+    st.surface = Surface(model["rest_surface"], model["faces"])
     if st.num_runs == 0:
         w.fail("vary", "the study has no runs")
     # Every varied path on its own, with its first (or a sampled) value: unknown paths fail here.
     for v in st.vary:
-        value = v.values[0] if v.values else v.from_unit(np.full(v.dims, 0.5), st.num_surface_nodes)
+        value = v.values[0] if v.values else v.from_unit(np.full(v.dims, 0.5), st.surface)
         try:
             d = apply_overrides(st.scene, [(v.path, value)])
             _medspring.scene_json(json.dumps(d), "/", "scene")
