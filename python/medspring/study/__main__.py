@@ -18,7 +18,9 @@ def main(argv=None) -> int:
     p.add_argument("--out", required=True, help="output folder (new, empty, or this study's with --resume)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", help="address of a running dask-scheduler, tcp://HOST:PORT")
-    where.add_argument("--workers", type=int, help="local worker processes (default: every core; 0: in this process, no Dask)")
+    where.add_argument(
+        "--workers", type=int, help="local worker processes (default: every core; 0: in this process, no Dask)"
+    )
     p.add_argument("--resume", action="store_true", help="complete the study already in --out (only missing runs)")
     p.add_argument("--yes", action="store_true", help="run a study with more runs than its max_runs")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

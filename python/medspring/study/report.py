@@ -99,7 +99,8 @@ def write_report(store, df) -> Path:
     lines += [
         f"{st.num_runs} runs ({len(df)} finished, {n_failed} failed) of the base scene "
         f"`{st.scene.get('name', '')}`; seed {st.seed}; batches of {st.batch} runs; fingerprint "
-        f"`{st.fingerprint()}`. Results: `results.zarr` (xarray: `xarray.open_zarr('results.zarr', consolidated=False, mask_and_scale=False)`), "
+        f"`{st.fingerprint()}`. Results: `results.zarr` (xarray: `xarray.open_zarr('results.zarr', "
+        "consolidated=False, mask_and_scale=False)`), "
         "`summary.csv`.",
         "",
         "## Varied",
@@ -129,7 +130,12 @@ def write_report(store, df) -> Path:
     lines += ["Runs (first rows; every run in `summary.csv`):", "", _table(df.drop(columns=["error"])), ""]
     if n_failed:
         lines += ["Failed runs:", "", _table(df[df["failed"]][["run", "error"]], 20), ""]
-    lines += ["## Timing", "", "| session | runs | workers | wall s | runs/s | runs/s per worker | engine ms/run | overhead ms/run |", "|---|---|---|---|---|---|---|---|"]
+    lines += [
+        "## Timing",
+        "",
+        "| session | runs | workers | wall s | runs/s | runs/s per worker | engine ms/run | overhead ms/run |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     engine = float(np.mean(df["engine_seconds"])) if len(df) else 0.0
     for k, s in enumerate(g.attrs.get("sessions", [])):
         runs, w, wall = s["runs_this_session"], max(1, s["workers"]), s["wall_seconds"]

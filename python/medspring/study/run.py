@@ -39,7 +39,9 @@ def connect(scheduler: str, timeout: float = CONNECT_TIMEOUT_S):
         return distributed.Client(scheduler, timeout=timeout, set_as_default=False)
     except (OSError, TimeoutError) as e:
         msg = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise SchedulerUnreachable(f"--scheduler {scheduler}: cannot reach the scheduler within {timeout:g} s ({msg[:160]})") from None
+        raise SchedulerUnreachable(
+            f"--scheduler {scheduler}: cannot reach the scheduler within {timeout:g} s ({msg[:160]})"
+        ) from None
 
 
 def local_client(workers: int | None):

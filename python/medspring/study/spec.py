@@ -79,7 +79,7 @@ class Vary:
     """One varied quantity."""
 
     path: str  # scene parameter path, e.g. "loads[0].magnitude"
-    kind: str  # values | grid | uniform | log_uniform | integers | choice | surface_node | surface_point | unit_vector
+    kind: str  # LISTED_KINDS or SAMPLED_KINDS
     where: str  # "vary[k]"
     values: list = field(default_factory=list)  # listed kinds: every value; choice: the options
     low: float = 0.0
@@ -396,7 +396,9 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None) -> Study:
         w.fail("outputs.metrics", "expected a non-empty list of metric names")
     for k, mname in enumerate(metrics):
         if mname not in METRICS:
-            w.fail(f"outputs.metrics[{k}]", f"unknown metric {json.dumps(mname)} (expected one of {', '.join(METRICS)})")
+            w.fail(
+                f"outputs.metrics[{k}]", f"unknown metric {json.dumps(mname)} (expected one of {', '.join(METRICS)})"
+            )
     fields = outputs.get("fields", None)
     field_times: list = []
     field_dtype = "float64"

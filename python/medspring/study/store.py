@@ -1,7 +1,8 @@
 """The study folder: DIR/study.json (what was asked, with its fingerprint), DIR/results.zarr (every run,
 chunked one batch per chunk, written as batches complete) and DIR/summary.csv (pandas, rewritten from
 the store). The Zarr arrays carry xarray's `_ARRAY_DIMENSIONS`, so
-`xarray.open_zarr(DIR/results.zarr, consolidated=False, mask_and_scale=False)` loads them as one Dataset over (run, time, node, xyz).
+`xarray.open_zarr(DIR/results.zarr, consolidated=False, mask_and_scale=False)` loads them as one
+Dataset over (run, time, node, xyz).
 
 A batch's arrays are written first and its `done` flags last; every chunk write is a file written under
 a temporary name and renamed (zarr's DirectoryStore), so a killed client leaves whole batches or none:
@@ -110,7 +111,8 @@ class Store:
         for v in st.vary:
             name, lay = f"param_{v.name}", v.layout
             if lay == "vec3":
-                a = _dims(g.full(name, shape=(N, 3), chunks=(B, 3), dtype=np.float64, fill_value=np.nan), ["run", "xyz"])
+                a = g.full(name, shape=(N, 3), chunks=(B, 3), dtype=np.float64, fill_value=np.nan)
+                _dims(a, ["run", "xyz"])
             elif lay == "text":
                 a = _dims(g.full(name, shape=(N,), chunks=(B,), dtype=f"<U{TEXT_LEN}", fill_value=""), ["run"])
             elif lay == "int":
@@ -144,7 +146,9 @@ class Store:
             )
             _dims(a, ["run", "time", "node", "xyz"])
             a.attrs["units"] = "mm"
-            a.attrs["description"] = "surface displacement (position - rest_positions) at the first frame reaching each time"
+            a.attrs["description"] = (
+                "surface displacement (position - rest_positions) at the first frame reaching each time"
+            )
 
     def batch_slice(self, b: int) -> slice:
         return slice(b * self.st.batch, min(self.st.num_runs, (b + 1) * self.st.batch))
