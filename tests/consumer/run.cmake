@@ -2,6 +2,7 @@
 #   STEP=install   a fresh `cmake --install BUILD --prefix WORK/prefix` (components dev and libs)
 #   STEP=cmake     configure NAME (SRC) against WORK/prefix with CMAKE_PREFIX_PATH, build, run it
 #   STEP=pkgconfig build SRC's first_simulation.cpp with make and `pkg-config medspring`, run it
+#   STEP=deb       cpack -G DEB; checks both packages' Depends and file lists with dpkg-deb -I / -c
 #   STEP=errors    find_package(MedSpring COMPONENTS nosuch) and (VTK disabled) COMPONENTS io must fail
 #                  with the component list / the Debian package in the message
 cmake_minimum_required(VERSION 3.25)
@@ -20,6 +21,15 @@ function(run what expect regex)
   endif()
   message(STATUS "${what}: ok")
   set(last_output "${out}" PARENT_SCOPE)
+endfunction()
+
+# expect(<regex>...): every regex matches the output of the last run().
+function(expect)
+  foreach(regex IN LISTS ARGN)
+    if(NOT last_output MATCHES "${regex}")
+      message(FATAL_ERROR "output does not match '${regex}':\n${last_output}")
+    endif()
+  endforeach()
 endfunction()
 
 set(configure_args -G "${GENERATOR}" -DCMAKE_BUILD_TYPE=Release "-DCMAKE_PREFIX_PATH=${prefix}"
@@ -80,6 +90,47 @@ elseif(STEP STREQUAL "errors")
     run("find_package(MedSpring COMPONENTS ${components}) ${args}" fail "${regex}"
       ${CMAKE_COMMAND} -S "${bin}/${case}" -B "${bin}/${case}/build" ${configure_args} ${args})
   endforeach()
+
+elseif(STEP STREQUAL "deb")
+  # cpack -G DEB from this build, then the control fields and file lists of both packages.
+  set(dist "${WORK}/deb")
+  file(REMOVE_RECURSE "${dist}")
+  run("cpack -G DEB" ok "libmedspring-dev_${VERSION}_[a-z0-9]+\\.deb generated"
+    ${CMAKE_CPACK_COMMAND} --config "${BUILD}/CPackConfig.cmake" -G DEB -B "${dist}")
+  file(GLOB dev "${dist}/libmedspring-dev_${VERSION}_*.deb")
+  file(GLOB cli "${dist}/medspring_${VERSION}_*.deb")
+  if(NOT dev OR NOT cli)
+    message(FATAL_ERROR "cpack did not write libmedspring-dev_${VERSION}_*.deb and medspring_${VERSION}_*.deb")
+  endif()
+  run("dpkg-deb -I libmedspring-dev" ok "Package: libmedspring-dev\n" dpkg-deb -I "${dev}")
+  expect("Depends: libeigen3-dev \\(>= 3\\.3\\)\n" "Recommends: [^\n]*libvtk9-dev" "Section: libdevel")
+  if(last_output MATCHES "Depends:[^\n]*(vtk|cgal)")
+    message(FATAL_ERROR "libmedspring-dev depends on VTK/CGAL, which only its components need:\n${last_output}")
+  endif()
+  run("dpkg-deb -c libmedspring-dev" ok "" dpkg-deb -c "${dev}")
+  foreach(file usr/include/medspring/sim/simulation.hpp usr/include/medspring/io/mesh_io.hpp
+      usr/lib/cmake/MedSpring/MedSpringConfig.cmake usr/lib/cmake/MedSpring/MedSpringConfigVersion.cmake
+      usr/lib/cmake/MedSpring/MedSpringEngineTargets.cmake usr/lib/cmake/MedSpring/MedSpringIoTargets.cmake
+      usr/lib/pkgconfig/medspring.pc usr/lib/libmedspring_core)
+    string(FIND "${last_output}" "./${file}" at)
+    if(at EQUAL -1)
+      message(FATAL_ERROR "libmedspring-dev lacks /${file}:\n${last_output}")
+    endif()
+  endforeach()
+  if(last_output MATCHES "usr/bin/")
+    message(FATAL_ERROR "libmedspring-dev holds programs:\n${last_output}")
+  endif()
+  # the command's Depends come from dpkg-shlibdeps: the C++ runtime and VTK's runtime library
+  run("dpkg-deb -I medspring" ok "Package: medspring\n" dpkg-deb -I "${cli}")
+  expect("Depends: [^\n]*libstdc\\+\\+6" "Depends: [^\n]*libvtk9\\.1" "Recommends: [^\n]*python3-matplotlib")
+  if(last_output MATCHES "Depends:[^\n]*-dev")
+    message(FATAL_ERROR "the medspring command depends on a -dev package:\n${last_output}")
+  endif()
+  run("dpkg-deb -c medspring" ok "\\./usr/bin/medspring\n.*\\./usr/share/medspring/scenes/phantom/kidney_1\\.0N_nonlinear\\.json"
+    dpkg-deb -c "${cli}")
+  if(last_output MATCHES "usr/include/|\\.a\n")
+    message(FATAL_ERROR "the medspring package holds headers or libraries:\n${last_output}")
+  endif()
 
 else()
   message(FATAL_ERROR "run.cmake: unknown STEP '${STEP}'")
