@@ -4,7 +4,8 @@
 #   STEP=pkgconfig build SRC's first_simulation.cpp with make and `pkg-config medspring`, run it
 #   STEP=deb       cpack -G DEB; checks both packages' Depends and file lists with dpkg-deb -I / -c
 #   STEP=errors    find_package(MedSpring COMPONENTS nosuch) and (VTK disabled) COMPONENTS io must fail
-#                  with the component list / the Debian package in the message
+#                  with the component list / the Debian package in the message; an optional component
+#                  whose package is missing (CGAL disabled) is reported as not found
 cmake_minimum_required(VERSION 3.25)
 set(prefix "${WORK}/prefix")
 
@@ -90,6 +91,15 @@ elseif(STEP STREQUAL "errors")
     run("find_package(MedSpring COMPONENTS ${components}) ${args}" fail "${regex}"
       ${CMAKE_COMMAND} -S "${bin}/${case}" -B "${bin}/${case}/build" ${configure_args} ${args})
   endforeach()
+  # an optional component whose package is missing is reported as not found; the rest is usable
+  file(MAKE_DIRECTORY "${bin}/optional")
+  file(WRITE "${bin}/optional/CMakeLists.txt" "cmake_minimum_required(VERSION 3.16)\nproject(optional CXX)\n"
+    "find_package(MedSpring REQUIRED COMPONENTS scene OPTIONAL_COMPONENTS meshing)\n"
+    "message(STATUS \"scene=\${MedSpring_scene_FOUND} meshing=\${MedSpring_meshing_FOUND}\")\n"
+    "if(TARGET MedSpring::meshing OR NOT TARGET MedSpring::scene)\n  message(FATAL_ERROR \"wrong targets\")\nendif()\n")
+  run("find_package(MedSpring COMPONENTS scene OPTIONAL_COMPONENTS meshing) without CGAL" ok
+    "scene=TRUE meshing=FALSE" ${CMAKE_COMMAND} -S "${bin}/optional" -B "${bin}/optional/build" ${configure_args}
+    -DCMAKE_DISABLE_FIND_PACKAGE_CGAL=ON)
 
 elseif(STEP STREQUAL "deb")
   # cpack -G DEB from this build, then the control fields and file lists of both packages.
