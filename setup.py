@@ -50,6 +50,10 @@ class CMakeBuild(build_ext):
         self.build_target(build, ext)
 
     def build_target(self, build: Path, ext: CMakeExtension) -> None:
+        cache = (build / "CMakeCache.txt").read_text(errors="replace")
+        if "\nBUILD_SHARED_LIBS:BOOL=ON" in cache:  # the module would need libmedspring_*.so beside it
+            raise RuntimeError(f"{build} builds shared libraries (BUILD_SHARED_LIBS=ON): the Python package "
+                               "needs the default static build")
         jobs = os.environ.get("JOBS", str(os.cpu_count() or 1))
         subprocess.run(["cmake", "--build", str(build), "--target", ext.target, "--parallel", jobs], check=True)
         suffix = sysconfig.get_config_var("EXT_SUFFIX")  # the module must be built for this interpreter

@@ -69,6 +69,7 @@ elseif(STEP STREQUAL "pkgconfig")
   set(ENV{PKG_CONFIG_PATH} "${prefix}/${LIBDIR}/pkgconfig")
   run("pkg-config --modversion medspring" ok "^${VERSION}" pkg-config --modversion medspring)
   run("make with pkg-config" ok "" make -C "${bin}" -f "${MAKEFILE}" "SRC=${SRC}" "CXX=${CXX}")
+  set(ENV{LD_LIBRARY_PATH} "${prefix}/${LIBDIR}")  # shared libraries (BUILD_SHARED_LIBS) in a private prefix
   run("run first_simulation" ok "${EXPECT}" "${bin}/first_simulation")
   message(STATUS "${last_output}")
 
