@@ -21,6 +21,7 @@
 #include "medspring/builders/kidney_build.hpp"
 #include "medspring/builders/output_folder.hpp"
 #include "medspring/io/data_dir.hpp"
+#include "medspring/io/temp_folders.hpp"
 #include "medspring/sim/simulation.hpp"
 #endif
 
@@ -152,6 +153,9 @@ template <class WriteFiles>
 int finish(const Args& args, const fs::path& out, nlohmann::json summary, const std::string& text,
            const std::vector<std::string>& warnings, WriteFiles&& write_files) {
   for (const auto& w : warnings) std::cerr << "medspring build: warning: " << w << "\n";
+  for (const StaleTempFolder& gone : remove_stale_temp_folders(out))
+    std::cerr << "medspring: removed " << gone.path.string() << ", left by an interrupted run (process "
+              << gone.pid << " is gone)\n";
   write_output_folder(out, args.flag("force"), [&](const fs::path& dir) {
     write_files(dir);
     std::ofstream f(dir / "summary.json");

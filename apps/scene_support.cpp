@@ -15,6 +15,7 @@
 #include "medspring/core/check.hpp"
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"
+#include "medspring/io/temp_folders.hpp"
 #include "medspring/io/volume_io.hpp"
 #ifdef MEDSPRING_HAVE_MESHING
 #include "medspring/meshing/balloon.hpp"
@@ -159,15 +160,11 @@ StagedOutput::StagedOutput(fs::path target, bool force) : target_(normalized_tar
   fs::create_directories(parent, ec);
   if (ec)
     throw IoError(cat("--out ", target_.string(), ": cannot create ", parent.string(), ": ", ec.message()));
-  // Folders left by an interrupted run (its process is gone) are removed.
-  const std::string prefix = cat(".", target_.filename().string(), ".tmp-");
-  for (const auto& e : fs::directory_iterator(parent, ec)) {
-    const std::string n = e.path().filename().string();
-    if (n.rfind(prefix, 0) != 0) continue;
-    const long pid = std::strtol(n.c_str() + prefix.size(), nullptr, 10);
-    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) fs::remove_all(e.path(), ec);
-  }
-  stage_ = parent / cat(prefix, getpid());
+  // Folders left by an interrupted run (its process is gone) are removed, and named on stderr.
+  for (const StaleTempFolder& gone : remove_stale_temp_folders(target_))
+    std::fprintf(stderr, "medspring: removed %s, left by an interrupted run (process %ld is gone)\n",
+                 gone.path.string().c_str(), gone.pid);
+  stage_ = temp_folder_for(target_, static_cast<long>(getpid()));
   fs::remove_all(stage_, ec);
   fs::create_directory(stage_, ec);
   if (ec)

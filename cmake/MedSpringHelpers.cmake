@@ -1,19 +1,136 @@
-# medspring_add_layer(NAME layer SOURCES ... DEPS ...)
+# Library targets, their package components, and tests.
+#
+# A library joins the installed package in one line: medspring_add_layer(NAME ... [COMPONENT c]).
+# Components are what a consumer names in find_package(MedSpring COMPONENTS ...); each has its own
+# export file (MedSpring<C>Targets.cmake, included on demand by MedSpringConfig.cmake) and the
+# external packages it needs (declared with medspring_find_package). Components it depends on are
+# worked out from the MedSpring:: targets a layer links. See docs/packaging.md.
+
+# medspring_add_layer(layer SOURCES ... DEPS ... PRIVATE_DEPS ... [COMPONENT component])
 # Declares the library target medspring_<layer>, alias MedSpring::<layer>, with the public
-# headers under include/ and the house warning flags; installs and exports it.
+# headers under include/ and the house warning flags; installs and exports it in `component`
+# (default: engine, the Eigen-only layers).
 function(medspring_add_layer layer)
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "COMPONENT" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  if(NOT ARG_COMPONENT)
+    set(ARG_COMPONENT engine)
+  endif()
   set(target medspring_${layer})
   add_library(${target} ${ARG_SOURCES})
   add_library(MedSpring::${layer} ALIAS ${target})
-  set_target_properties(${target} PROPERTIES EXPORT_NAME ${layer} POSITION_INDEPENDENT_CODE ON)
+  set_target_properties(${target} PROPERTIES EXPORT_NAME ${layer} POSITION_INDEPENDENT_CODE ON
+    OUTPUT_NAME medspring_${layer})
+  target_compile_features(${target} PUBLIC cxx_std_20)
   target_include_directories(${target} PUBLIC
     $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${target} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS} $<BUILD_INTERFACE:MedSpring::options>)
-  install(TARGETS ${target} EXPORT MedSpringTargets
-    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+  if(MEDSPRING_NATIVE)
+    # Eigen's alignment (and so the layout and heap allocation of its objects) depends on the
+    # instruction set: code using the installed headers must be compiled for the same one.
+    target_compile_options(${target} INTERFACE $<INSTALL_INTERFACE:-march=native>)
+  endif()
+  medspring_shared_library_properties(${target})
+  medspring_install_target(${target} COMPONENT ${ARG_COMPONENT} DEPS ${ARG_DEPS})
+endfunction()
+
+# medspring_install_target(target COMPONENT component [DEPS ...])
+# Installs `target` into the export set of `component` (declared on first use). DEPS: the MedSpring::
+# targets it links, from which the components it needs are recorded. Install components (CPack):
+# static libraries, headers and CMake files are `dev`; shared libraries `libs` (their .so link `dev`).
+function(medspring_install_target target)
+  cmake_parse_arguments(ARG "" "COMPONENT" "DEPS" ${ARGN})
+  medspring_component(${ARG_COMPONENT})
+  set_property(TARGET ${target} PROPERTY MEDSPRING_COMPONENT ${ARG_COMPONENT})
+  set_property(GLOBAL APPEND PROPERTY MEDSPRING_INSTALLED_TARGETS ${target})
+  foreach(dep IN LISTS ARG_DEPS)
+    if(NOT TARGET ${dep})
+      continue()
+    endif()
+    get_target_property(real ${dep} ALIASED_TARGET)
+    if(NOT real)
+      set(real ${dep})
+    endif()
+    get_target_property(dep_component ${real} MEDSPRING_COMPONENT)
+    if(dep_component AND NOT dep_component STREQUAL ARG_COMPONENT)
+      set_property(GLOBAL APPEND PROPERTY MEDSPRING_COMPONENT_${ARG_COMPONENT}_REQUIRES ${dep_component})
+    endif()
+  endforeach()
+  medspring_component_export_name(${ARG_COMPONENT} export)
+  install(TARGETS ${target} EXPORT ${export}
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT dev
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT libs NAMELINK_COMPONENT dev
+    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT dev)
+endfunction()
+
+# medspring_component(component): declares a package component (idempotent; declaration order is
+# dependency order: a component may only need components declared before it).
+function(medspring_component component)
+  get_property(all GLOBAL PROPERTY MEDSPRING_COMPONENTS)
+  if(NOT component IN_LIST all)
+    set_property(GLOBAL APPEND PROPERTY MEDSPRING_COMPONENTS ${component})
+  endif()
+endfunction()
+
+# medspring_component_export_name(component out): "io" -> MedSpringIoTargets
+function(medspring_component_export_name component out)
+  string(SUBSTRING ${component} 0 1 first)
+  string(SUBSTRING ${component} 1 -1 rest)
+  string(TOUPPER ${first} first)
+  set(${out} MedSpring${first}${rest}Targets PARENT_SCOPE)
+endfunction()
+
+# medspring_find_package(COMPONENT component DEBIAN debian-package <find_package arguments>)
+# find_package(<arguments> REQUIRED) for this build, and the same search (package, version, CONFIG /
+# NO_MODULE, COMPONENTS) recorded for the installed MedSpringConfig.cmake, which repeats it for
+# consumers asking for `component`, naming `debian-package` when it fails. A macro: the package's
+# variables (VTK_LIBRARIES, ...) land in the caller's scope as with find_package.
+macro(medspring_find_package)
+  cmake_parse_arguments(_msfp "" "COMPONENT;DEBIAN" "" ${ARGN})
+  find_package(${_msfp_UNPARSED_ARGUMENTS} REQUIRED)
+  medspring_record_package_dependency(${_msfp_COMPONENT} ${_msfp_DEBIAN} ${_msfp_UNPARSED_ARGUMENTS})
+endmacro()
+
+function(medspring_record_package_dependency component debian package)
+  medspring_component(${component})
+  set(version "")
+  set(flags "")
+  set(components "")
+  set(in_components FALSE)
+  foreach(arg IN LISTS ARGN)
+    if(arg STREQUAL "COMPONENTS")
+      set(in_components TRUE)
+    elseif(arg MATCHES "^(CONFIG|NO_MODULE|MODULE)$")
+      list(APPEND flags ${arg})
+    elseif(arg MATCHES "^(REQUIRED|QUIET|EXACT)$")
+    elseif(in_components)
+      list(APPEND components ${arg})
+    elseif(arg MATCHES "^[0-9]" AND NOT version)
+      set(version ${arg})
+    endif()
+  endforeach()
+  set_property(GLOBAL APPEND PROPERTY MEDSPRING_COMPONENT_${component}_PACKAGES ${package})
+  set_property(GLOBAL APPEND PROPERTY MEDSPRING_PACKAGE_${package}_COMPONENTS_OF_${component} ${components})
+  set_property(GLOBAL PROPERTY MEDSPRING_PACKAGE_${package}_VERSION "${version}")
+  set_property(GLOBAL PROPERTY MEDSPRING_PACKAGE_${package}_FLAGS "${flags}")
+  set_property(GLOBAL PROPERTY MEDSPRING_PACKAGE_${package}_DEBIAN "${debian}")
+endfunction()
+
+# medspring_shared_library_properties(target): with BUILD_SHARED_LIBS, the shared library gets a
+# VERSION and SOVERSION and exports only MedSpring's own symbols (cmake/medspring.map: the
+# medspring:: namespace; Eigen, std and VTK/CGAL code inlined into it stay internal).
+function(medspring_shared_library_properties target)
+  get_target_property(type ${target} TYPE)
+  if(NOT type STREQUAL "SHARED_LIBRARY")
+    return()
+  endif()
+  set_target_properties(${target} PROPERTIES
+    VERSION ${PROJECT_VERSION} SOVERSION ${MEDSPRING_SOVERSION}
+    VISIBILITY_INLINES_HIDDEN ON)
+  if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang" AND NOT APPLE AND NOT EMSCRIPTEN)
+    target_link_options(${target} PRIVATE "LINKER:--version-script=${PROJECT_SOURCE_DIR}/cmake/medspring.map")
+    set_property(TARGET ${target} APPEND PROPERTY LINK_DEPENDS ${PROJECT_SOURCE_DIR}/cmake/medspring.map)
+  endif()
 endfunction()
 
 # medspring_add_test(NAME SOURCES ... DEPS ...): one GoogleTest executable, tests discovered by CTest.

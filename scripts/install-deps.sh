@@ -12,5 +12,6 @@ PACKAGES=(
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-matplotlib
   xvfb xauth                         # offscreen rendering of the report figures (VTK under Xvfb)
   python3-distributed python3-dask python3-zarr python3-pandas python3-tqdm python3-xarray  # medspring study (Dask)
+  python3-pip python3-venv python3-setuptools python3-wheel dpkg-dev make  # package tests: wheel, venv, .deb, pkg-config consumer
 )
 bash "$(dirname "$0")/apt-install.sh" install-deps "${PACKAGES[@]}"

@@ -5,6 +5,7 @@
 #include <system_error>
 
 #include "medspring/core/check.hpp"
+#include "medspring/io/temp_folders.hpp"
 
 namespace medspring {
 
@@ -26,9 +27,9 @@ void write_output_folder(const fs::path& folder_in, bool overwrite,
   const fs::path folder = fs::absolute(folder_in).lexically_normal();
   const fs::path target = folder.has_filename() ? folder : folder.parent_path();  // "out/" -> "out"
   const fs::path parent = target.parent_path();
-  const std::string pid = std::to_string(static_cast<long>(::getpid()));
-  const fs::path tmp = parent / (target.filename().string() + ".tmp-" + pid);
-  const fs::path old = parent / (target.filename().string() + ".old-" + pid);
+  const long pid = static_cast<long>(::getpid());
+  const fs::path tmp = temp_folder_for(target, pid);
+  const fs::path old = parent / cat(".", target.filename().string(), ".old-", pid);
 
   // the first missing ancestor, removed again if anything fails
   fs::path created;
@@ -43,6 +44,7 @@ void write_output_folder(const fs::path& folder_in, bool overwrite,
   };
   try {
     fs::create_directories(parent);
+    remove_stale_temp_folders(target);  // left by killed runs (the CLI reports them before calling this)
     fs::remove_all(tmp);
     fs::create_directory(tmp);
     write(tmp);

@@ -16,7 +16,8 @@ namespace medspring {
 /// `overwrite` is false ("... is not empty; use --force to replace it").
 void check_output_folder(const std::filesystem::path& folder, bool overwrite);
 
-/// check_output_folder, then calls write(tmp) on a fresh folder "<folder>.tmp-<pid>" beside `folder`
+/// check_output_folder, then calls write(tmp) on a fresh hidden folder ".<name>.tmp-<pid>" beside
+/// `folder` (io/temp_folders.hpp; those of dead processes, left by a killed run, are removed first)
 /// and renames it to `folder` (missing parent folders are created). An existing `folder` (empty, or
 /// any with `overwrite`) is replaced only after every file is written. On any exception the temporary
 /// folder (and parent folders created here) are removed, `folder` is left as it was, and the exception
