@@ -247,6 +247,25 @@ void bind_models(py::module_& m) {
       "settings"_a = HybridSettings{}, "The hybrid kidney phantom: 458 surface nodes + 42 atoms (§4.1).");
 
   // ---- SmrmVessel ----
+  py::enum_<BendingMode> bending_mode(m, "BendingMode", "Bending of the SMRM centerline (docs/vessels.md).");
+  bending_mode.value("Wall", BendingMode::Wall, "default: k_b,i = E I_i / h_i^3 of the wall (hollow tube)")
+      .value("Constant", BendingMode::Constant, "chain.kb at every interior atom (0 = the paper's chain)");
+  enum_accepts_strings(bending_mode, &parse_bending_mode);
+  py::class_<WallSettings> wall(m, "WallSettings",
+                                "The vessel wall that gives the default bending stiffness.");
+  wall.def_readwrite("E", &WallSettings::E, "Young's modulus of the wall, MPa (0.5).")
+      .def_readwrite("thickness_ratio", &WallSettings::thickness_ratio,
+                     "Wall thickness / lumen radius (0.1).");
+  settings_helpers(wall);
+  m.def(
+      "wall_bending_stiffness",
+      [](py::handle atoms, py::handle radius, const WallSettings& w) {
+        const MatX3 C = points_arg(atoms, "atoms");
+        return copy_of(
+            wall_bending_stiffness(C, vector_arg(radius, "radius", static_cast<Index>(C.rows())), w));
+      },
+      "atoms"_a, "radius"_a, "wall"_a = WallSettings{},
+      "Bending stiffness k_b,i = E pi/4 (r_o^4 - r_i^4) / h_i^3 (N/mm) of every atom of a rest chain.");
   py::class_<SmrmSettings> ss(m, "SmrmSettings", "Settings of the SMRM vessel (vessel column of §9).");
   ss.def_readwrite("atoms", &SmrmSettings::atoms, "Centerline atoms after resampling (40).")
       .def_readwrite("spokes", &SmrmSettings::spokes, "Spokes per atom of the structured builders (30).")
@@ -254,7 +273,9 @@ void bind_models(py::module_& m) {
       .def_readwrite("chain", &SmrmSettings::chain, "ChainSettings.")
       .def_readwrite("k_loc", &SmrmSettings::k_loc, "Local patch stiffness, N/mm (0.05).")
       .def_readwrite("dedup_tolerance", &SmrmSettings::dedup_tolerance, "mm (1e-3).")
-      .def_readwrite("max_radius_factor", &SmrmSettings::max_radius_factor, "In local radii (3).");
+      .def_readwrite("max_radius_factor", &SmrmSettings::max_radius_factor, "In local radii (3).")
+      .def_readwrite("wall", &SmrmSettings::wall, "WallSettings of the default bending.");
+  def_enum_field(ss, "bending", &SmrmSettings::bending, "BendingMode (Wall; Constant uses chain.kb).");
   settings_helpers(ss);
   py::class_<SmrmBuildReport>(m, "SmrmBuildReport", "What the SMRM builders found (reported, not raised).")
       .def_readonly("atoms", &SmrmBuildReport::atoms, "Atoms n.")
@@ -288,6 +309,24 @@ void bind_models(py::module_& m) {
           "atom_radius",
           [](py::object self) { return view_of(self.cast<const SmrmVessel&>().atom_radius(), self); },
           "(n,) local lumen radius, mm, read-only view.")
+      .def_property_readonly(
+          "bending_stiffness",
+          [](py::object self) { return view_of(self.cast<const SmrmVessel&>().bending_stiffness(), self); },
+          "(n,) bending stiffness k_b,i, N/mm (0 at the ends), read-only view.")
+      .def(
+          "max_turning_change_deg",
+          [](const SmrmVessel& v, py::handle atoms) {
+            Index a = -1;
+            const double d = v.max_turning_change_deg(points_arg(atoms, "atoms", v.num_atoms(), "n"), &a);
+            return py::make_tuple(d, a);
+          },
+          "atoms"_a, "(degrees, atom): largest |alpha_i - alpha_i^0| of the turning angle of atoms (n, 3).")
+      .def(
+          "validity",
+          [](const SmrmVessel& v, py::handle atoms) {
+            return v.validity(points_arg(atoms, "atoms", v.num_atoms(), "n"));
+          },
+          "atoms"_a, "CurvatureCheck (§5.6 rho kappa < 1) of atoms (n, 3).")
       .def(
           "surface_from_atoms",
           [](const SmrmVessel& v, py::handle atoms) {
@@ -426,7 +465,13 @@ void bind_models(py::module_& m) {
       .def_readonly("atom_hold", &VesselRun::atom_hold, "mm.")
       .def_readonly("contact_hold", &VesselRun::contact_hold, "mm.")
       .def_readonly("return_time", &VesselRun::return_time, "ms after release (inf: never).")
-      .def_readonly("warnings", &VesselRun::warnings, "Integrator warnings (State.warnings.total()).");
+      .def_readonly("warnings", &VesselRun::warnings, "Integrator warnings (State.warnings.total()).")
+      .def_readonly("max_rho_kappa", &VesselRun::max_rho_kappa, "§5.6 validity, max over updates and atoms.")
+      .def_readonly("rho_kappa_violations", &VesselRun::rho_kappa_violations,
+                    "(update, atom) pairs with rho kappa >= 1.")
+      .def_readonly("max_turning_change_deg", &VesselRun::max_turning_change_deg,
+                    "Max over updates and atoms of |alpha_i - alpha_i^0|, degrees.")
+      .def_readonly("max_turning_atom", &VesselRun::max_turning_atom, "Where it was largest.");
   py::class_<VesselExperimentResult>(m, "VesselExperimentResult", "The four runs of the vessel experiment.")
       .def_readonly("atom", &VesselExperimentResult::atom, "Loaded atom.")
       .def_readonly("contact_node", &VesselExperimentResult::contact_node,
@@ -458,7 +503,8 @@ void bind_models(py::module_& m) {
         save_model_package(path, package_of(body, name, description));
       },
       "path"_a, "body"_a, "name"_a = "", "description"_a = "",
-      "Writes the body as a model package (.msm, docs/model_packages.md), atomically: what the engine needs to rebuild "
+      "Writes the body as a model package (.msm, docs/model_packages.md), atomically: what the engine needs "
+      "to rebuild "
       "it exactly (the browser page loads these).");
   m.def(
       "load_model_package",

@@ -122,8 +122,9 @@ std::string VesselSummary::text() const {
            ", stable step at rest ", dt_safe_ms, " ms\n");
   if (has_distance)
     t += cat("  rebuilt surface vs input: Hausdorff ", hausdorff_mm, " mm, mean distance ", mean_distance_mm,
-             " mm (surface nodes to the input: max ", to_input_max_mm, " mm, mean ", to_input_mean_mm,
-             " mm; the cut ends count)\n");
+             " mm (both count the input's end caps, which the open tube lacks); surface nodes to the input: "
+             "max ",
+             to_input_max_mm, " mm, mean ", to_input_mean_mm, " mm\n");
   t += cat("  built in ", seconds, " s\n");
   for (const auto& n : notes) t += cat("  note: ", n, "\n");
   for (const auto& w : warnings) t += cat("  warning: ", w, "\n");
