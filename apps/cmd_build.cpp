@@ -240,8 +240,8 @@ nlohmann::json vessel_json(const VesselSummary& s) {
 /// medspring build vessel --centerline F --unit U [--branch N] | --mesh F --unit U | --segmentation F
 /// [--label L]  --out DIR [--atoms N] [--spokes M] [--k-b K | --wall-e E] [--json] [--force]
 int build_vessel_cmd(const Args& args) {
-  args.require_known({"json", "force", "centerline", "branch", "mesh", "segmentation", "mask", "label",
-                      "unit", "atoms", "spokes", "k-b", "wall-e", "out"});
+  args.require_known({"json", "force", "centerline", "branch", "branches", "mesh", "segmentation", "mask",
+                      "label", "unit", "atoms", "spokes", "k-b", "wall-e", "out"});
   VesselBuildSettings st;
   const auto line = args.get("centerline"), mesh = args.get("mesh");
   auto seg = args.get("segmentation");
@@ -254,9 +254,15 @@ int build_vessel_cmd(const Args& args) {
     require(u.has_value(), "option --unit: required with --centerline (mm, cm or m: the file does not say)");
     st.centerline_unit = parse_length_unit(*u);
     if (args.get("branch")) st.branch = count_option(args, "branch", 0, 0);
+    if (const auto b = args.get("branches")) {
+      require(*b == "all", "option --branches: '", *b, "' is not 'all' (one branch: --branch N)");
+      require(!args.get("branch"), "give at most one of --branch and --branches");
+      st.all_branches = true;
+    }
     require(!args.get("label"), "option --label: applies to --segmentation only");
   } else {
-    require(!args.get("branch"), "option --branch: applies to --centerline only");
+    require(!args.get("branch") && !args.get("branches"),
+            "options --branch, --branches: apply to --centerline only");
     if (mesh) {
       st.source.mesh = *mesh;
       require(!args.get("label"), "option --label: applies to --segmentation only");

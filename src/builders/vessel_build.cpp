@@ -12,8 +12,60 @@
 #include "medspring/meshing/surface_distance.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/physics/stability.hpp"
+#include "medspring/physics/state.hpp"
 
 namespace medspring {
+
+namespace {
+
+// The summary of a tree build (centerline input, every branch).
+VesselBuild finish_tree(std::shared_ptr<SmrmTree> tree, VesselSummary s,
+                        std::chrono::steady_clock::time_point t0) {
+  VesselBuild out;
+  const SmrmTree& t = *tree;
+  s.atoms = t.num_atoms();
+  s.branches = t.num_branches();
+  s.junctions = t.num_junctions();
+  s.surface_nodes = t.num_surface_nodes();
+  s.faces = static_cast<Index>(t.faces().rows());
+  s.spokes = t.branch_vessel(0).grid().spokes;
+  s.radius_min_mm = std::numeric_limits<double>::infinity();
+  s.radius_max_mm = 0.0;
+  for (Index b = 0; b < t.num_branches(); ++b) {
+    const SmrmVessel& v = t.branch_vessel(b);
+    const MatX3& C = v.rest_atoms();
+    for (Index i = 1; i < C.rows(); ++i) s.length_mm += (C.row(i) - C.row(i - 1)).norm();
+    s.radius_min_mm = std::min(s.radius_min_mm, v.atom_radius().minCoeff());
+    s.radius_max_mm = std::max(s.radius_max_mm, v.atom_radius().maxCoeff());
+    s.max_rho_kappa = std::max(s.max_rho_kappa, v.report().curvature.max_rho_kappa);
+    Centerline c;
+    c.name = cat("branch ", b);
+    c.points = C;
+    c.radii = v.atom_radius();
+    out.centerlines.push_back(std::move(c));
+  }
+  {
+    State st = make_state(t.model());
+    MatX3 S;
+    t.map_to_surface(st, S);
+    s.rest_error_mm = (S - t.rest_surface()).rowwise().norm().maxCoeff();
+  }
+  const VecX& kb = t.model().bending.kb;
+  if (kb.size() > 0) {
+    s.kb_min = kb.minCoeff();
+    s.kb_max = kb.maxCoeff();
+  }
+  s.dt_safe_ms = dt_safe(t.model(), 1.0);
+  s.notes.push_back(
+      cat(s.input_branches, " polylines merged into ", s.branches, " branches at ", s.junctions,
+          " junctions (shared junction atoms); one tube per branch, not one watertight surface"));
+  out.tree = std::move(tree);
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.summary = std::move(s);
+  return out;
+}
+
+}  // namespace
 
 VesselBuild build_vessel(const VesselBuildSettings& st) {
   using Clock = std::chrono::steady_clock;
@@ -21,6 +73,7 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   const bool has_line = !st.centerline.empty();
   const bool has_organ = !st.source.mesh.empty() || !st.source.mask.empty();
   require(has_line != has_organ, "vessel: give exactly one of a centerline, a mesh and a segmentation");
+  require(!st.all_branches || has_line, "vessel: all branches (a tree) need a centerline file");
   require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");
   require(st.smrm.spokes >= 3, "vessel: spokes must be >= 3 (got ", st.smrm.spokes, ")");
   VesselBuild out;
@@ -32,6 +85,13 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
     s.input_kind = "centerline";
     s.input_branches = static_cast<Index>(lines.size());
     std::size_t k = 0;
+    if (st.all_branches) {
+      require(st.branch < 0, "vessel: give a branch or all branches, not both");
+      SmrmTreeSettings ts;
+      ts.vessel = st.smrm;
+      auto tree = std::make_shared<SmrmTree>(merge_centerlines(lines, st.merge_tolerance), ts);
+      return finish_tree(std::move(tree), s, t0);
+    }
     if (st.branch < 0) {
       const Centerline& longest = longest_centerline(lines);
       k = static_cast<std::size_t>(&longest - lines.data());
@@ -104,9 +164,11 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
     s.to_input_max_mm = dn.maxCoeff();
     s.to_input_mean_mm = dn.mean();
   }
-  out.centerline.name = v.name();
-  out.centerline.points = C;
-  out.centerline.radii = v.atom_radius();
+  Centerline atoms_line;
+  atoms_line.name = v.name();
+  atoms_line.points = C;
+  atoms_line.radii = v.atom_radius();
+  out.centerlines.push_back(std::move(atoms_line));
   out.vessel = std::move(vessel);
   s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return out;
@@ -132,26 +194,31 @@ std::string VesselSummary::text() const {
 }
 
 void write_vessel_files(const std::filesystem::path& dir, const VesselBuild& build) {
-  require(build.vessel != nullptr, "write_vessel_files: the build holds no vessel");
-  const SmrmVessel& v = *build.vessel;
-  const MatX3& S = v.rest_surface();
-  const Index ns = static_cast<Index>(S.rows()), na = v.num_atoms();
-  VecX atom(ns);
-  for (Index k = 0; k < ns; ++k) atom[k] = static_cast<double>(v.node_atom(k));
-  write_vtp(dir / "surface.vtp", SurfaceMesh{S, v.faces()}, {{"atom", atom}});
-  write_centerlines(dir / "atoms.vtp", {build.centerline});
+  require(build.vessel != nullptr || build.tree != nullptr, "write_vessel_files: the build holds no vessel");
+  const Body& body = build.vessel ? static_cast<const Body&>(*build.vessel) : *build.tree;
+  const MatX3& S = body.rest_surface();
+  const MatX3& X = body.model().x0;
+  const Index ns = static_cast<Index>(S.rows()), na = static_cast<Index>(X.rows());
+  VecX atom(ns), branch = VecX::Zero(ns);
+  for (Index k = 0; k < ns; ++k) {
+    atom[k] = static_cast<double>(build.vessel ? build.vessel->node_atom(k) : build.tree->node_atom(k));
+    if (build.tree) branch[k] = static_cast<double>(build.tree->node_branch(k));
+  }
+  write_vtp(dir / "surface.vtp", SurfaceMesh{S, body.faces()}, {{"atom", atom}, {"branch", branch}});
+  write_centerlines(dir / "atoms.vtp", build.centerlines);
   MatX3 P(ns + na, 3);
   P.topRows(ns) = S;
-  P.bottomRows(na) = v.rest_atoms();
+  P.bottomRows(na) = X;
   MatX2i seg(ns, 2);
-  for (Index k = 0; k < ns; ++k) seg.row(k) << ns + v.node_atom(k), k;
+  for (Index k = 0; k < ns; ++k) seg.row(k) << ns + static_cast<Index>(atom[k]), k;
   VecX is_atom = VecX::Zero(ns + na);
   is_atom.tail(na).setOnes();
   write_segments_vtp(dir / "spokes.vtp", P, seg, {{"atom", is_atom}});
-  save_model_package(dir / "vessel.msm",
-                     package_of(v, v.name(),
-                                cat("SMRM vessel from ", build.summary.input_kind, " ", build.summary.input,
-                                    ", ", na, " atoms x ", build.summary.spokes, " spokes")));
+  if (build.vessel)
+    save_model_package(dir / "vessel.msm",
+                       package_of(*build.vessel, build.vessel->name(),
+                                  cat("SMRM vessel from ", build.summary.input_kind, " ", build.summary.input,
+                                      ", ", na, " atoms x ", build.summary.spokes, " spokes")));
 }
 
 }  // namespace medspring

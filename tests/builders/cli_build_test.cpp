@@ -130,6 +130,28 @@ TEST(CliBuildVessel, FromTheVmrCenterlineWritesTheModelAndItsExactRestSurface) {
   EXPECT_NE(t.out.find("bending k_b 0..0 N/mm"), std::string::npos) << t.out;
 }
 
+TEST(CliBuildVessel, AllBranchesOfTheVmrFileMakeATree) {
+  const fs::path tmp = testing::temp_dir("cli-vessel-tree");
+  const fs::path file = testing::require_data_file("vmr-0159-aorta-centerline.vtp");
+  const CliRun r = run_cli("build vessel --centerline \"" + file.string() +
+                               "\" --unit cm --branches all --out \"" + (tmp / "tree").string() + "\" --json",
+                           tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json_number(r.out, "branches"), 7);  // 4 outlets, 3 junctions
+  EXPECT_EQ(json_number(r.out, "junctions"), 3);
+  EXPECT_LE(json_number(r.out, "rest_error_mm"), 1e-9);
+  for (const char* f : {"surface.vtp", "atoms.vtp", "spokes.vtp", "summary.json"})
+    EXPECT_TRUE(fs::exists(tmp / "tree" / f)) << f;
+  EXPECT_FALSE(fs::exists(tmp / "tree" / "vessel.msm"));
+  EXPECT_EQ(read_centerlines(tmp / "tree" / "atoms.vtp").size(), 7u);
+  const CliRun bad = run_cli("build vessel --centerline \"" + file.string() +
+                                 "\" --unit cm --branches some --out \"" + (tmp / "bad").string() + "\"",
+                             tmp);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("option --branches: 'some' is not 'all'"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+}
+
 TEST(CliBuildVessel, FromTheAortaSegmentationReportsItsDistanceToTheInput) {
   const fs::path tmp = testing::temp_dir("cli-vessel-mask");
   const fs::path mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");

@@ -7,12 +7,12 @@
 //   v.summary.rest_error_mm;   // <= 1e-9 (exact reconstruction, D-13)
 //   write_vessel_files(dir, v);  // surface.vtp atoms.vtp spokes.vtp vessel.msm
 //
-// Centerline input: one branch of the file (--branch N, default the longest; a file's polylines that
-// share their start are not merged into a tree by this builder). Mesh / segmentation input: the
-// distance-mapping centerline (§3, build_centerline) and spoke lengths marched to the boundary (§5.6).
-// Errors: those of read_centerlines / load_organ / build_centerline; InvalidInput for a branch out of
-// range, a segmentation with several components (naming the count and the voxels of each), settings out
-// of range. Nothing is written by build_vessel.
+// Centerline input: one branch of the file (--branch N, default the longest), or all of them merged
+// into a tree where they share their start (all_branches: SmrmTree, shared junction atoms). Mesh /
+// segmentation input: the distance-mapping centerline (§3, build_centerline) and spoke lengths marched to the
+// boundary (§5.6). Errors: those of read_centerlines / load_organ / build_centerline; InvalidInput for a
+// branch out of range, a segmentation with several components (naming the count and the voxels of each),
+// settings out of range. Nothing is written by build_vessel.
 #pragma once
 
 #include <filesystem>
@@ -23,6 +23,7 @@
 #include "medspring/builders/organ_source.hpp"
 #include "medspring/core/units.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 
 namespace medspring {
@@ -30,9 +31,11 @@ namespace medspring {
 struct VesselBuildSettings {
   std::filesystem::path centerline{};  // a centerline file (.vtp / .vtk with radii), or
   LengthUnit centerline_unit = LengthUnit::Millimetre;
-  Index branch = -1;     // centerline: the polyline to use; -1 = the longest
-  OrganSource source{};  // a mesh or a segmentation (exactly one source in all)
-  SmrmSettings smrm{};   // atoms (40), spokes (30), bending, chain
+  Index branch = -1;              // centerline: the polyline to use; -1 = the longest
+  bool all_branches = false;      // centerline: every polyline, merged into a tree (SmrmTree)
+  double merge_tolerance = 0.05;  // mm: points of two polylines closer than this are one
+  OrganSource source{};           // a mesh or a segmentation (exactly one source in all)
+  SmrmSettings smrm{};            // atoms (40), spokes (30), bending, chain
 };
 
 /// What build_vessel made. Distances in mm, times in seconds.
@@ -63,18 +66,20 @@ struct VesselSummary {
 };
 
 struct VesselBuild {
-  std::shared_ptr<const SmrmVessel> vessel;
-  Centerline centerline;  // the atoms with their radii (mm)
-  SurfaceMesh input;      // mesh / mask input: the boundary surface (empty for a centerline)
+  std::shared_ptr<const SmrmVessel> vessel;  // one branch, or
+  std::shared_ptr<const SmrmTree> tree;      // all branches (--branches all)
+  std::vector<Centerline> centerlines;       // the atoms of every branch with their radii (mm)
+  SurfaceMesh input;  // mesh / mask input: the boundary surface (empty for a centerline)
   VesselSummary summary;
 };
 
 /// Builds the vessel of settings (see the file comment). Deterministic.
 VesselBuild build_vessel(const VesselBuildSettings& settings);
 
-/// Writes surface.vtp (rebuilt rest surface, point array "atom"), atoms.vtp (the atoms as a polyline
-/// with "MaximumInscribedSphereRadius", readable by read_centerlines), spokes.vtp (atom -> surface node
-/// segments) and vessel.msm (the model package) into the existing folder `dir`.
+/// Writes surface.vtp (rebuilt rest surface, point arrays "atom" and "branch"), atoms.vtp (the atoms of
+/// every branch as a polyline with "MaximumInscribedSphereRadius", readable by read_centerlines),
+/// spokes.vtp (atom -> surface node segments) and, for one branch, vessel.msm (the model package; a tree
+/// has no package format yet) into the existing folder `dir`.
 void write_vessel_files(const std::filesystem::path& dir, const VesselBuild& build);
 
 }  // namespace medspring
