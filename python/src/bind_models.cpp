@@ -8,6 +8,7 @@
 #include "medspring/models/body.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/model_package.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 
@@ -413,6 +414,49 @@ void bind_models(py::module_& m) {
       "path"_a = VesselPath::StraightX, "shape"_a = CrossSectionShape::Circular,
       "settings"_a = SmrmSettings{},
       "A procedural vessel phantom of §8.0 (settings.atoms atoms at 2.5 mm, settings.spokes spokes).");
+  // ---- Vessel trees (issue 17) ----
+  py::class_<SmrmTree, Body, std::shared_ptr<SmrmTree>>(
+      m, "SmrmTree",
+      "A branching SMRM vessel: one chain over all atoms with shared junction atoms, one tube per branch. "
+      "Build with smrm_tree_from_centerlines or smrm_tree_from_parents.")
+      .def_property_readonly("num_branches", &SmrmTree::num_branches, "Branches.")
+      .def_property_readonly("num_junctions", &SmrmTree::num_junctions, "Branch ends with children.")
+      .def_property_readonly("num_atoms", &SmrmTree::num_atoms, "Atoms of the tree (junction atoms once).")
+      .def("parent", &SmrmTree::parent, "branch"_a, "The parent branch (-1 for the root).")
+      .def("branch_atoms", &SmrmTree::branch_atoms, "branch"_a,
+           "The tree atoms of a branch in order (a child's first is its parent's last).")
+      .def("node_branch", &SmrmTree::node_branch, "node"_a, "The branch of a surface node.")
+      .def("node_atom", &SmrmTree::node_atom, "node"_a, "The tree atom a surface node rides on.");
+  m.def(
+      "smrm_tree_from_centerlines",
+      [](const std::vector<Centerline>& lines, double tolerance, const SmrmSettings& s) {
+        return std::make_shared<SmrmTree>(merge_centerlines(lines, tolerance), SmrmTreeSettings{s});
+      },
+      "lines"_a, "tolerance"_a = 0.05, "settings"_a = SmrmSettings{},
+      "A vessel tree from centerlines sharing their start (VMTK): merged where they agree within "
+      "`tolerance` mm; settings.atoms = atoms on the longest root-to-leaf path.");
+  m.def(
+      "smrm_tree_from_parents",
+      [](py::handle atoms, py::handle parent, py::handle radii, const SmrmSettings& s) {
+        const MatX3 X = points_arg(atoms, "atoms");
+        const Index n = static_cast<Index>(X.rows());
+        const py::array_t<long long, py::array::c_style | py::array::forcecast> p(
+            py::reinterpret_borrow<py::object>(parent));
+        require(p.ndim() == 1 && p.shape(0) == n, "parent: must have shape (", n, ",), got ", p.size(),
+                " values");
+        std::vector<Index> par(static_cast<std::size_t>(n));
+        for (Index i = 0; i < n; ++i) {
+          const long long v = p.at(i);
+          require(v >= -1 && v < n, "parent[", i, "]: ", v, " is not -1 or an atom index");
+          par[static_cast<std::size_t>(i)] = static_cast<Index>(v);
+        }
+        return std::make_shared<SmrmTree>(tree_from_parents(X, par, vector_arg(radii, "radii", n)),
+                                          SmrmTreeSettings{s});
+      },
+      "atoms"_a, "parent"_a, "radii"_a, "settings"_a = SmrmSettings{},
+      "A vessel tree from NumPy: atoms (n, 3) mm, parent index of every atom (n,) (-1 for the root atom 0, "
+      "else an earlier atom), radii (n,) mm. Runs of atoms form branches; an atom with several children is a "
+      "junction. settings.atoms = atoms on the longest root-to-leaf path (the resampling spacing).");
   m.def(
       "first_ray_hit",
       [](const SurfaceMesh& mesh, py::handle o, py::handle w, double t_max) {

@@ -42,3 +42,23 @@ def test_validity_and_turning_angle_of_a_kinked_chain():
     assert degrees == pytest.approx(90.0, abs=1e-9) and atom == 20
     check = v.validity(atoms)
     assert check.max_rho_kappa == pytest.approx(v.atom_radius[20] * math.sqrt(2) / h, rel=1e-9)
+
+
+def test_tree_from_numpy_parent_indices_is_exact_at_rest_and_moves_the_loaded_branch():
+    # A Y: trunk 0-1-2-3, branches 3-4-5-6 and 3-7-8-9 (mm).
+    atoms = np.array([[0, 0, 0], [5, 0, 0], [10, 0, 0], [15, 0, 0], [20, 3, 0], [25, 6, 0], [30, 9, 0],
+                      [20, -3, 0], [25, -6, 0], [30, -9, 0]], float)
+    parent = np.array([-1, 0, 1, 2, 3, 4, 5, 3, 7, 8])
+    tree = ms.smrm_tree_from_parents(atoms, parent, np.full(10, 1.0), ms.SmrmSettings(atoms=7))
+    assert tree.num_branches == 3 and tree.num_junctions == 1
+    assert tree.branch_atoms(1)[0] == tree.branch_atoms(0)[-1] == tree.branch_atoms(2)[0]
+    sim = ms.Simulation(tree)
+    np.testing.assert_allclose(sim.surface, tree.rest_surface, rtol=0, atol=1e-9)
+    leaf = tree.branch_atoms(2)
+    node = next(k for k in range(tree.num_surface_nodes) if tree.node_atom(k) == leaf[len(leaf) // 2])
+    sim.set_loads([ms.PointLoad(node=node, force=[0.0, -0.05, 0.0], t_ramp=20.0)])
+    sim.update(nsteps=400)
+    u = np.linalg.norm(sim.state.x - tree.model.x0, axis=1)
+    assert int(np.argmax(u)) in leaf
+    with pytest.raises(ms.InvalidInput, match=r"parent\[2\]: 5 is not -1"):
+        ms.smrm_tree_from_parents(atoms[:3], np.array([-1, 0, 5]), np.ones(3))
