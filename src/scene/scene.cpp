@@ -296,6 +296,12 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
     s.centerline = resolve_file(c, *f, p.at("file"));
     s.centerline_unit = parse_unit(p, "unit");
     s.branch = p.index("branch", 0, 0);
+    if (const json* all = p.get("branches")) {
+      if (!all->is_string() || all->get<std::string>() != "all")
+        fail(c, p.at("branches"), "must be \"all\" (one branch: \"branch\": N)");
+      if (p.get("branch")) fail(c, p.at("branches"), "give \"branch\" or \"branches\", not both");
+      s.all_branches = true;
+    }
     s.radius_array = p.string("radius_array", s.radius_array);
     if (const json* r = p.get("range_mm")) {
       const std::string rp = p.at("range_mm");
@@ -649,6 +655,10 @@ std::string scene_to_json(const Scene& s) {
                  {"unit", to_string(src.centerline_unit)},
                  {"branch", src.branch},
                  {"radius_array", src.radius_array}};
+      if (src.all_branches) {
+        cl.erase("branch");
+        cl["branches"] = "all";
+      }
       if (src.range_start > 0 || std::isfinite(src.range_end))
         cl["range_mm"] = {src.range_start,
                           std::isfinite(src.range_end) ? json(src.range_end) : json(nullptr)};

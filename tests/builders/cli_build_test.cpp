@@ -152,6 +152,33 @@ TEST(CliBuildVessel, AllBranchesOfTheVmrFileMakeATree) {
   EXPECT_FALSE(fs::exists(tmp / "bad"));
 }
 
+TEST(CliBuildVessel, SceneWithAllBranchesRunsTheTreeAndReturnsToRest) {
+  const fs::path tmp = testing::temp_dir("cli-vessel-tree-scene");
+  const fs::path file = testing::require_data_file("vmr-0159-aorta-centerline.vtp");
+  std::ofstream(tmp / "tree.json")
+      << R"({"name": "tree", "model": {"kind": "smrm", "source": {"centerline": {"file": ")" << file.string()
+      << R"(", "unit": "cm", "branches": "all"}}},
+    "loads": [{"node": 1900, "direction": "inward_normal", "magnitude": 0.5, "t_ramp": 20, "t_release": 300}],
+    "duration": 600})";
+  const CliRun r = run_cli(
+      "run \"" + (tmp / "tree.json").string() + "\" --out \"" + (tmp / "run").string() + "\" --quiet --json",
+      tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"kind\": \"smrm_tree\""), std::string::npos) << r.out;
+  EXPECT_EQ(json_number(r.out, "surface_nodes"), 1980);
+  EXPECT_GT(json_number(r.out, "contact_hold_mm"), 0.5);
+  EXPECT_LT(json_number(r.out, "return_ms"), 200.0);
+  EXPECT_EQ(json_number(r.out, "warnings"), 0);
+  std::ofstream(tmp / "bad.json")
+      << R"({"name": "bad", "model": {"kind": "smrm", "source": {"centerline": {"file": ")" << file.string()
+      << R"(", "unit": "cm", "branches": "some"}}}, "duration": 10})";
+  const CliRun bad =
+      run_cli("run \"" + (tmp / "bad.json").string() + "\" --out \"" + (tmp / "bad").string() + "\"", tmp);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("model.source.centerline.branches: must be \"all\""), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+}
+
 TEST(CliBuildVessel, FromTheAortaSegmentationReportsItsDistanceToTheInput) {
   const fs::path tmp = testing::temp_dir("cli-vessel-mask");
   const fs::path mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");
