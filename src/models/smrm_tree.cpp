@@ -350,11 +350,13 @@ void SmrmTree::map_to_surface(const MatX3& x, Workspace& ws, MatX3& surface) con
 
 void SmrmTree::map_to_surface(const State& state, MatX3& surface) const {
   thread_local Workspace ws;
-  thread_local const SmrmTree* owner = nullptr;
-  if (owner != this || ws.atoms.size() != branches_.size()) {
-    ws = make_workspace();
-    owner = this;
-  }
+  bool fits = ws.atoms.size() == branches_.size() && ws.vessel.size() == branches_.size();
+  for (std::size_t b = 0; fits && b < branches_.size(); ++b)  // another tree may have used this thread
+    fits = ws.atoms[b].rows() == static_cast<Index>(atoms_[b].size()) &&
+           ws.surface[b].rows() == branches_[b]->rest_surface().rows() &&
+           ws.vessel[b].frames.size() == branches_[b]->num_atoms() &&
+           ws.vessel[b].scratch.face_normals.rows() == branches_[b]->faces().rows();
+  if (!fits) ws = make_workspace();
   map_to_surface(state.x, ws, surface);
 }
 
