@@ -1,8 +1,9 @@
 // `medspring build KIND`: from real anatomy (an organ mesh or a segmentation) to simulation models.
 //   build kidney      balloon surface + distance-mapping skeleton + spokes = the hybrid kidney (§4)
 //   build centerline  the distance-mapping centerline with radii (§3)
-// Another kind ("vessel", the SMRM model) is added as one more row of build_kinds().
+//   build vessel      the SMRM vessel (§5) from a centerline file, a mesh or a segmentation
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include "medspring/builders/centerline_build.hpp"
 #include "medspring/builders/kidney_build.hpp"
 #include "medspring/builders/output_folder.hpp"
+#include "medspring/builders/vessel_build.hpp"
 #include "medspring/io/data_dir.hpp"
 #include "medspring/io/temp_folders.hpp"
 #include "medspring/sim/simulation.hpp"
@@ -205,14 +207,111 @@ int build_centerline_cmd(const Args& args) {
                 [&](const fs::path& dir) { write_centerline_files(dir, c); });
 }
 
+nlohmann::json vessel_json(const VesselSummary& s) {
+  nlohmann::json j = {{"input", s.input},
+                      {"input_kind", s.input_kind},
+                      {"atoms", s.atoms},
+                      {"branches", s.branches},
+                      {"junctions", s.junctions},
+                      {"surface_nodes", s.surface_nodes},
+                      {"faces", s.faces},
+                      {"spokes_per_atom", s.spokes},
+                      {"length_mm", s.length_mm},
+                      {"radius_min_mm", s.radius_min_mm},
+                      {"radius_max_mm", s.radius_max_mm},
+                      {"rest_error_mm", s.rest_error_mm},
+                      {"kb_min_n_per_mm", s.kb_min},
+                      {"kb_max_n_per_mm", s.kb_max},
+                      {"max_rho_kappa_rest", s.max_rho_kappa},
+                      {"dt_safe_ms", s.dt_safe_ms},
+                      {"spokes_without_hit", s.spokes_without_hit},
+                      {"build_seconds", s.seconds},
+                      {"notes", s.notes},
+                      {"warnings", s.warnings}};
+  if (s.input_kind == "centerline") {
+    j["input_branches"] = s.input_branches;
+    j["branch"] = s.branch;
+  }
+  if (s.has_distance) {
+    j["hausdorff_mm"] = s.hausdorff_mm;
+    j["mean_distance_mm"] = s.mean_distance_mm;
+    j["to_input_max_mm"] = s.to_input_max_mm;
+    j["to_input_mean_mm"] = s.to_input_mean_mm;
+  }
+  return j;
+}
+
+/// medspring build vessel --centerline F --unit U [--branch N] | --mesh F --unit U | --segmentation F
+/// [--label L]  --out DIR [--atoms N] [--spokes M] [--k-b K | --wall-e E] [--json] [--force]
+int build_vessel_cmd(const Args& args) {
+  args.require_known({"json", "force", "centerline", "branch", "branches", "mesh", "segmentation", "mask",
+                      "label", "unit", "atoms", "spokes", "k-b", "wall-e", "out"});
+  VesselBuildSettings st;
+  const auto line = args.get("centerline"), mesh = args.get("mesh");
+  auto seg = args.get("segmentation");
+  if (!seg) seg = args.get("mask");
+  const int sources = line.has_value() + mesh.has_value() + seg.has_value();
+  require(sources == 1, "give exactly one of --centerline FILE, --mesh FILE and --segmentation FILE");
+  if (line) {
+    st.centerline = *line;
+    const auto u = args.get("unit");
+    require(u.has_value(), "option --unit: required with --centerline (mm, cm or m: the file does not say)");
+    st.centerline_unit = parse_length_unit(*u);
+    if (args.get("branch")) st.branch = count_option(args, "branch", 0, 0);
+    if (const auto b = args.get("branches")) {
+      require(*b == "all", "option --branches: '", *b, "' is not 'all' (one branch: --branch N)");
+      require(!args.get("branch"), "give at most one of --branch and --branches");
+      st.all_branches = true;
+    }
+    require(!args.get("label"), "option --label: applies to --segmentation only");
+  } else {
+    require(!args.get("branch") && !args.get("branches"),
+            "options --branch, --branches: apply to --centerline only");
+    if (mesh) {
+      st.source.mesh = *mesh;
+      require(!args.get("label"), "option --label: applies to --segmentation only");
+      if (auto u = args.get("unit")) st.source.unit = parse_length_unit(*u);
+    } else {
+      st.source.mask = *seg;
+      require(!args.get("unit"),
+              "option --unit: applies to --centerline and --mesh (a volume's spacing is in its "
+              "file)");
+      if (args.get("label")) {
+        const long label = args.integer("label", 0);
+        require(label >= std::numeric_limits<std::int32_t>::min() &&
+                    label <= std::numeric_limits<std::int32_t>::max(),
+                "option --label: ", label, " is out of range");
+        st.source.label = static_cast<std::int32_t>(label);
+      }
+    }
+  }
+  st.smrm.atoms = count_option(args, "atoms", 40, 3);
+  st.smrm.spokes = count_option(args, "spokes", 30, 3);
+  require(!(args.get("k-b") && args.get("wall-e")), "give at most one of --k-b and --wall-e");
+  if (args.get("k-b")) {
+    st.smrm.bending = BendingMode::Constant;
+    st.smrm.chain.kb = args.number("k-b", 0.0);
+    require(st.smrm.chain.kb >= 0 && std::isfinite(st.smrm.chain.kb), "option --k-b: must be >= 0 N/mm");
+  }
+  if (args.get("wall-e")) {
+    st.smrm.wall.E = args.number("wall-e", st.smrm.wall.E);
+    require(st.smrm.wall.E > 0 && std::isfinite(st.smrm.wall.E), "option --wall-e: must be > 0 MPa");
+  }
+  const fs::path out = out_option(args);
+  check_output_folder(out, args.flag("force"));
+  const VesselBuild v = build_vessel(st);
+  return finish(args, out, {{"vessel", vessel_json(v.summary)}}, v.summary.text(), v.summary.warnings,
+                [&](const fs::path& dir) { write_vessel_files(dir, v); });
+}
+
 struct BuildKind {
   const char* name;
   int (*run)(const Args&);
 };
 
 const std::vector<BuildKind>& build_kinds() {
-  static const std::vector<BuildKind> kinds = {{"kidney", build_kidney},
-                                               {"centerline", build_centerline_cmd}};
+  static const std::vector<BuildKind> kinds = {
+      {"kidney", build_kidney}, {"centerline", build_centerline_cmd}, {"vessel", build_vessel_cmd}};
   return kinds;
 }
 

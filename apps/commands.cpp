@@ -33,7 +33,11 @@ const std::vector<Command>& commands() {
        "                              [--nodes 458] [--atoms 42] [--path mst|dijkstra]\n"
        "                              --out DIR [--json] [--force]\n"
        "       medspring build centerline --mask FILE [--label N] | --mesh FILE [--unit mm|cm|m]\n"
-       "                                  [--atoms 40] [--path mst|dijkstra] --out DIR [--json] [--force]\n\n"
+       "                                  [--atoms 40] [--path mst|dijkstra] --out DIR [--json] [--force]\n"
+       "       medspring build vessel --centerline FILE --unit mm|cm|m [--branch N | --branches all]\n"
+       "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE [--label N]\n"
+       "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
+       "                              --out DIR [--json] [--force]\n\n"
        "Builds a simulation model from real anatomy (ALGORITHMS.md §3-4) and writes it as .vtp files.\n"
        "  kidney      the hybrid kidney: balloon surface of exactly --nodes nodes fitted to the organ, the\n"
        "              distance-mapping skeleton of the voxelised organ with --atoms atoms, spokes (D-9),\n"
@@ -42,6 +46,14 @@ const std::vector<Command>& commands() {
        "  centerline  the distance-mapping centerline with radii; ends cut by the volume border are open\n"
        "              (§3.1); an open tube mesh is capped (§3.6). Writes centerline.vtp, curve.vtp,\n"
        "              surface.vtp and summary.json.\n"
+       "  vessel      the SMRM vessel (§5, docs/vessels.md): atoms with radii, spokes, the rebuilt surface\n"
+       "              and its rest reconstruction error; from a mesh or segmentation the centerline of §3\n"
+       "              and spokes marched to the boundary, with the Hausdorff and mean distance of the\n"
+       "              rebuilt surface to the input. Bending from the wall (E --wall-e MPa, default 0.5) or\n"
+       "              --k-b N/mm (0 = the paper's chain). --branch: the polyline of a centerline file\n"
+       "              (default the longest); --branches all: every polyline, merged into a tree where\n"
+       "              they share their start (shared junction atoms, one tube per branch, no .msm yet).\n"
+       "              Writes surface.vtp, atoms.vtp, spokes.vtp, vessel.msm and summary.json.\n"
        "  --mesh FILE        closed organ surface (.obj .stl .ply .vtp .vtk); --unit: its length unit\n"
        "  --close-holes N    close holes of up to N edges first (an open mesh is refused otherwise)\n"
        "  --mask FILE        label volume (.nii .nii.gz .mha .mhd .nrrd); --label: the organ's label\n"
@@ -172,7 +184,7 @@ void extra_usage(std::ostream& os) {
   os << "  haptics  the 1 kHz haptic loop along a recorded tool path: tick times, force trace\n";
   os << "  export   write built models as packages the engine alone (and the web page) rebuilds\n";
   os << "  view     serve the browser page on 127.0.0.1: poke the models with the mouse (docs/web.md)\n";
-  os << "  build    build a model from real anatomy: build kidney | build centerline (--help)\n";
+  os << "  build    build a model from real anatomy: build kidney | centerline | vessel (--help)\n";
   os << "  study    parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md\n";
   os << "  run      run a scene file (docs/scenes.md): ParaView series, traces, summary\n";
   os << "  paper    reproduce the paper: Fig. 9, Fig. 10 A-F, Tables I-II -> report.md, figures, "

@@ -8,6 +8,7 @@
 #include "medspring/models/body.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/model_package.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 
@@ -247,6 +248,25 @@ void bind_models(py::module_& m) {
       "settings"_a = HybridSettings{}, "The hybrid kidney phantom: 458 surface nodes + 42 atoms (§4.1).");
 
   // ---- SmrmVessel ----
+  py::enum_<BendingMode> bending_mode(m, "BendingMode", "Bending of the SMRM centerline (docs/vessels.md).");
+  bending_mode.value("Wall", BendingMode::Wall, "default: k_b,i = E I_i / h_i^3 of the wall (hollow tube)")
+      .value("Constant", BendingMode::Constant, "chain.kb at every interior atom (0 = the paper's chain)");
+  enum_accepts_strings(bending_mode, &parse_bending_mode);
+  py::class_<WallSettings> wall(m, "WallSettings",
+                                "The vessel wall that gives the default bending stiffness.");
+  wall.def_readwrite("E", &WallSettings::E, "Young's modulus of the wall, MPa (0.5).")
+      .def_readwrite("thickness_ratio", &WallSettings::thickness_ratio,
+                     "Wall thickness / lumen radius (0.1).");
+  settings_helpers(wall);
+  m.def(
+      "wall_bending_stiffness",
+      [](py::handle atoms, py::handle radius, const WallSettings& w) {
+        const MatX3 C = points_arg(atoms, "atoms");
+        return copy_of(
+            wall_bending_stiffness(C, vector_arg(radius, "radius", static_cast<Index>(C.rows())), w));
+      },
+      "atoms"_a, "radius"_a, "wall"_a = WallSettings{},
+      "Bending stiffness k_b,i = E pi/4 (r_o^4 - r_i^4) / h_i^3 (N/mm) of every atom of a rest chain.");
   py::class_<SmrmSettings> ss(m, "SmrmSettings", "Settings of the SMRM vessel (vessel column of §9).");
   ss.def_readwrite("atoms", &SmrmSettings::atoms, "Centerline atoms after resampling (40).")
       .def_readwrite("spokes", &SmrmSettings::spokes, "Spokes per atom of the structured builders (30).")
@@ -254,7 +274,9 @@ void bind_models(py::module_& m) {
       .def_readwrite("chain", &SmrmSettings::chain, "ChainSettings.")
       .def_readwrite("k_loc", &SmrmSettings::k_loc, "Local patch stiffness, N/mm (0.05).")
       .def_readwrite("dedup_tolerance", &SmrmSettings::dedup_tolerance, "mm (1e-3).")
-      .def_readwrite("max_radius_factor", &SmrmSettings::max_radius_factor, "In local radii (3).");
+      .def_readwrite("max_radius_factor", &SmrmSettings::max_radius_factor, "In local radii (3).")
+      .def_readwrite("wall", &SmrmSettings::wall, "WallSettings of the default bending.");
+  def_enum_field(ss, "bending", &SmrmSettings::bending, "BendingMode (Wall; Constant uses chain.kb).");
   settings_helpers(ss);
   py::class_<SmrmBuildReport>(m, "SmrmBuildReport", "What the SMRM builders found (reported, not raised).")
       .def_readonly("atoms", &SmrmBuildReport::atoms, "Atoms n.")
@@ -288,6 +310,24 @@ void bind_models(py::module_& m) {
           "atom_radius",
           [](py::object self) { return view_of(self.cast<const SmrmVessel&>().atom_radius(), self); },
           "(n,) local lumen radius, mm, read-only view.")
+      .def_property_readonly(
+          "bending_stiffness",
+          [](py::object self) { return view_of(self.cast<const SmrmVessel&>().bending_stiffness(), self); },
+          "(n,) bending stiffness k_b,i, N/mm (0 at the ends), read-only view.")
+      .def(
+          "max_turning_change_deg",
+          [](const SmrmVessel& v, py::handle atoms) {
+            Index a = -1;
+            const double d = v.max_turning_change_deg(points_arg(atoms, "atoms", v.num_atoms(), "n"), &a);
+            return py::make_tuple(d, a);
+          },
+          "atoms"_a, "(degrees, atom): largest |alpha_i - alpha_i^0| of the turning angle of atoms (n, 3).")
+      .def(
+          "validity",
+          [](const SmrmVessel& v, py::handle atoms) {
+            return v.validity(points_arg(atoms, "atoms", v.num_atoms(), "n"));
+          },
+          "atoms"_a, "CurvatureCheck (§5.6 rho kappa < 1) of atoms (n, 3).")
       .def(
           "surface_from_atoms",
           [](const SmrmVessel& v, py::handle atoms) {
@@ -374,6 +414,49 @@ void bind_models(py::module_& m) {
       "path"_a = VesselPath::StraightX, "shape"_a = CrossSectionShape::Circular,
       "settings"_a = SmrmSettings{},
       "A procedural vessel phantom of §8.0 (settings.atoms atoms at 2.5 mm, settings.spokes spokes).");
+  // ---- Vessel trees (issue 17) ----
+  py::class_<SmrmTree, Body, std::shared_ptr<SmrmTree>>(
+      m, "SmrmTree",
+      "A branching SMRM vessel: one chain over all atoms with shared junction atoms, one tube per branch. "
+      "Build with smrm_tree_from_centerlines or smrm_tree_from_parents.")
+      .def_property_readonly("num_branches", &SmrmTree::num_branches, "Branches.")
+      .def_property_readonly("num_junctions", &SmrmTree::num_junctions, "Branch ends with children.")
+      .def_property_readonly("num_atoms", &SmrmTree::num_atoms, "Atoms of the tree (junction atoms once).")
+      .def("parent", &SmrmTree::parent, "branch"_a, "The parent branch (-1 for the root).")
+      .def("branch_atoms", &SmrmTree::branch_atoms, "branch"_a,
+           "The tree atoms of a branch in order (a child's first is its parent's last).")
+      .def("node_branch", &SmrmTree::node_branch, "node"_a, "The branch of a surface node.")
+      .def("node_atom", &SmrmTree::node_atom, "node"_a, "The tree atom a surface node rides on.");
+  m.def(
+      "smrm_tree_from_centerlines",
+      [](const std::vector<Centerline>& lines, double tolerance, const SmrmSettings& s) {
+        return std::make_shared<SmrmTree>(merge_centerlines(lines, tolerance), SmrmTreeSettings{s});
+      },
+      "lines"_a, "tolerance"_a = 0.05, "settings"_a = SmrmSettings{},
+      "A vessel tree from centerlines sharing their start (VMTK): merged where they agree within "
+      "`tolerance` mm; settings.atoms = atoms on the longest root-to-leaf path.");
+  m.def(
+      "smrm_tree_from_parents",
+      [](py::handle atoms, py::handle parent, py::handle radii, const SmrmSettings& s) {
+        const MatX3 X = points_arg(atoms, "atoms");
+        const Index n = static_cast<Index>(X.rows());
+        const py::array_t<long long, py::array::c_style | py::array::forcecast> p(
+            py::reinterpret_borrow<py::object>(parent));
+        require(p.ndim() == 1 && p.shape(0) == n, "parent: must have shape (", n, ",), got ", p.size(),
+                " values");
+        std::vector<Index> par(static_cast<std::size_t>(n));
+        for (Index i = 0; i < n; ++i) {
+          const long long v = p.at(i);
+          require(v >= -1 && v < n, "parent[", i, "]: ", v, " is not -1 or an atom index");
+          par[static_cast<std::size_t>(i)] = static_cast<Index>(v);
+        }
+        return std::make_shared<SmrmTree>(tree_from_parents(X, par, vector_arg(radii, "radii", n)),
+                                          SmrmTreeSettings{s});
+      },
+      "atoms"_a, "parent"_a, "radii"_a, "settings"_a = SmrmSettings{},
+      "A vessel tree from NumPy: atoms (n, 3) mm, parent index of every atom (n,) (-1 for the root atom 0, "
+      "else an earlier atom), radii (n,) mm. Runs of atoms form branches; an atom with several children is a "
+      "junction. settings.atoms = atoms on the longest root-to-leaf path (the resampling spacing).");
   m.def(
       "first_ray_hit",
       [](const SurfaceMesh& mesh, py::handle o, py::handle w, double t_max) {
@@ -426,7 +509,13 @@ void bind_models(py::module_& m) {
       .def_readonly("atom_hold", &VesselRun::atom_hold, "mm.")
       .def_readonly("contact_hold", &VesselRun::contact_hold, "mm.")
       .def_readonly("return_time", &VesselRun::return_time, "ms after release (inf: never).")
-      .def_readonly("warnings", &VesselRun::warnings, "Integrator warnings (State.warnings.total()).");
+      .def_readonly("warnings", &VesselRun::warnings, "Integrator warnings (State.warnings.total()).")
+      .def_readonly("max_rho_kappa", &VesselRun::max_rho_kappa, "§5.6 validity, max over updates and atoms.")
+      .def_readonly("rho_kappa_violations", &VesselRun::rho_kappa_violations,
+                    "(update, atom) pairs with rho kappa >= 1.")
+      .def_readonly("max_turning_change_deg", &VesselRun::max_turning_change_deg,
+                    "Max over updates and atoms of |alpha_i - alpha_i^0|, degrees.")
+      .def_readonly("max_turning_atom", &VesselRun::max_turning_atom, "Where it was largest.");
   py::class_<VesselExperimentResult>(m, "VesselExperimentResult", "The four runs of the vessel experiment.")
       .def_readonly("atom", &VesselExperimentResult::atom, "Loaded atom.")
       .def_readonly("contact_node", &VesselExperimentResult::contact_node,
@@ -458,7 +547,8 @@ void bind_models(py::module_& m) {
         save_model_package(path, package_of(body, name, description));
       },
       "path"_a, "body"_a, "name"_a = "", "description"_a = "",
-      "Writes the body as a model package (.msm, docs/model_packages.md), atomically: what the engine needs to rebuild "
+      "Writes the body as a model package (.msm, docs/model_packages.md), atomically: what the engine needs "
+      "to rebuild "
       "it exactly (the browser page loads these).");
   m.def(
       "load_model_package",

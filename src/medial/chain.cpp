@@ -1,10 +1,17 @@
 #include "medspring/medial/chain.hpp"
 
+#include <algorithm>
+
 #include "medspring/core/check.hpp"
 
 namespace medspring {
 
 Model make_chain_model(const MatX3& C0, const ChainSettings& s, const std::string& name) {  // §5.2
+  const Index n = static_cast<Index>(C0.rows());
+  return make_chain_model(C0, s, name, VecX::Constant(std::max<Index>(n, 0), s.kb));
+}
+
+Model make_chain_model(const MatX3& C0, const ChainSettings& s, const std::string& name, const VecX& kb) {
   const Index n = static_cast<Index>(C0.rows());
   require(n >= 2, name, ": a chain needs at least 2 atoms (got ", n, ")");
   require_finite_points(C0, cat(name, ": atom"));
@@ -13,6 +20,8 @@ Model make_chain_model(const MatX3& C0, const ChainSettings& s, const std::strin
   require_positive(s.mass, cat(name, ": chain.mass"));
   require_nonnegative(s.beta, cat(name, ": chain.beta"));
   require_nonnegative(s.kb, cat(name, ": chain.kb"));
+  require(kb.size() == n, name, ": ", kb.size(), " bending stiffnesses for ", n, " atoms");
+  for (Index i = 0; i < n; ++i) require_nonnegative(kb[i], cat(name, ": atom ", i, ": bending stiffness"));
   const DuffingSettings duffing = s.nonlinear ? s.duffing : DuffingSettings{.mode = DuffingMode::Linear};
   ModelBuilder b(name);
   for (Index i = 0; i < n; ++i) {
@@ -24,8 +33,8 @@ Model make_chain_model(const MatX3& C0, const ChainSettings& s, const std::strin
     require(L0 >= 1e-9, name, ": atoms ", i, " and ", i + 1, " coincide (", L0, " mm apart)");
     b.add_spring(i, i + 1, s.k, duffing);  // D-3 / D-4
   }
-  if (s.kb > 0)
-    for (Index i = 1; i + 1 < n; ++i) b.add_bending(i - 1, i, i + 1, s.kb);
+  for (Index i = 1; i + 1 < n; ++i)
+    if (kb[i] > 0) b.add_bending(i - 1, i, i + 1, kb[i]);
   return b.build();
 }
 

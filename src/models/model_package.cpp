@@ -186,6 +186,9 @@ std::string encode_model_package(const ModelPackage& p) {
     w.flag(c.fix_last);
     w.f64(c.kb);
     for (double v : {s.k_loc, s.dedup_tolerance, s.max_radius_factor}) w.f64(v);
+    w.u8(static_cast<std::uint8_t>(s.bending));  // version 2
+    w.f64(s.wall.E);
+    w.f64(s.wall.thickness_ratio);
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -194,8 +197,9 @@ std::string encode_model_package(const ModelPackage& p) {
 }
 
 ModelPackage decode_model_package(std::string_view bytes, const std::string& what) {
-  const std::string_view payload =
-      unframe_payload(bytes, kModelPackageMagic, kModelPackageVersion, kModelPackageVersion, kKind, what);
+  std::uint32_t version = 0;
+  const std::string_view payload = unframe_payload(bytes, kModelPackageMagic, kModelPackageMinVersion,
+                                                   kModelPackageVersion, kKind, what, &version);
   ByteReader r(payload, what, kKind);
   ModelPackage p;
   p.name = r.str("name", kMaxText);
@@ -277,6 +281,13 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     s.k_loc = r.f64();
     s.dedup_tolerance = r.f64();
     s.max_radius_factor = r.f64();
+    if (version >= 2) {
+      s.bending = get_enum<BendingMode>(r, "bending", 2);
+      s.wall.E = r.f64();
+      s.wall.thickness_ratio = r.f64();
+    } else {
+      s.bending = BendingMode::Constant;  // version 1 packages were saved from the chain.kb model
+    }
   }
   p.fingerprint = r.u64();
   r.finish();

@@ -113,7 +113,6 @@ SmrmVessel::SmrmVessel(SmrmParts parts, const SmrmSettings& settings)
       require(lam >= 0 && lam <= 1, w, ": node ", k, ": bracket parameter must be in [0, 1] (got ", lam, ")");
     }
   }
-  model_ = make_chain_model(parts.atoms, settings.chain, name_);
   faces_ = std::move(parts.faces);
   require(faces_.rows() > 0, w, ": has no surface triangles");
   grid_ = parts.grid;
@@ -155,6 +154,20 @@ SmrmVessel::SmrmVessel(SmrmParts parts, const SmrmSettings& settings)
     for (Index i = 0; i < n; ++i) require_positive(parts.atom_radius[i], cat(w, ": atom ", i, ": radius"));
     atom_radius_ = std::move(parts.atom_radius);
   }
+  rho_max_ = rho_max;
+  rest_turning_.resize(n);
+  {
+    const VecX a = turning_angles_deg(ref_.C0);
+    for (Index i = 0; i < n; ++i) rest_turning_[i] = a[i] * std::numbers::pi / 180.0;
+  }
+  if (settings.bending == BendingMode::Wall) {
+    bending_k_ = wall_bending_stiffness(ref_.C0, atom_radius_, settings.wall);
+  } else {
+    require_nonnegative(settings.chain.kb, cat(w, ": chain.kb"));
+    bending_k_ = VecX::Constant(n, settings.chain.kb);
+    bending_k_[0] = bending_k_[n - 1] = 0.0;
+  }
+  model_ = make_chain_model(ref_.C0, settings.chain, name_, bending_k_);
 
   report_ = std::move(parts.report);
   report_.atoms = n;
@@ -241,7 +254,86 @@ Index SmrmVessel::contact_node(Index atom, const Vec3& F) const {
 Model SmrmVessel::make_chain(bool nonlinear) const {
   ChainSettings c = settings_.chain;
   c.nonlinear = nonlinear;
-  return make_chain_model(ref_.C0, c, name_);
+  return make_chain_model(ref_.C0, c, name_, bending_k_);
+}
+
+namespace {
+
+// Turning angle at interior atom i (radians), 0 for a degenerate segment.
+double turning_angle(const MatX3& C, Index i) {
+  const Vec3 e1 = row3(C, i) - row3(C, i - 1), e2 = row3(C, i + 1) - row3(C, i);
+  const double l1 = e1.norm(), l2 = e2.norm();
+  if (l1 <= 0 || l2 <= 0) return 0.0;
+  return std::atan2(e1.cross(e2).norm(), e1.dot(e2));
+}
+
+}  // namespace
+
+VecX SmrmVessel::turning_angles_deg(const MatX3& atoms) {
+  const Index n = static_cast<Index>(atoms.rows());
+  VecX a = VecX::Zero(n);
+  for (Index i = 1; i + 1 < n; ++i) a[i] = turning_angle(atoms, i) * 180.0 / std::numbers::pi;
+  return a;
+}
+
+CurvatureCheck SmrmVessel::validity(const MatX3& atoms) const {  // §5.6, as check_curvature
+  CurvatureCheck r;
+  const Index n = std::min<Index>(static_cast<Index>(atoms.rows()), static_cast<Index>(rho_max_.size()));
+  for (Index i = 1; i + 1 < n; ++i) {
+    const Vec3 e1 = row3(atoms, i) - row3(atoms, i - 1), e2 = row3(atoms, i + 1) - row3(atoms, i);
+    const double l1 = e1.norm(), l2 = e2.norm();
+    if (l1 <= 0 || l2 <= 0) continue;
+    const double rk = rho_max_[i] * (e2 / l2 - e1 / l1).norm() / (0.5 * (l1 + l2));
+    r.max_rho_kappa = std::max(r.max_rho_kappa, rk);
+    if (!(rk < 1.0)) {
+      ++r.violations;
+      if (r.first_atom < 0) r.first_atom = i;
+    }
+  }
+  return r;
+}
+
+double SmrmVessel::max_turning_change_deg(const MatX3& atoms, Index* atom) const {
+  double best = 0.0;
+  Index where = -1;
+  const Index n = std::min<Index>(static_cast<Index>(atoms.rows()), static_cast<Index>(rest_turning_.size()));
+  for (Index i = 1; i + 1 < n; ++i) {
+    const double d = std::abs(turning_angle(atoms, i) - rest_turning_[i]);
+    if (d > best || where < 0) {
+      best = d;
+      where = i;
+    }
+  }
+  if (atom) *atom = where;
+  return best * 180.0 / std::numbers::pi;
+}
+
+BendingMode parse_bending_mode(const std::string& text) {
+  if (text == "wall") return BendingMode::Wall;
+  if (text == "constant") return BendingMode::Constant;
+  throw InvalidInput(cat("unknown bending mode '", text, "' (expected wall or constant)"));
+}
+
+std::string to_string(BendingMode mode) {
+  return mode == BendingMode::Wall ? "wall" : "constant";
+}
+
+VecX wall_bending_stiffness(const MatX3& C0, const VecX& radius, const WallSettings& wall) {
+  const Index n = static_cast<Index>(C0.rows());
+  require_positive(wall.E, "vessel wall: E");
+  require_positive(wall.thickness_ratio, "vessel wall: thickness_ratio");
+  require(radius.size() == n, "vessel wall: ", radius.size(), " radii for ", n, " atoms");
+  VecX kb = VecX::Zero(n);
+  for (Index i = 1; i + 1 < n; ++i) {
+    require(std::isfinite(radius[i]) && radius[i] > 0, "vessel wall: atom ", i, ": radius must be > 0 (got ",
+            radius[i], ")");
+    const double h = 0.5 * ((row3(C0, i) - row3(C0, i - 1)).norm() + (row3(C0, i + 1) - row3(C0, i)).norm());
+    require(h > 1e-9, "vessel wall: atom ", i, ": its neighbours coincide with it");
+    const double ri = radius[i], ro = ri * (1.0 + wall.thickness_ratio);
+    const double I = std::numbers::pi / 4.0 * (ro * ro * ro * ro - ri * ri * ri * ri);  // mm^4
+    kb[i] = wall.E * I / (h * h * h);                                                   // N/mm
+  }
+  return kb;
 }
 
 Vec3 SmrmVessel::reaction_force(const State& state, Index node) const {
@@ -462,6 +554,15 @@ VesselExperimentResult run_vessel_experiment(const SmrmVessel& vessel, const Ves
       r.atom_displacement[q] = (row3(st.x, s.atom) - row3(m.x0, s.atom)).norm();
       r.contact_displacement[q] = (row3(S, c) - row3(S0, c)).norm();
       r.max_surface_displacement[q] = (S - S0).rowwise().norm().maxCoeff();
+      const CurvatureCheck v = vessel.validity(st.x);
+      r.max_rho_kappa = std::max(r.max_rho_kappa, v.max_rho_kappa);
+      r.rho_kappa_violations += v.violations;
+      Index ta = -1;
+      const double turn = vessel.max_turning_change_deg(st.x, &ta);
+      if (turn > r.max_turning_change_deg || r.max_turning_atom < 0) {
+        r.max_turning_change_deg = turn;
+        r.max_turning_atom = ta;
+      }
       if (!held && st.t >= s.t_release - 1e-9) {  // the last loaded state (release acts on the next frame)
         held = true;
         r.profile = st.x - m.x0;

@@ -9,6 +9,7 @@
 #include "medspring/core/check.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 #include "medspring/skeleton/centerline_extraction.hpp"
@@ -28,6 +29,7 @@ struct Builder {
   Index num_atoms = 0;
   MatX3 atoms_rest;
   std::shared_ptr<const SmrmVessel> vessel;  // set for an smrm model
+  std::shared_ptr<const SmrmTree> tree;      // set for an smrm vessel tree ("branches": "all")
 
   [[noreturn]] void fail(const std::string& path, const std::string& message) const {
     throw InvalidInput(cat(origin, ": ", path, ": ", message));
@@ -173,6 +175,20 @@ struct Builder {
     return p;
   }
 
+  BodyPtr tree_body() {
+    const ModelSource& s = scene.model.source;
+    const std::vector<Centerline> lines =
+        files("model.source.centerline").read_centerlines(s.centerline, s.centerline_unit, s.radius_array);
+    auto t = std::make_shared<SmrmTree>(merge_centerlines(lines), SmrmTreeSettings{scene.model.smrm});
+    out.notes.push_back(cat("smrm tree: ", lines.size(), " polylines -> ", t->num_branches(), " branches, ",
+                            t->num_junctions(), " junctions, ", t->num_atoms(), " atoms, ",
+                            t->num_surface_nodes(), " surface nodes (one tube per branch)"));
+    num_atoms = t->num_atoms();
+    atoms_rest = t->model().x0;
+    tree = t;
+    return t;
+  }
+
   BodyPtr build_body() {
     const SceneModel& m = scene.model;
     const ModelSource& s = m.source;
@@ -216,6 +232,12 @@ struct Builder {
         return hybrid_body(maybe_balloon(organ), atoms, name);
       }
       case ModelSource::Type::Centerline: {
+        if (s.all_branches) {
+          if (!s.mesh.empty()) fail("model.source.centerline.branches", "a tree takes no mesh (yet)");
+          if (s.range_start > 0 || std::isfinite(s.range_end))
+            fail("model.source.centerline.range_mm", "applies to one branch, not to \"branches\": \"all\"");
+          return tree_body();
+        }
         const Centerline line = read_branch();
         if (!s.mesh.empty()) {
           SurfaceMesh boundary = files("model.source.mesh").read_mesh(s.mesh, s.mesh_unit);
@@ -272,7 +294,8 @@ struct Builder {
           if (num_atoms == 0)
             fail(L.where + ".direction", "towards_atom needs a model with atoms (hybrid or smrm)");
           Index a = L.target_atom;
-          if (a < 0) a = vessel ? vessel->node_atom(node) : num_atoms / 2;  // smrm: the node's own atom
+          if (a < 0)  // smrm: the node's own atom
+            a = vessel ? vessel->node_atom(node) : tree ? tree->node_atom(node) : num_atoms / 2;
           if (a >= num_atoms) fail(L.where + ".atom", cat("index ", a, " out of range [0, ", num_atoms, ")"));
           d = atoms_rest.row(a).transpose() - X0.row(node).transpose();
           break;
@@ -300,7 +323,7 @@ struct Builder {
     }
     for (const Index a : scene.record.atoms) {
       out.trace_atoms.push_back(a);
-      out.trace_atom_dofs.push_back(vessel ? a : S + a);
+      out.trace_atom_dofs.push_back(vessel || tree ? a : S + a);
     }
   }
 
@@ -334,7 +357,7 @@ BuiltScene finish_build(Builder& b, std::chrono::steady_clock::time_point t0) {
   b.settings();
   b.resolve_loads();
   b.out.atoms_rest = b.atoms_rest;
-  if (b.num_atoms > 0) b.out.atom_dof_begin = b.vessel ? 0 : b.out.body->num_surface_nodes();
+  if (b.num_atoms > 0) b.out.atom_dof_begin = b.vessel || b.tree ? 0 : b.out.body->num_surface_nodes();
   // Everything Simulation checks (loads, local patches) is checked now, before anything is written.
   try {
     Simulation probe(b.out.body, b.out.settings);
@@ -354,7 +377,7 @@ BuiltScene finish_build(Builder& b, std::chrono::steady_clock::time_point t0) {
 
 BuiltScene build_scene(const Scene& scene, SceneLoader* loader) {
   const auto t0 = std::chrono::steady_clock::now();
-  Builder b{scene, loader, scene.file.empty() ? "scene" : scene.file.string(), {}, 0, {}, nullptr};
+  Builder b{scene, loader, scene.file.empty() ? "scene" : scene.file.string(), {}, 0, {}, nullptr, nullptr};
   b.out.scene = scene;
   try {
     b.out.body = b.build_body();
@@ -369,12 +392,13 @@ BuiltScene build_scene(const Scene& scene, SceneLoader* loader) {
 BuiltScene build_scene_reusing(const Scene& scene, const BuiltScene& prior) {
   const auto t0 = std::chrono::steady_clock::now();
   require(prior.body != nullptr, "build_scene_reusing: the prior scene has no model");
-  Builder b{scene, nullptr, scene.file.empty() ? "scene" : scene.file.string(), {}, 0, {}, nullptr};
+  Builder b{scene, nullptr, scene.file.empty() ? "scene" : scene.file.string(), {}, 0, {}, nullptr, nullptr};
   b.out.scene = scene;
   b.out.body = prior.body;
   b.num_atoms = static_cast<Index>(prior.atoms_rest.rows());
   b.atoms_rest = prior.atoms_rest;
   b.vessel = std::dynamic_pointer_cast<const SmrmVessel>(prior.body);
+  b.tree = std::dynamic_pointer_cast<const SmrmTree>(prior.body);
   b.out.notes.push_back(cat("model reused from an earlier build (", prior.build_seconds, " s)"));
   return finish_build(b, t0);
 }

@@ -8,6 +8,7 @@
 
 #include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/models/smrm_vessel.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/static_solve.hpp"
 
@@ -104,7 +105,23 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   const Model& model = b.body->model();
   const Index contact = b.loads.empty() ? -1 : b.loads.front().node;
 
+  const auto* vessel = dynamic_cast<const SmrmVessel*>(b.body.get());
+  std::vector<double> turning;  // max_i |alpha_i - alpha_i^0| per sampled frame (vessels)
   auto sample = [&] {
+    if (vessel) {
+      RunSummary& q = res.summary;
+      const CurvatureCheck v = vessel->validity(sim.state().x);
+      q.max_rho_kappa = std::max(q.max_rho_kappa, v.max_rho_kappa);
+      q.rho_kappa_violations += v.violations;
+      q.rho_kappa_updates += v.violations > 0 ? 1 : 0;
+      Index atom = -1;
+      const double t = vessel->max_turning_change_deg(sim.state().x, &atom);
+      if (t > q.max_turning_change_deg || q.max_turning_atom < 0) {
+        q.max_turning_change_deg = t;
+        q.max_turning_atom = atom;
+      }
+      turning.push_back(t);
+    }
     tr.time.push_back(sim.time());
     tr.force.push_back(sim.applied_force().norm());
     tr.max_disp.push_back((sim.surface() - S0).rowwise().norm().maxCoeff());
@@ -186,6 +203,10 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   }
   if (!tr.atom_disp.empty()) s.atom_hold_mm = tr.atom_disp[0][hold];
   s.local_hold_mm = tr.local_contact[hold];
+  if (vessel && !turning.empty()) {
+    const Index offset = T - static_cast<Index>(turning.size());  // a resumed run samples from its resume
+    if (hold >= offset) s.hold_turning_change_deg = turning[static_cast<std::size_t>(hold - offset)];
+  }
   s.max_disp_peak_mm = *std::max_element(tr.max_disp.begin(), tr.max_disp.end());
   s.final_max_disp_mm = tr.max_disp.back();
   if (std::isfinite(s.release_time)) {

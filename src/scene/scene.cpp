@@ -296,6 +296,12 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
     s.centerline = resolve_file(c, *f, p.at("file"));
     s.centerline_unit = parse_unit(p, "unit");
     s.branch = p.index("branch", 0, 0);
+    if (const json* all = p.get("branches")) {
+      if (!all->is_string() || all->get<std::string>() != "all")
+        fail(c, p.at("branches"), "must be \"all\" (one branch: \"branch\": N)");
+      if (p.get("branch")) fail(c, p.at("branches"), "give \"branch\" or \"branches\", not both");
+      s.all_branches = true;
+    }
     s.radius_array = p.string("radius_array", s.radius_array);
     if (const json* r = p.get("range_mm")) {
       const std::string rp = p.at("range_mm");
@@ -348,6 +354,17 @@ void parse_parameters(const Ctx& c, const json& j, const std::string& path, Scen
       s.chain.k = o.positive("k_cl", s.chain.k);
       s.chain.kr = o.nonnegative("k_r", s.chain.kr);
       s.chain.kb = o.nonnegative("k_b", s.chain.kb);
+      // Bending (issue 17): "wall" (default, E I of the wall) or "constant" (k_b; 0 = the paper's chain).
+      // A k_b without "bending" means "constant".
+      if (o.get("k_b")) s.bending = BendingMode::Constant;
+      if (const json* bm = o.get("bending")) {
+        const std::string t = as_string(c, *bm, o.at("bending"));
+        s.bending = with_path(c, o.at("bending"), [&] { return parse_bending_mode(t); });
+        if (s.bending == BendingMode::Wall && o.get("k_b"))
+          fail(c, o.at("k_b"), "applies to \"bending\": \"constant\" only");
+      }
+      s.wall.E = o.positive("wall_E", s.wall.E);
+      s.wall.thickness_ratio = o.positive("wall_thickness_ratio", s.wall.thickness_ratio);
       s.chain.fix_first = o.boolean("fix_first", s.chain.fix_first);
       s.chain.fix_last = o.boolean("fix_last", s.chain.fix_last);
       s.k_loc = o.positive("k_loc", s.k_loc);
@@ -638,6 +655,10 @@ std::string scene_to_json(const Scene& s) {
                  {"unit", to_string(src.centerline_unit)},
                  {"branch", src.branch},
                  {"radius_array", src.radius_array}};
+      if (src.all_branches) {
+        cl.erase("branch");
+        cl["branches"] = "all";
+      }
       if (src.range_start > 0 || std::isfinite(src.range_end))
         cl["range_mm"] = {src.range_start,
                           std::isfinite(src.range_end) ? json(src.range_end) : json(nullptr)};
@@ -678,13 +699,16 @@ std::string scene_to_json(const Scene& s) {
               {"beta", q.chain.beta},
               {"k_cl", q.chain.k},
               {"k_r", q.chain.kr},
-              {"k_b", q.chain.kb},
+              {"bending", to_string(q.bending)},
+              {"wall_E", q.wall.E},
+              {"wall_thickness_ratio", q.wall.thickness_ratio},
               {"fix_first", q.chain.fix_first},
               {"fix_last", q.chain.fix_last},
               {"k_loc", q.k_loc},
               {"duffing", duffing_json(q.chain.duffing)},
               {"frame_mode", to_string(q.frames.mode)},
               {"frame_anchor", to_string(q.frames.anchor)}};
+    if (q.bending == BendingMode::Constant) params["k_b"] = q.chain.kb;
   }
   json model = {{"kind", to_string(m.kind)},
                 {"source", source},

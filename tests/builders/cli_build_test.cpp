@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -85,8 +86,151 @@ TEST(CliBuild, ErrorsExitNonZeroWithOneLineAndWriteNothing) {
 
   const CliRun unknown = run_cli("build organ --out x", tmp);
   EXPECT_EQ(unknown.code, 1);
-  EXPECT_NE(unknown.err.find("unknown kind 'organ' (known: kidney, centerline)"), std::string::npos)
+  EXPECT_NE(unknown.err.find("unknown kind 'organ' (known: kidney, centerline, vessel)"), std::string::npos)
       << unknown.err;
+}
+
+/// The number after `"key": ` in a JSON text (the first occurrence), NaN if absent.
+double json_number(const std::string& text, const std::string& key) {
+  const std::string k = "\"" + key + "\": ";
+  const auto at = text.find(k);
+  if (at == std::string::npos) return std::nan("");
+  return std::stod(text.substr(at + k.size()));
+}
+
+TEST(CliBuildVessel, FromTheVmrCenterlineWritesTheModelAndItsExactRestSurface) {
+  const fs::path tmp = testing::temp_dir("cli-vessel-line");
+  const fs::path file = testing::require_data_file("vmr-0159-aorta-centerline.vtp");
+  const CliRun r = run_cli("build vessel --centerline \"" + file.string() + "\" --unit cm --out \"" +
+                               (tmp / "aorta").string() + "\" --json",
+                           tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json_number(r.out, "atoms"), 40);
+  EXPECT_EQ(json_number(r.out, "branches"), 1);
+  EXPECT_EQ(json_number(r.out, "junctions"), 0);
+  EXPECT_EQ(json_number(r.out, "surface_nodes"), 1200);
+  EXPECT_EQ(json_number(r.out, "input_branches"), 4);
+  EXPECT_EQ(json_number(r.out, "branch"), 2);  // the longest polyline
+  EXPECT_LE(json_number(r.out, "rest_error_mm"), 1e-9);
+  EXPECT_GT(json_number(r.out, "kb_min_n_per_mm"), 0.0);
+  EXPECT_NEAR(json_number(r.out, "length_mm"), 345.0, 2.0);
+  for (const char* f : {"surface.vtp", "atoms.vtp", "spokes.vtp", "vessel.msm", "summary.json"})
+    EXPECT_TRUE(fs::exists(tmp / "aorta" / f)) << f;
+  const auto lines = read_centerlines(tmp / "aorta" / "atoms.vtp");
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0].size(), 40);
+
+  // the text form names the counts
+  const CliRun t = run_cli("build vessel --centerline \"" + file.string() +
+                               "\" --unit cm --branch 0 --k-b 0 --out \"" + (tmp / "b0").string() + "\"",
+                           tmp);
+  ASSERT_EQ(t.code, 0) << t.err;
+  EXPECT_NE(t.out.find("atoms: 40, branches: 1, junctions: 0, surface nodes: 1200"), std::string::npos)
+      << t.out;
+  EXPECT_NE(t.out.find("bending k_b 0..0 N/mm"), std::string::npos) << t.out;
+}
+
+TEST(CliBuildVessel, AllBranchesOfTheVmrFileMakeATree) {
+  const fs::path tmp = testing::temp_dir("cli-vessel-tree");
+  const fs::path file = testing::require_data_file("vmr-0159-aorta-centerline.vtp");
+  const CliRun r = run_cli("build vessel --centerline \"" + file.string() +
+                               "\" --unit cm --branches all --out \"" + (tmp / "tree").string() + "\" --json",
+                           tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json_number(r.out, "branches"), 7);  // 4 outlets, 3 junctions
+  EXPECT_EQ(json_number(r.out, "junctions"), 3);
+  EXPECT_LE(json_number(r.out, "rest_error_mm"), 1e-9);
+  for (const char* f : {"surface.vtp", "atoms.vtp", "spokes.vtp", "summary.json"})
+    EXPECT_TRUE(fs::exists(tmp / "tree" / f)) << f;
+  EXPECT_FALSE(fs::exists(tmp / "tree" / "vessel.msm"));
+  EXPECT_EQ(read_centerlines(tmp / "tree" / "atoms.vtp").size(), 7u);
+  const CliRun bad = run_cli("build vessel --centerline \"" + file.string() +
+                                 "\" --unit cm --branches some --out \"" + (tmp / "bad").string() + "\"",
+                             tmp);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("option --branches: 'some' is not 'all'"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+}
+
+TEST(CliBuildVessel, SceneWithAllBranchesRunsTheTreeAndReturnsToRest) {
+  const fs::path tmp = testing::temp_dir("cli-vessel-tree-scene");
+  const fs::path file = testing::require_data_file("vmr-0159-aorta-centerline.vtp");
+  std::ofstream(tmp / "tree.json")
+      << R"({"name": "tree", "model": {"kind": "smrm", "source": {"centerline": {"file": ")" << file.string()
+      << R"(", "unit": "cm", "branches": "all"}}},
+    "loads": [{"node": 1900, "direction": "inward_normal", "magnitude": 0.5, "t_ramp": 20, "t_release": 300}],
+    "duration": 600})";
+  const CliRun r = run_cli(
+      "run \"" + (tmp / "tree.json").string() + "\" --out \"" + (tmp / "run").string() + "\" --quiet --json",
+      tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"kind\": \"smrm_tree\""), std::string::npos) << r.out;
+  EXPECT_EQ(json_number(r.out, "surface_nodes"), 1980);
+  EXPECT_GT(json_number(r.out, "contact_hold_mm"), 0.5);
+  EXPECT_LT(json_number(r.out, "return_ms"), 200.0);
+  EXPECT_EQ(json_number(r.out, "warnings"), 0);
+  std::ofstream(tmp / "bad.json")
+      << R"({"name": "bad", "model": {"kind": "smrm", "source": {"centerline": {"file": ")" << file.string()
+      << R"(", "unit": "cm", "branches": "some"}}}, "duration": 10})";
+  const CliRun bad =
+      run_cli("run \"" + (tmp / "bad.json").string() + "\" --out \"" + (tmp / "bad").string() + "\"", tmp);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("model.source.centerline.branches: must be \"all\""), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+}
+
+TEST(CliBuildVessel, FromTheAortaSegmentationReportsItsDistanceToTheInput) {
+  const fs::path tmp = testing::temp_dir("cli-vessel-mask");
+  const fs::path mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");
+  const CliRun r = run_cli("build vessel --segmentation \"" + mask.string() + "\" --label 1 --out \"" +
+                               (tmp / "aorta").string() + "\" --json",
+                           tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json_number(r.out, "atoms"), 40);
+  EXPECT_LE(json_number(r.out, "rest_error_mm"), 1e-9);
+  // Spokes are marched to the isosurface, so the rebuilt nodes lie on it (ray hits, to rounding) except
+  // where a spoke found no boundary; the symmetric distance counts the cut ends the open tube lacks.
+  EXPECT_LT(json_number(r.out, "to_input_mean_mm"), 0.5);
+  EXPECT_GT(json_number(r.out, "hausdorff_mm"), 0.0);
+  EXPECT_LT(json_number(r.out, "mean_distance_mm"), 5.0);
+  EXPECT_TRUE(fs::exists(tmp / "aorta" / "vessel.msm"));
+}
+
+TEST(CliBuildVessel, BadInputExitsWithOneLineNamingThePartAndWritesNothing) {
+  const fs::path tmp = testing::temp_dir("cli-vessel-bad");
+  const fs::path file = testing::require_data_file("vmr-0159-aorta-centerline.vtp");
+  auto expect_error = [&](const std::string& args, const std::string& what) {
+    const CliRun r = run_cli("build vessel " + args + " --out \"" + (tmp / "out").string() + "\"", tmp);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_NE(r.err.find(what), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(tmp / "out")) << args;
+  };
+  const std::string line = "--centerline \"" + file.string() + "\"";
+  expect_error(line, "option --unit: required with --centerline");
+  expect_error(line + " --unit cm --branch 7", "branch 7 does not exist (the file has 4 polylines");
+  expect_error(line + " --unit cm --k-b 1 --wall-e 1", "at most one of --k-b and --wall-e");
+  expect_error("--unit cm", "give exactly one of --centerline FILE, --mesh FILE and --segmentation FILE");
+
+  // radii <= 0 or NaN, and a branch of one point: named by line and point
+  Centerline bad{MatX3(3, 3), VecX(3), "bad"};
+  bad.points << 0, 0, 0, 1, 0, 0, 2, 0, 0;
+  bad.radii << 1.0, -0.5, 1.0;
+  write_centerlines(tmp / "negative.vtp", {bad});
+  expect_error("--centerline \"" + (tmp / "negative.vtp").string() + "\" --unit mm", "point 1");
+  bad.radii << 1.0, std::nan(""), 1.0;
+  write_centerlines(tmp / "nan.vtp", {bad});
+  expect_error("--centerline \"" + (tmp / "nan.vtp").string() + "\" --unit mm", "point 1");
+
+  // a segmentation with two separate components
+  LabelVolume two;
+  two.dims = {12, 6, 6};
+  two.data.assign(two.size(), 0);
+  for (Index z = 1; z < 5; ++z)
+    for (Index y = 1; y < 5; ++y)
+      for (Index x : {1, 2, 3, 8, 9, 10}) two.data[static_cast<std::size_t>((z * 6 + y) * 12 + x)] = 1;
+  write_label_volume(tmp / "two.mha", two);
+  expect_error("--segmentation \"" + (tmp / "two.mha").string() + "\"", "2 separate components");
 }
 
 }  // namespace

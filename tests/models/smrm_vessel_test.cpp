@@ -144,8 +144,16 @@ TEST(SmrmVessel, RingsStayPerpendicularToTheDeformedTangent) {  // §5.7
   }
 }
 
+// The paper-literal chain (no bending, k_b = 0): the kinks and the light/strong contrast of §5.2.
+SmrmSettings paper_chain() {
+  SmrmSettings s;
+  s.bending = BendingMode::Constant;
+  s.chain.kb = 0.0;
+  return s;
+}
+
 TEST(SmrmVessel, StraightZDoesNotFlipInRmfModeAndIsDegenerateInPaperXoy) {  // §8.2-11
-  const SmrmVessel v = smrm_phantom(VesselPath::StraightZ, CrossSectionShape::Elliptical);
+  const SmrmVessel v = smrm_phantom(VesselPath::StraightZ, CrossSectionShape::Elliptical, paper_chain());
   const MatX3 C = loaded_atoms(v, 20, Vec3(0.5, 0, 0));
   auto ws = v.make_workspace();
   MatX3 S;
@@ -171,10 +179,10 @@ TEST(SmrmVessel, StraightZDoesNotFlipInRmfModeAndIsDegenerateInPaperXoy) {  // �
   EXPECT_EQ(vp.map_to_surface(vp.rest_atoms(), wp, S).degenerate, 40);
 }
 
-TEST(SmrmVessel, NonlinearChainIsStifferThanLinearUnderTheStrongForce) {  // §7.2, eq. (5)
-  SmrmSettings lin;
+TEST(SmrmVessel, NonlinearChainIsStifferThanLinearUnderTheStrongForce) {  // §7.2, eq. (5), k_b = 0
+  SmrmSettings lin = paper_chain();
   lin.chain.nonlinear = false;
-  const SmrmVessel vn = smrm_phantom(VesselPath::StraightX, CrossSectionShape::Circular);
+  const SmrmVessel vn = smrm_phantom(VesselPath::StraightX, CrossSectionShape::Circular, paper_chain());
   const SmrmVessel vl = smrm_phantom(VesselPath::StraightX, CrossSectionShape::Circular, lin);
   const double strong_n = loaded_atoms(vn, 20, Vec3(0, 0.5, 0))(20, 1);
   const double strong_l = loaded_atoms(vl, 20, Vec3(0, 0.5, 0))(20, 1);
@@ -185,14 +193,14 @@ TEST(SmrmVessel, NonlinearChainIsStifferThanLinearUnderTheStrongForce) {  // §7
   EXPECT_NEAR(light_n, light_l, 1e-3 * light_l);  // the cubic term is invisible at the light force
 }
 
-TEST(SmrmVessel, ExperimentHoldsTheStaticDeflectionAndReturnsToRest) {  // §7.2, §8.2-12
-  const SmrmVessel v = smrm_phantom(VesselPath::StraightX, CrossSectionShape::Circular);
+TEST(SmrmVessel, ExperimentHoldsTheStaticDeflectionAndReturnsToRest) {  // §7.2, §8.2-12, k_b = 0
+  const SmrmVessel v = smrm_phantom(VesselPath::StraightX, CrossSectionShape::Circular, paper_chain());
   const VesselExperimentResult r = run_vessel_experiment(v);
   EXPECT_EQ(r.atom, 20);
   EXPECT_LE((r.direction - Vec3(0, 1, 0)).norm(), 1e-15);  // u_20^0 of straight-x
   EXPECT_EQ(r.contact_node, 20 * 30 + 15);                 // spoke at theta = pi faces -y
   EXPECT_EQ(v.node_atom(r.contact_node), 20);
-  SmrmSettings lin;
+  SmrmSettings lin = paper_chain();
   lin.chain.nonlinear = false;
   const SmrmVessel vl = smrm_phantom(VesselPath::StraightX, CrossSectionShape::Circular, lin);
   struct Case {

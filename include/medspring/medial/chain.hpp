@@ -30,4 +30,10 @@ struct ChainSettings {
 Model make_chain_model(const MatX3& C0, const ChainSettings& settings = {},
                        const std::string& name = "centerline");
 
+/// The same chain with a bending stiffness per atom: bending term i (atoms i-1, i, i+1) gets kb[i]
+/// (N/mm; entries 0 and n-1 are unused; a zero entry adds no term). settings.kb is ignored. Throws
+/// InvalidInput naming the atom for a negative or non-finite entry or a size other than n.
+Model make_chain_model(const MatX3& C0, const ChainSettings& settings, const std::string& name,
+                       const VecX& kb);
+
 }  // namespace medspring

@@ -25,6 +25,27 @@
 
 namespace medspring {
 
+/// Bending of the centerline (an extension of the paper, ALGORITHMS.md §5.2 option, docs/vessels.md).
+enum class BendingMode : std::uint8_t {
+  Wall,      // default: k_b,i = E I_i / h_i^3 from the wall, I_i = pi/4 (r_o^4 - r_i^4) (hollow tube)
+  Constant,  // chain.kb at every interior atom; chain.kb = 0 is the paper-literal chain (no bending)
+};
+BendingMode parse_bending_mode(const std::string& text);  // "wall" | "constant"
+std::string to_string(BendingMode mode);
+
+/// The vessel wall that gives the default bending stiffness.
+struct WallSettings {
+  double E = 0.5;                // Young's modulus of the wall, MPa (= N/mm^2); aorta ~0.3-1 MPa
+  double thickness_ratio = 0.1;  // wall thickness / lumen radius (large arteries ~0.1): r_o = 1.1 r_i
+};
+
+/// Bending stiffness per atom of a rest chain (#n x 3, mm) with lumen radii r (#n, mm): the discrete
+/// form of (1/2) E I int |kappa - kappa0|^2 ds with Delta_i = C_{i-1} - 2 C_i + C_{i+1} ~ h_i^2 kappa_i
+/// over the atom's length h_i = (|C_i - C_{i-1}| + |C_{i+1} - C_i|) / 2:
+/// k_b,i = E pi/4 ((r_i (1 + thickness_ratio))^4 - r_i^4) / h_i^3 (N/mm); entries 0 and n-1 are 0.
+/// Throws InvalidInput for E or thickness_ratio <= 0, a radius <= 0 or coincident atoms.
+VecX wall_bending_stiffness(const MatX3& C0, const VecX& radius, const WallSettings& wall);
+
 /// Settings of the SMRM vessel; defaults are the vessel column of ALGORITHMS.md §9.
 struct SmrmSettings {
   Index atoms = 40;                // n, centerline atoms after resampling (>= 3)
@@ -35,6 +56,8 @@ struct SmrmSettings {
   double k_loc = 0.05;             // N/mm, stiffness of the local patch (local_stiffness())
   double dedup_tolerance = 1e-3;   // mm: consecutive centerline points closer than this are merged
   double max_radius_factor = 3.0;  // generic binding / spoke marching limit, in local radii
+  BendingMode bending = BendingMode::Wall;  // Wall (default): E I of the wall; Constant: chain.kb
+  WallSettings wall{};                      // used by BendingMode::Wall
 };
 
 /// What the builders found (conditions that are reported, not thrown).
@@ -95,6 +118,17 @@ class SmrmVessel final : public Body {
   Index num_atoms() const { return ref_.size(); }
   const MatX3& rest_atoms() const { return ref_.C0; }
   const VecX& atom_radius() const { return atom_radius_; }
+  /// Bending stiffness k_b,i of every atom (N/mm, §5.2 option; 0 at the ends and with k_b = 0).
+  const VecX& bending_stiffness() const { return bending_k_; }
+  /// Largest in-plane spoke of every atom (mm), the rho of the validity check.
+  const VecX& max_spoke() const { return rho_max_; }
+  /// §5.6 validity rho_i kappa_i < 1 of the atoms (#n x 3); no allocation.
+  CurvatureCheck validity(const MatX3& atoms) const;
+  /// Largest |alpha_i - alpha_i^0| over the interior atoms, degrees: alpha_i = the turning angle
+  /// between segments (i-1, i) and (i, i+1); the atom where it is largest in *atom. No allocation.
+  double max_turning_change_deg(const MatX3& atoms, Index* atom = nullptr) const;
+  /// Turning angle alpha_i of every atom (degrees, 0 at the ends).
+  static VecX turning_angles_deg(const MatX3& atoms);
 
   /// Per-update buffers (one per thread or per state).
   struct Workspace {
@@ -133,6 +167,9 @@ class SmrmVessel final : public Body {
   MatX3 rest_normals_;
   VecX spoke_length_;
   VecX atom_radius_;
+  VecX bending_k_;
+  VecX rho_max_;
+  VecX rest_turning_;  // radians
   SmrmBuildReport report_;
 };
 
@@ -203,7 +240,11 @@ struct VesselRun {
   double atom_hold = 0.0;         // |u| of the loaded atom at release, mm
   double contact_hold = 0.0;      // |u| of the contact node at release, mm
   double return_time = std::numeric_limits<double>::infinity();  // ms
-  std::uint64_t warnings = 0;  // integrator warnings (State::warnings.total())
+  std::uint64_t warnings = 0;         // integrator warnings (State::warnings.total())
+  double max_rho_kappa = 0.0;         // §5.6 validity, max over every update and atom
+  Index rho_kappa_violations = 0;     // (update, atom) pairs with rho kappa >= 1
+  double max_turning_change_deg = 0;  // max over updates and atoms of |alpha_i - alpha_i^0|
+  Index max_turning_atom = -1;        // where it was largest
 };
 
 struct VesselExperimentResult {

@@ -52,6 +52,15 @@ struct RunSummary {
                                                 // surface node stays within return_tolerance (inf: never)
   double return_tolerance = 1e-3;               // mm
   double final_max_disp_mm = 0.0;               // max |u| at the end
+  // SMRM vessels (0 / -1 for other models): the §5.6 validity rho kappa < 1 checked at every update,
+  // and the bend of the centerline (alpha_i = turning angle between the segments at atom i). A resumed
+  // run covers the updates from the resume on.
+  double max_rho_kappa = 0.0;            // max over updates and atoms
+  Index rho_kappa_violations = 0;        // (update, atom) pairs with rho kappa >= 1
+  Index rho_kappa_updates = 0;           // updates with at least one violation
+  double max_turning_change_deg = 0.0;   // max over updates and atoms of |alpha_i - alpha_i^0|
+  Index max_turning_atom = -1;           // the atom where it was largest
+  double hold_turning_change_deg = 0.0;  // max_i |alpha_i - alpha_i^0| in the hold frame
 };
 
 struct SceneResult {

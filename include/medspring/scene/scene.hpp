@@ -61,6 +61,7 @@ struct ModelSource {
   std::filesystem::path centerline;
   LengthUnit centerline_unit = LengthUnit::Millimetre;
   Index branch = 0;
+  bool all_branches = false;  // "branches": "all": every polyline, merged into a vessel tree (smrm)
   std::string radius_array = "MaximumInscribedSphereRadius";
   double range_start = 0.0;                                    // mm of arc length from the first point
   double range_end = std::numeric_limits<double>::infinity();  // mm (inf = to the end)

@@ -1,0 +1,77 @@
+// SMRM vessel tree update (issue 17, docs/vessels.md): the VMR 0159 tree (4 polylines sharing their start
+// merged into 7 branches, 3 junctions), one 0.5 ms frame = chain step (with its bending substeps) +
+// frames and reconstruction of every branch + vertex normals, 1 thread, strong force (0.5 N) held on a
+// leaf. Needs the data file (skipped with a message without it) and the io layer.
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "medspring/models/smrm_tree.hpp"
+#include "medspring/physics/integrators.hpp"
+#ifdef MEDSPRING_BENCH_HAVE_IO
+#include "medspring/io/centerline_io.hpp"
+#include "medspring/io/data_dir.hpp"
+#endif
+
+namespace {
+
+using namespace medspring;
+
+#ifdef MEDSPRING_BENCH_HAVE_IO
+std::unique_ptr<SmrmTree> vmr_tree() {
+  const std::filesystem::path file = data_dir() / "vmr-0159-aorta-centerline.vtp";
+  if (!std::filesystem::exists(file)) return nullptr;
+  return std::make_unique<SmrmTree>(merge_centerlines(read_centerlines(file, LengthUnit::Centimetre)));
+}
+
+void BM_SmrmTreeBuild(benchmark::State& st) {
+  const std::filesystem::path file = data_dir() / "vmr-0159-aorta-centerline.vtp";
+  if (!std::filesystem::exists(file)) {
+    st.SkipWithError("vmr-0159-aorta-centerline.vtp not found (MEDSPRING_DATA)");
+    return;
+  }
+  for (auto _ : st) {
+    SmrmTree t(merge_centerlines(read_centerlines(file, LengthUnit::Centimetre)));
+    benchmark::DoNotOptimize(t.rest_surface().data());
+  }
+}
+BENCHMARK(BM_SmrmTreeBuild)->Unit(benchmark::kMillisecond);
+
+void BM_SmrmTreeUpdate(benchmark::State& st) {
+  const auto tree = vmr_tree();
+  if (!tree) {
+    st.SkipWithError("vmr-0159-aorta-centerline.vtp not found (MEDSPRING_DATA)");
+    return;
+  }
+  State s = make_state(tree->model());
+  const Index leaf = tree->num_branches() - 1;
+  const Index a = tree->branch_atoms(leaf)[tree->branch_atoms(leaf).size() / 2];
+  s.f_ext.row(a) << 0.5, 0.0, 0.0;
+  const StepSettings ss{.dt = 0.5};
+  SmrmTree::Workspace ws = tree->make_workspace();
+  MatX3 S = tree->rest_surface();
+  std::vector<MatX3> N(static_cast<std::size_t>(tree->num_branches()));
+  double frames = 0;
+  auto update = [&] {
+    frames += 1;
+    step(tree->model(), s, ss);
+    tree->map_to_surface(s.x, ws, S);
+    for (Index b = 0; b < tree->num_branches(); ++b)
+      tree->branch_vessel(b).surface_normals(ws.surface[static_cast<std::size_t>(b)],
+                                             ws.vessel[static_cast<std::size_t>(b)],
+                                             N[static_cast<std::size_t>(b)]);
+  };
+  for (int i = 0; i < 200; ++i) update();
+  for (auto _ : st) {
+    update();
+    benchmark::DoNotOptimize(S.data());
+  }
+  st.counters["atoms"] = static_cast<double>(tree->num_atoms());
+  st.counters["surface_nodes"] = static_cast<double>(S.rows());
+  st.counters["substeps_per_frame"] = static_cast<double>(s.substeps) / frames;
+}
+BENCHMARK(BM_SmrmTreeUpdate)->Unit(benchmark::kMicrosecond);
+#endif
+
+}  // namespace

@@ -1,0 +1,85 @@
+// The SMRM vessel (ALGORITHMS.md §5) of a real vessel from a centerline file, a surface mesh or a
+// segmentation: atoms with radii, 30 spokes per atom, the rebuilt surface, its rest reconstruction error
+// and, from a mesh or segmentation, its distance to the input; written with a model package (.msm).
+//
+//   VesselBuild v = build_vessel({.centerline = find_data_file("vmr-0159-aorta-centerline.vtp"),
+//                                 .centerline_unit = LengthUnit::Centimetre});
+//   v.summary.rest_error_mm;   // <= 1e-9 (exact reconstruction, D-13)
+//   write_vessel_files(dir, v);  // surface.vtp atoms.vtp spokes.vtp vessel.msm
+//
+// Centerline input: one branch of the file (--branch N, default the longest), or all of them merged
+// into a tree where they share their start (all_branches: SmrmTree, shared junction atoms). Mesh /
+// segmentation input: the distance-mapping centerline (§3, build_centerline) and spoke lengths marched to the
+// boundary (§5.6). Errors: those of read_centerlines / load_organ / build_centerline; InvalidInput for a
+// branch out of range, a segmentation with several components (naming the count and the voxels of each),
+// settings out of range. Nothing is written by build_vessel.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "medspring/builders/organ_source.hpp"
+#include "medspring/core/units.hpp"
+#include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/models/smrm_tree.hpp"
+#include "medspring/models/smrm_vessel.hpp"
+
+namespace medspring {
+
+struct VesselBuildSettings {
+  std::filesystem::path centerline{};  // a centerline file (.vtp / .vtk with radii), or
+  LengthUnit centerline_unit = LengthUnit::Millimetre;
+  Index branch = -1;              // centerline: the polyline to use; -1 = the longest
+  bool all_branches = false;      // centerline: every polyline, merged into a tree (SmrmTree)
+  double merge_tolerance = 0.05;  // mm: points of two polylines closer than this are one
+  OrganSource source{};           // a mesh or a segmentation (exactly one source in all)
+  SmrmSettings smrm{};            // atoms (40), spokes (30), bending, chain
+};
+
+/// What build_vessel made. Distances in mm, times in seconds.
+struct VesselSummary {
+  std::string input;       // file name
+  std::string input_kind;  // "centerline", "mesh" or "mask"
+  Index atoms = 0, branches = 1, junctions = 0, surface_nodes = 0, faces = 0, spokes = 0;
+  Index input_branches = 0;  // centerline input: polylines in the file
+  Index branch = 0;          // centerline input: the polyline used
+  double length_mm = 0.0;    // arc length of the atoms
+  double radius_min_mm = 0.0, radius_max_mm = 0.0;
+  double rest_error_mm = 0.0;         // max |rebuilt rest surface - rest surface| (exact: rounding only)
+  double kb_min = 0.0, kb_max = 0.0;  // bending stiffness of the interior atoms, N/mm
+  double max_rho_kappa = 0.0;         // §5.6 validity at rest
+  double dt_safe_ms = 0.0;            // stable step at rest (Gershgorin, with the bending terms)
+  // mesh / mask input: the rebuilt tube against the input surface
+  bool has_distance = false;
+  double hausdorff_mm = 0.0;      // symmetric (sampled), cut ends included
+  double mean_distance_mm = 0.0;  // average of the two one-sided means
+  double to_input_max_mm = 0.0;   // rebuilt surface nodes -> input surface, max
+  double to_input_mean_mm = 0.0;  // rebuilt surface nodes -> input surface, mean
+  Index spokes_without_hit = 0;   // spoke marching found no boundary (rho = r_i used)
+  double seconds = 0.0;
+  std::vector<std::string> notes;
+  std::vector<std::string> warnings;
+
+  std::string text() const;
+};
+
+struct VesselBuild {
+  std::shared_ptr<const SmrmVessel> vessel;  // one branch, or
+  std::shared_ptr<const SmrmTree> tree;      // all branches (--branches all)
+  std::vector<Centerline> centerlines;       // the atoms of every branch with their radii (mm)
+  SurfaceMesh input;  // mesh / mask input: the boundary surface (empty for a centerline)
+  VesselSummary summary;
+};
+
+/// Builds the vessel of settings (see the file comment). Deterministic.
+VesselBuild build_vessel(const VesselBuildSettings& settings);
+
+/// Writes surface.vtp (rebuilt rest surface, point arrays "atom" and "branch"), atoms.vtp (the atoms of
+/// every branch as a polyline with "MaximumInscribedSphereRadius", readable by read_centerlines),
+/// spokes.vtp (atom -> surface node segments) and, for one branch, vessel.msm (the model package; a tree
+/// has no package format yet) into the existing folder `dir`.
+void write_vessel_files(const std::filesystem::path& dir, const VesselBuild& build);
+
+}  // namespace medspring

@@ -1,0 +1,104 @@
+// A branching SMRM vessel (issue 17, docs/vessels.md): centerline branches joined at junctions, one chain
+// model over all atoms, and one SMRM tube per branch for the surface. Model kind "smrm_tree".
+//
+//   auto lines = read_centerlines(find_data_file("vmr-0159-aorta-centerline.vtp"), LengthUnit::Centimetre);
+//   CenterlineTree tree = merge_centerlines(lines);      // 4 polylines sharing their start -> 7 branches
+//   SmrmTree vessel(tree);                               // shared junction atoms, 30 spokes per atom
+//
+// Junction coupling: a child's first atom IS its parent's last atom (a shared atom), and a bending term
+// joins the parent's second-to-last atom, the junction and the child's second atom (rest angle as zero),
+// so a force on one branch reaches the others through the junction. The surface is one tube per branch
+// (the child's first ring sits at the junction inside the parent's last ring): not one watertight mesh.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "medspring/geometry/polyline.hpp"
+#include "medspring/models/body.hpp"
+#include "medspring/models/smrm_vessel.hpp"
+
+namespace medspring {
+
+/// Branches of a centerline tree. Branch 0 is the root (it starts at the inlet); every other branch
+/// starts at the last point of its parent (the junction).
+struct CenterlineTree {
+  struct Branch {
+    Centerline line;  // mm, >= 2 points; a child's first point is its parent's last point
+    Index parent = -1;
+  };
+  std::vector<Branch> branches;
+  Index junctions() const;  // branch ends with children
+};
+
+/// Merges centerlines that share their start (VMTK: each polyline repeats the trunk with its own points)
+/// into a tree: points of two lines at the same index within `tolerance` mm are one point; where they
+/// part, the trunk ends in a junction. Consecutive points closer than 1e-3 mm are merged first. Throws
+/// InvalidInput naming the line and point for fewer than 2 points, non-finite points, radii <= 0 or NaN,
+/// a line whose start is farther than `tolerance` from line 0's start (branches that do not meet), and a
+/// line that comes back within `tolerance` of a point of its own branch path more than 2 radii behind
+/// (a loop).
+CenterlineTree merge_centerlines(const std::vector<Centerline>& lines, double tolerance = 0.05);
+
+/// A tree from NumPy-style arrays: atoms (#n x 3, mm), parent index of every atom (-1 for the root atom
+/// 0 only; parent < index) and radii (#n, mm). Runs of atoms form branches; an atom with several children
+/// is a junction. Throws InvalidInput naming the atom for bad parents or radii.
+CenterlineTree tree_from_parents(const MatX3& atoms, const std::vector<Index>& parent, const VecX& radii);
+
+struct SmrmTreeSettings {
+  SmrmSettings vessel{};  // chain, bending, wall, spokes, frames; vessel.atoms = atoms on the longest
+                          // root-to-leaf path (sets the spacing of every branch)
+};
+
+class SmrmTree final : public Body {
+ public:
+  /// Resamples every branch at the common spacing (>= 3 atoms per branch), shares the junction atoms,
+  /// fixes the root's first atom and every leaf's last atom. Throws InvalidInput naming the branch.
+  explicit SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings = {});
+
+  std::string kind() const override { return "smrm_tree"; }
+  const Model& model() const override { return model_; }
+  const MatX3i& faces() const override { return faces_; }
+  const MatX3& rest_surface() const override { return rest_surface_; }
+  void map_to_surface(const State& state, MatX3& surface) const override;
+  /// The node's branch atom receives F (D-14); nothing for a fixed atom.
+  void transfer_force(Index node, const Vec3& F, MatX3& f_dof) const override;
+  double local_stiffness() const override { return settings_.vessel.k_loc; }
+  double spoke_length(Index node) const override;
+
+  Index num_branches() const { return static_cast<Index>(branches_.size()); }
+  Index num_junctions() const { return junctions_; }
+  Index num_atoms() const { return model_.num_nodes(); }
+  Index parent(Index branch) const { return parent_[static_cast<std::size_t>(branch)]; }
+  /// The tree atoms of a branch in order (the first is the parent's last for a child).
+  const std::vector<Index>& branch_atoms(Index branch) const {
+    return atoms_[static_cast<std::size_t>(branch)];
+  }
+  const SmrmVessel& branch_vessel(Index branch) const { return *branches_[static_cast<std::size_t>(branch)]; }
+  /// The surface nodes of a branch are [node_begin(b), node_begin(b + 1)).
+  Index node_begin(Index branch) const { return node_begin_[static_cast<std::size_t>(branch)]; }
+  Index node_branch(Index node) const;
+  Index node_atom(Index node) const;  // the tree atom a surface node rides on
+
+  struct Workspace {
+    std::vector<MatX3> atoms, surface;
+    std::vector<SmrmVessel::Workspace> vessel;
+  };
+  Workspace make_workspace() const;
+  /// Surface (#S x 3) of tree atoms (#n x 3); no allocation once `surface` has its size.
+  void map_to_surface(const MatX3& atoms, Workspace& ws, MatX3& surface) const;
+
+ private:
+  SmrmTreeSettings settings_;
+  std::vector<std::shared_ptr<const SmrmVessel>> branches_;
+  std::vector<std::vector<Index>> atoms_;
+  std::vector<Index> parent_;
+  std::vector<Index> node_begin_;
+  Index junctions_ = 0;
+  Model model_;
+  MatX3 rest_surface_;
+  MatX3i faces_;
+};
+
+}  // namespace medspring

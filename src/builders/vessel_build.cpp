@@ -1,0 +1,224 @@
+#include "medspring/builders/vessel_build.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "medspring/builders/centerline_build.hpp"
+#include "medspring/core/check.hpp"
+#include "medspring/io/centerline_io.hpp"
+#include "medspring/io/mesh_io.hpp"
+#include "medspring/meshing/surface_distance.hpp"
+#include "medspring/models/model_package.hpp"
+#include "medspring/physics/stability.hpp"
+#include "medspring/physics/state.hpp"
+
+namespace medspring {
+
+namespace {
+
+// The summary of a tree build (centerline input, every branch).
+VesselBuild finish_tree(std::shared_ptr<SmrmTree> tree, VesselSummary s,
+                        std::chrono::steady_clock::time_point t0) {
+  VesselBuild out;
+  const SmrmTree& t = *tree;
+  s.atoms = t.num_atoms();
+  s.branches = t.num_branches();
+  s.junctions = t.num_junctions();
+  s.surface_nodes = t.num_surface_nodes();
+  s.faces = static_cast<Index>(t.faces().rows());
+  s.spokes = t.branch_vessel(0).grid().spokes;
+  s.radius_min_mm = std::numeric_limits<double>::infinity();
+  s.radius_max_mm = 0.0;
+  for (Index b = 0; b < t.num_branches(); ++b) {
+    const SmrmVessel& v = t.branch_vessel(b);
+    const MatX3& C = v.rest_atoms();
+    for (Index i = 1; i < C.rows(); ++i) s.length_mm += (C.row(i) - C.row(i - 1)).norm();
+    s.radius_min_mm = std::min(s.radius_min_mm, v.atom_radius().minCoeff());
+    s.radius_max_mm = std::max(s.radius_max_mm, v.atom_radius().maxCoeff());
+    s.max_rho_kappa = std::max(s.max_rho_kappa, v.report().curvature.max_rho_kappa);
+    Centerline c;
+    c.name = cat("branch ", b);
+    c.points = C;
+    c.radii = v.atom_radius();
+    out.centerlines.push_back(std::move(c));
+  }
+  {
+    State st = make_state(t.model());
+    MatX3 S;
+    t.map_to_surface(st, S);
+    s.rest_error_mm = (S - t.rest_surface()).rowwise().norm().maxCoeff();
+  }
+  const VecX& kb = t.model().bending.kb;
+  if (kb.size() > 0) {
+    s.kb_min = kb.minCoeff();
+    s.kb_max = kb.maxCoeff();
+  }
+  s.dt_safe_ms = dt_safe(t.model(), 1.0);
+  s.notes.push_back(
+      cat(s.input_branches, " polylines merged into ", s.branches, " branches at ", s.junctions,
+          " junctions (shared junction atoms); one tube per branch, not one watertight surface"));
+  out.tree = std::move(tree);
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.summary = std::move(s);
+  return out;
+}
+
+}  // namespace
+
+VesselBuild build_vessel(const VesselBuildSettings& st) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  const bool has_line = !st.centerline.empty();
+  const bool has_organ = !st.source.mesh.empty() || !st.source.mask.empty();
+  require(has_line != has_organ, "vessel: give exactly one of a centerline, a mesh and a segmentation");
+  require(!st.all_branches || has_line, "vessel: all branches (a tree) need a centerline file");
+  require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");
+  require(st.smrm.spokes >= 3, "vessel: spokes must be >= 3 (got ", st.smrm.spokes, ")");
+  VesselBuild out;
+  VesselSummary& s = out.summary;
+  std::shared_ptr<SmrmVessel> vessel;
+  if (has_line) {
+    const std::vector<Centerline> lines = read_centerlines(st.centerline, st.centerline_unit);
+    s.input = st.centerline.filename().string();
+    s.input_kind = "centerline";
+    s.input_branches = static_cast<Index>(lines.size());
+    std::size_t k = 0;
+    if (st.all_branches) {
+      require(st.branch < 0, "vessel: give a branch or all branches, not both");
+      SmrmTreeSettings ts;
+      ts.vessel = st.smrm;
+      auto tree = std::make_shared<SmrmTree>(merge_centerlines(lines, st.merge_tolerance), ts);
+      return finish_tree(std::move(tree), s, t0);
+    }
+    if (st.branch < 0) {
+      const Centerline& longest = longest_centerline(lines);
+      k = static_cast<std::size_t>(&longest - lines.data());
+    } else {
+      require(st.branch < s.input_branches, s.input, ": branch ", st.branch, " does not exist (the file has ",
+              s.input_branches, " polylines, 0..", s.input_branches - 1, ")");
+      k = static_cast<std::size_t>(st.branch);
+    }
+    s.branch = static_cast<Index>(k);
+    Centerline line = lines[k];
+    line.name = cat(s.input, " branch ", k);
+    require(line.size() >= 2, s.input, ": branch ", k, " has ", line.size(),
+            " point(s); a vessel needs at least 2");
+    vessel = std::make_shared<SmrmVessel>(smrm_from_centerline(line, st.smrm));
+    if (s.input_branches > 1)
+      s.notes.push_back(cat("the file has ", s.input_branches, " polylines; branch ", k,
+                            st.branch < 0 ? " (the longest)" : "", " was used"));
+  } else {
+    if (!st.source.mask.empty()) {  // a vessel (tree) is one component: refuse, naming the count
+      const LoadedOrgan organ = load_organ(st.source, {.surface = false});
+      if (organ.components > 1)
+        throw InvalidInput(cat(organ.name, ": label ", organ.label, " has ", organ.components,
+                               " separate components (26-connected); a vessel must be one component (",
+                               organ.notes.empty() ? std::string() : organ.notes.front(), ")"));
+    }
+    CenterlineBuildSettings cs;
+    cs.source = st.source;
+    cs.atoms = st.smrm.atoms;
+    const CenterlineBuild c = build_centerline(cs);
+    s.input = c.summary.input;
+    s.input_kind = c.summary.input_kind;
+    s.notes = c.summary.notes;
+    s.warnings = c.summary.warnings;
+    Centerline line = c.centerline();
+    line.name = s.input;
+    require(c.surface.num_faces() > 0, s.input, ": no boundary surface to march the spokes to");
+    vessel = std::make_shared<SmrmVessel>(smrm_from_marched_spokes(line, c.surface, st.smrm));
+    out.input = c.surface;
+  }
+  const SmrmVessel& v = *vessel;
+  s.atoms = v.num_atoms();
+  s.surface_nodes = static_cast<Index>(v.rest_surface().rows());
+  s.faces = static_cast<Index>(v.faces().rows());
+  s.spokes = v.grid().valid() ? v.grid().spokes : 0;
+  const MatX3& C = v.rest_atoms();
+  for (Index i = 1; i < s.atoms; ++i) s.length_mm += (C.row(i) - C.row(i - 1)).norm();
+  s.radius_min_mm = v.atom_radius().minCoeff();
+  s.radius_max_mm = v.atom_radius().maxCoeff();
+  {
+    SmrmVessel::Workspace ws = v.make_workspace();
+    MatX3 S;
+    v.map_to_surface(C, ws, S);
+    s.rest_error_mm = (S - v.rest_surface()).rowwise().norm().maxCoeff();
+  }
+  const VecX& kb = v.bending_stiffness();
+  if (s.atoms > 2) {
+    s.kb_min = kb.segment(1, s.atoms - 2).minCoeff();
+    s.kb_max = kb.segment(1, s.atoms - 2).maxCoeff();
+  }
+  s.max_rho_kappa = v.report().curvature.max_rho_kappa;
+  s.dt_safe_ms = dt_safe(v.model(), 1.0);
+  s.spokes_without_hit = v.report().spokes_without_hit;
+  for (const auto& n : v.report().notes) s.notes.push_back(n);
+  if (out.input.num_faces() > 0) {
+    const SurfaceDistance d = surface_distance(SurfaceMesh{v.rest_surface(), v.faces()}, out.input);
+    s.has_distance = true;
+    s.hausdorff_mm = d.hausdorff;
+    s.mean_distance_mm = d.mean;
+    const VecX dn = distances_to_surface(v.rest_surface(), out.input);
+    s.to_input_max_mm = dn.maxCoeff();
+    s.to_input_mean_mm = dn.mean();
+  }
+  Centerline atoms_line;
+  atoms_line.name = v.name();
+  atoms_line.points = C;
+  atoms_line.radii = v.atom_radius();
+  out.centerlines.push_back(std::move(atoms_line));
+  out.vessel = std::move(vessel);
+  s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return out;
+}
+
+std::string VesselSummary::text() const {
+  std::string t = cat("vessel from ", input_kind, " ", input, "\n");
+  t += cat("  atoms: ", atoms, ", branches: ", branches, ", junctions: ", junctions,
+           ", surface nodes: ", surface_nodes, " (", spokes, " spokes per atom, ", faces, " triangles)\n");
+  t += cat("  length ", length_mm, " mm, radii ", radius_min_mm, "..", radius_max_mm, " mm\n");
+  t += cat("  rest reconstruction error: ", rest_error_mm, " mm\n");
+  t += cat("  bending k_b ", kb_min, "..", kb_max, " N/mm, max rho kappa at rest ", max_rho_kappa,
+           ", stable step at rest ", dt_safe_ms, " ms\n");
+  if (has_distance)
+    t += cat("  rebuilt surface vs input: Hausdorff ", hausdorff_mm, " mm, mean distance ", mean_distance_mm,
+             " mm (both count the input's end caps, which the open tube lacks); surface nodes to the input: "
+             "max ",
+             to_input_max_mm, " mm, mean ", to_input_mean_mm, " mm\n");
+  t += cat("  built in ", seconds, " s\n");
+  for (const auto& n : notes) t += cat("  note: ", n, "\n");
+  for (const auto& w : warnings) t += cat("  warning: ", w, "\n");
+  return t;
+}
+
+void write_vessel_files(const std::filesystem::path& dir, const VesselBuild& build) {
+  require(build.vessel != nullptr || build.tree != nullptr, "write_vessel_files: the build holds no vessel");
+  const Body& body = build.vessel ? static_cast<const Body&>(*build.vessel) : *build.tree;
+  const MatX3& S = body.rest_surface();
+  const MatX3& X = body.model().x0;
+  const Index ns = static_cast<Index>(S.rows()), na = static_cast<Index>(X.rows());
+  VecX atom(ns), branch = VecX::Zero(ns);
+  for (Index k = 0; k < ns; ++k) {
+    atom[k] = static_cast<double>(build.vessel ? build.vessel->node_atom(k) : build.tree->node_atom(k));
+    if (build.tree) branch[k] = static_cast<double>(build.tree->node_branch(k));
+  }
+  write_vtp(dir / "surface.vtp", SurfaceMesh{S, body.faces()}, {{"atom", atom}, {"branch", branch}});
+  write_centerlines(dir / "atoms.vtp", build.centerlines);
+  MatX3 P(ns + na, 3);
+  P.topRows(ns) = S;
+  P.bottomRows(na) = X;
+  MatX2i seg(ns, 2);
+  for (Index k = 0; k < ns; ++k) seg.row(k) << ns + static_cast<Index>(atom[k]), k;
+  VecX is_atom = VecX::Zero(ns + na);
+  is_atom.tail(na).setOnes();
+  write_segments_vtp(dir / "spokes.vtp", P, seg, {{"atom", is_atom}});
+  if (build.vessel)
+    save_model_package(dir / "vessel.msm",
+                       package_of(*build.vessel, build.vessel->name(),
+                                  cat("SMRM vessel from ", build.summary.input_kind, " ", build.summary.input,
+                                      ", ", na, " atoms x ", build.summary.spokes, " spokes")));
+}
+
+}  // namespace medspring
