@@ -96,7 +96,8 @@ std::string write_inp(const FemProblem& p, const FemSettings& s) {
     for (Index v : p.fixed) o << v + 1 << ", 1, 3\n";
   }
   const int inc = std::max(1, s.increments);
-  o << "*STEP, NLGEOM, INC=1000\n*STATIC\n" << 1.0 / inc << ", 1.0, 1e-6, " << 1.0 / inc << '\n';
+  // initial increment 1 / increments; CalculiX grows it when iterations converge quickly
+  o << "*STEP, NLGEOM, INC=1000\n*STATIC\n" << 1.0 / inc << ", 1.0, 1e-6, 1.0\n";
   if (!p.constraints.empty()) {
     o << "*BOUNDARY\n";
     for (const auto& c : p.constraints)

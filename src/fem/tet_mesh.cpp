@@ -131,8 +131,8 @@ TetMesh tet_mesh_from_surface(const SurfaceMesh& surface, const TetgenSettings& 
         cat("tet mesh: surface: normals point inwards (signed volume ", rep.signed_volume, " mm^3)"));
   require(std::isfinite(settings.max_volume) && settings.max_volume >= 0,
           "tet mesh: max_volume must be >= 0");
-  require(std::isfinite(settings.radius_edge) && settings.radius_edge >= 1.0,
-          "tet mesh: radius_edge must be >= 1");
+  require(settings.radius_edge == 0 || (std::isfinite(settings.radius_edge) && settings.radius_edge >= 1.0),
+          "tet mesh: radius_edge must be 0 (no quality bound) or >= 1");
   const fs::path exe = settings.executable.empty() ? detail::find_tool("tetgen", "MEDSPRING_TETGEN",
                                                                        "install the Debian package tetgen")
                                                    : fs::path(settings.executable);
@@ -150,7 +150,8 @@ TetMesh tet_mesh_from_surface(const SurfaceMesh& surface, const TetgenSettings& 
     if (!out) throw IoError(cat("cannot write ", (dir.path() / "input.smesh").string()));
   }
   std::ostringstream sw;
-  sw << "-pq" << settings.radius_edge;
+  sw << "-p";
+  if (settings.radius_edge > 0) sw << "q" << settings.radius_edge;
   if (settings.max_volume > 0) sw << "a" << settings.max_volume;
   sw << "Q input.smesh";
   const int rc = detail::run_in(dir.path(), exe, sw.str(), "tetgen.log");

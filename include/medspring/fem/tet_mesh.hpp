@@ -41,7 +41,7 @@ std::vector<double> graded(double a, double b, int n, double grading = 1.0);
 /// Settings of surface meshing with TetGen.
 struct TetgenSettings {
   double max_volume = 0.0;      // mm^3, 0 = no volume constraint (-a)
-  double radius_edge = 1.6;     // quality bound (-q)
+  double radius_edge = 1.6;     // quality bound (-q); 0 = none (fewest elements)
   std::string executable = "";  // default: $MEDSPRING_TETGEN, then `tetgen` on PATH
 };
 
