@@ -59,6 +59,10 @@ void bind_exceptions(py::module_& m) {
 }
 
 }  // namespace
+
+#ifdef MEDSPRING_PYTHON_WITH_FEM
+void bind_fem(py::module_& m);  // bind_fem.cpp
+#endif
 }  // namespace medspring::python
 
 PYBIND11_MODULE(_medspring, m) {
@@ -79,5 +83,11 @@ PYBIND11_MODULE(_medspring, m) {
   m.attr("has_io") = true;
 #else
   m.attr("has_io") = false;
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_FEM
+  bind_fem(m);
+  m.attr("has_fem") = true;
+#else
+  m.attr("has_fem") = false;
 #endif
 }
