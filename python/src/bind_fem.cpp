@@ -5,6 +5,7 @@
 #include "bind_common.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/physics/loads.hpp"
 
 namespace medspring::python {
 
@@ -85,7 +86,7 @@ void bind_fem(py::module_& m) {
         s.F = faces_arg(faces, "faces", s.num_vertices());
         const MatX3 A = points_arg(atoms, "atoms", -1, "A");
         const MatX3 C = points_arg(centres, "centres", -1, "L");
-        const MatX3 Fs = points_arg(forces, "forces", C.rows(), "L");
+        const MatX3 Fs = points_arg(forces, "forces", static_cast<Index>(C.rows()), "L");
         const fem::SupportRule rule = support_rule(support_direction, support_depth);
         VecX mult;
         std::vector<fem::CalibrationCase> training;
