@@ -348,7 +348,7 @@ std::string markdown(const json& j) {
        << " pinned surface nodes.\n";
     if (o["fem"].contains("convergence")) {
       const auto& c = o["fem"]["convergence"];
-      md << "Mesh convergence of the reference (site 0, largest force): contact displacement "
+      md << "Mesh convergence of the reference (site 0, 0.2 N): contact displacement "
          << c["contact_mm_level"].get<double>() << " mm -> " << c["contact_mm"].get<double>()
          << " mm at level " << c["level"] << " (" << c["nodes"] << " nodes): change "
          << pct(100 * c["rel_change"].get<double>()) << " % (target < 2 %).\n";
