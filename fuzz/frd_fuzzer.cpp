@@ -1,6 +1,7 @@
 // Fuzz target: parse_frd (fem/frd.hpp), the reader of CalculiX result files. Accepted: IoError. A result
 // must have unique positive node ids, finite coordinates and one finite displacement per node in every
 // DISP block; last_displacement must then either succeed with finite values or throw IoError.
+#include <cmath>
 #include <set>
 #include <string_view>
 
