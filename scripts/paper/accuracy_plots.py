@@ -14,26 +14,24 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 
 def speed_accuracy(acc, out):
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    markers = {"surface": "o", "hybrid": "s"}
+    fig, ax = plt.subplots(figsize=(8, 5))
     kinds = sorted({r["kind"] for o in acc["organs"] for r in o["models"]})
     colour = {k: "C%d" % (i % 10) for i, k in enumerate(kinds)}
-    for organ in acc["organs"]:
+    organ_marker = {}
+    for i, organ in enumerate(acc["organs"]):
+        organ_marker[organ["organ"]] = "os^D"[i % 4]
         for r in organ["models"]:
-            x = r["update_us"]
-            y = r["held_out_mean_rms_pct"]
-            face = "none" if not r["calibrated"] else None
-            ax.scatter([x], [y], marker=markers.get(r["base"], "^"), facecolors=face,
-                       edgecolors=colour[r["kind"]], color=colour[r["kind"]])
-            ax.annotate(("%s, %s" % (r["kind"], "cal." if r["calibrated"] else "def."))
-                        + ("" if len(acc["organs"]) == 1 else " [%s]" % organ["organ"]),
-                        (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
+            ax.scatter([r["update_us"]], [r["held_out_mean_rms_pct"]], marker=organ_marker[organ["organ"]], s=40,
+                       facecolors=colour[r["kind"]] if r["calibrated"] else "none", edgecolors=colour[r["kind"]])
         fem_us = organ["fem"]["median_solve_s"] * 1e6
         ax.axvline(fem_us, color="k", ls="--", lw=0.8)
-        ax.text(fem_us, ax.get_ylim()[1] * 0.9 if ax.get_ylim()[1] > 0 else 1, " FEM solve\n (%s)" % organ["organ"],
-                fontsize=7, va="top")
+        ax.annotate("FEM solve\n%s" % organ["organ"], (fem_us, 0.02 + 0.12 * i), xycoords=("data", "axes fraction"),
+                    fontsize=7, ha="right")
+    handles = [plt.Line2D([], [], color=colour[k], marker="o", ls="", label=k) for k in kinds]
+    handles += [plt.Line2D([], [], color="k", marker=m, ls="", mfc="none", label=o) for o, m in organ_marker.items()]
+    ax.legend(handles=handles, fontsize=7, loc="upper center", ncol=2)
     ax.set_xscale("log")
-    ax.set_xlabel("time per update (us, median; FEM: one CalculiX static solve)")
+    ax.set_xlabel("time per update (us, median; dashed: one CalculiX static solve)")
     ax.set_ylabel("RMS surface error, % of FEM contact displacement\n(mean over held-out cases)")
     ax.set_title("Speed against accuracy (open: default parameters, filled: calibrated)")
     ax.grid(True, which="both", alpha=0.3)
