@@ -176,6 +176,31 @@ const std::vector<Command>& commands() {
        "Runs the Python package medspring.study (python3 -m medspring.study takes the same arguments).\n",
        {"resume", "yes", "quiet", "no-report"},
        cmd_study},
+      {"accuracy",
+       "usage: medspring accuracy --out DIR [--force] [--quick] [--quiet] [--json] [--E-kPa 10] [--nu 0.45]\n"
+       "                          [--radius 8] [--level 1] [--scenes DIR]\n\n"
+       "Measures the spring models against an independent FEM reference (CalculiX, compressible Neo-Hookean,\n"
+       "NLGEOM; docs/accuracy.md): first the FEM pipeline against closed forms (uniaxial stretch, cantilever,\n"
+       "Boussinesq) at three refinements, then the kidney phantom and the real kidney under contact-disk loads\n"
+       "of 0.2 / 0.5 / 1.0 N at 4 sites, support opposite the load: contact, RMS and max surface error of the\n"
+       "surface and hybrid models (linear, Duffing, + local), default and calibrated (fitted on two sites at\n"
+       "0.5 N, errors reported on every other case). Writes DIR/accuracy.md, accuracy.json, error_maps.json\n"
+       "and figures/*.png (matplotlib). Needs ccx (calculix-ccx) and tetgen; FEM results are cached\n"
+       "($MEDSPRING_FEM_CACHE, default ~/.cache/medspring/fem).\n"
+       "  --quick        phantom only, 2 sites, 0.5 N, coarse validation (a smoke test)\n"
+       "  --E-kPa, --nu  the tissue (Young's modulus in kPa, Poisson ratio < 0.5)\n"
+       "  --radius       contact disk radius a, mm\n"
+       "  --level        FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)\n",
+       {"json", "force", "quick", "quiet"},
+       cmd_accuracy},
+      {"calibrate",
+       "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface] [--linear] [--E-kPa 10]\n"
+       "                           [--nu 0.45] [--radius 8] [--json] [--quiet]\n\n"
+       "Fits the stiffness of each spring family (surface: k, k_r; hybrid: k_surf, k_spoke, k_cl, k_r; k_loc =\n"
+       "k_surf) to the CalculiX FEM response of a tissue (E, nu) on training loads (two sites at 0.5 N), and\n"
+       "reports the error on the held-out loads and sites (docs/accuracy.md). Prints the parameters in N/mm.\n",
+       {"json", "quiet", "linear"},
+       cmd_calibrate},
   };
   return list;
 }
@@ -187,6 +212,8 @@ void extra_usage(std::ostream& os) {
   os << "  build    build a model from real anatomy: build kidney | centerline | vessel (--help)\n";
   os << "  study    parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md\n";
   os << "  run      run a scene file (docs/scenes.md): ParaView series, traces, summary\n";
+  os << "  accuracy spring models against a CalculiX FEM reference: tables, error maps, calibration\n";
+  os << "  calibrate fit spring stiffnesses to a tissue (E, nu) on FEM responses; held-out errors\n";
   os << "  paper    reproduce the paper: Fig. 9, Fig. 10 A-F, Tables I-II -> report.md, figures, "
         "tables.json\n";
 }

@@ -31,5 +31,7 @@ int cmd_haptics(const Args& args);  // cmd_haptics.cpp
 int cmd_export(const Args& args);   // cmd_export.cpp
 int cmd_view(const Args& args);     // cmd_view.cpp
 int cmd_study(const Args& args);    // cmd_study.cpp
+int cmd_accuracy(const Args& args);
+int cmd_calibrate(const Args& args);
 
 }  // namespace medspring::cli

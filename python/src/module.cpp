@@ -62,6 +62,10 @@ void bind_exceptions(py::module_& m) {
 #ifdef MEDSPRING_PYTHON_WITH_SCENE
 void bind_scene(py::module_& m);  // bind_scene.cpp
 #endif
+
+#ifdef MEDSPRING_PYTHON_WITH_FEM
+void bind_fem(py::module_& m);  // bind_fem.cpp
+#endif
 }  // namespace medspring::python
 
 PYBIND11_MODULE(_medspring, m) {
@@ -88,5 +92,11 @@ PYBIND11_MODULE(_medspring, m) {
   m.attr("has_scene") = true;
 #else
   m.attr("has_scene") = false;
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_FEM
+  bind_fem(m);
+  m.attr("has_fem") = true;
+#else
+  m.attr("has_fem") = false;
 #endif
 }

@@ -1,0 +1,102 @@
+// The FEM reference of an organ and the spring models under the same supports and loads
+// (docs/accuracy.md). Used by `medspring accuracy` / `medspring calibrate` and the Python module.
+//
+//   fem::OrganReference ref(surface, fem::Material::from_kpa(10, 0.45), support, {.max_volume = 400});
+//   fem::ContactLoad load{centre, Vec3(0, 0, -0.5), 8.0};
+//   MatX3 u_fem = ref.surface_displacement(load);                 // at the surface nodes, mm
+//   MatX3 u_spring = fem::spring_displacement(*body, load);       // static equilibrium, mm
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "medspring/fem/calculix.hpp"
+#include "medspring/fem/matching.hpp"
+#include "medspring/models/body.hpp"
+
+namespace medspring::fem {
+
+/// A load spread uniformly over the contact disk |x - centre| < radius of the surface (same total force
+/// and distribution on the FEM boundary and on the spring model's surface).
+struct ContactLoad {
+  Vec3 centre = Vec3::Zero();  // on the surface, mm
+  Vec3 force = Vec3::Zero();   // total force, N
+  double radius = 8.0;         // contact disk radius a, mm
+};
+
+/// The support region by rule: the surface points within `depth` mm of the extreme point along
+/// `direction` (e.g. the posterior-most point of a kidney lying on the abdominal wall).
+struct SupportRule {
+  Vec3 direction = Vec3(0, 0, -1);
+  double depth = 5.0;  // mm
+};
+
+struct OrganMeshSettings {
+  int subdivisions = 0;      // midpoint subdivisions of the surface before meshing (refinement levels
+                             // 1, 2, 3 = 0, 1, 2): the same polyhedron, 4x the faces each time
+  double max_volume = 0.0;   // TetGen volume bound, mm^3 (0: none)
+  double radius_edge = 0.0;  // TetGen quality bound (0: none, the fewest elements)
+  FemSettings solver{};
+};
+
+class OrganReference {
+ public:
+  /// Meshes the closed surface (refused when open, before meshing), fixes the FEM boundary nodes the
+  /// support rule picks, and locates the surface nodes on the FEM boundary.
+  OrganReference(const SurfaceMesh& surface, const Material& material, const SupportRule& support,
+                 const OrganMeshSettings& settings = {});
+  /// FEM displacement (#S x 3, mm) of the surface nodes under `load` (cached by CalculiX input).
+  MatX3 surface_displacement(const ContactLoad& load, double* solve_seconds = nullptr,
+                             bool* from_cache = nullptr) const;
+  const TetMesh& mesh() const { return problem_.mesh; }
+  const std::vector<Index>& fixed_fem_nodes() const { return problem_.fixed; }
+  const Material& material() const { return problem_.material; }
+
+ private:
+  FemProblem problem_;
+  MatX6i boundary_;
+  BoundarySample sample_;
+  OrganMeshSettings settings_;
+};
+
+/// The surface with every triangle split into 4 at its edge midpoints (the same polyhedron).
+SurfaceMesh subdivide_midpoint(const SurfaceMesh& surface);
+
+/// Surface nodes of `surface` picked by the rule (the spring model's pinned nodes).
+std::vector<Index> support_nodes(const MatX3& surface, const SupportRule& rule);
+
+/// Static equilibrium of a spring model (built with the support nodes pinned) under the disk load, as
+/// displacement of its surface nodes (#S x 3, mm). The disk load becomes nodal forces on the surface
+/// (disk_load_linear) that travel the body's force map. Throws SolverError when there is no equilibrium.
+MatX3 spring_displacement(const Body& body, const ContactLoad& load);
+
+/// The same plus the local-deformation overlay (§6, eq. 6) of the whole contact force on the surface
+/// node nearest the disk centre (BFS patch of 25 nodes; k_loc = body.local_stiffness() when k_loc <= 0).
+MatX3 spring_displacement_local(const Body& body, const ContactLoad& load, double k_loc = 0.0);
+
+/// Errors of a spring displacement against the FEM one, over the surface nodes.
+struct SurfaceError {
+  double contact_fem = 0, contact_model = 0;  // |u| at the contact node, mm
+  double contact_error = 0;                   // |u_model - u_fem| at the contact node, mm
+  double rms = 0, max = 0;                    // over all surface nodes, mm
+  double rel(double v) const { return contact_fem > 0 ? v / contact_fem : 0.0; }
+};
+SurfaceError compare(const MatX3& u_model, const MatX3& u_fem, Index contact);
+
+/// Calibration (docs/accuracy.md): multipliers m (one per stiffness family of the model) fitted in log
+/// space by coordinate descent (golden section per family over [1e-3, 1e3], then a second sweep within
+/// a factor 10) to minimise, over the training loads, the mean squared surface error plus the squared
+/// contact-node error, both relative to the largest FEM displacement of the load. response(m, load) is
+/// the model's surface displacement (#S x 3) with its families scaled by m; a SolverError counts as an
+/// infinite cost. Returns the multipliers.
+struct CalibrationCase {
+  ContactLoad load;
+  MatX3 u_fem;        // FEM displacement of the surface nodes
+  Index contact = 0;  // surface node nearest the disk centre
+};
+using Response = std::function<MatX3(const VecX& multipliers, const ContactLoad& load)>;
+VecX calibrate_multipliers(const Response& response, Index families,
+                           const std::vector<CalibrationCase>& training, int sweeps = 2);
+
+}  // namespace medspring::fem

@@ -1,0 +1,137 @@
+// The FEM reference (docs/accuracy.md) from NumPy: medspring.fem_reference (CalculiX displacement of a
+// closed surface under a contact-disk load, at its vertices) and medspring.calibrate (hybrid-model
+// stiffnesses fitted to that reference). Needs ccx (calculix-ccx) and tetgen; the GIL is released while
+// they run.
+#include "bind_common.hpp"
+#include "medspring/fem/organ.hpp"
+#include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/physics/loads.hpp"
+
+namespace medspring::python {
+
+using namespace pybind11::literals;
+
+namespace {
+
+fem::SupportRule support_rule(py::handle direction, double depth) {
+  return {vec3_arg(direction, "support_direction"), depth};
+}
+
+}  // namespace
+
+void bind_fem(py::module_& m) {
+  m.def(
+      "fem_reference",
+      [](py::handle vertices, py::handle faces, py::handle centre, py::handle force, double E_kPa, double nu,
+         double radius, py::handle support_direction, double support_depth, int level) {
+        SurfaceMesh s;
+        s.V = points_arg(vertices, "vertices", -1, "V");
+        s.F = faces_arg(faces, "faces", s.num_vertices());
+        const fem::ContactLoad load{vec3_arg(centre, "centre"), vec3_arg(force, "force"), radius};
+        const fem::SupportRule rule = support_rule(support_direction, support_depth);
+        if (level < 1 || level > 3) throw InvalidInput("fem_reference: level must be 1, 2 or 3");
+        MatX3 u;
+        double secs = 0;
+        Index nodes = 0, elements = 0, fixed = 0;
+        {
+          py::gil_scoped_release release;
+          fem::OrganMeshSettings ms;
+          ms.subdivisions = level - 1;
+          const fem::OrganReference ref(s, fem::Material::from_kpa(E_kPa, nu), rule, ms);
+          u = ref.surface_displacement(load, &secs);
+          nodes = ref.mesh().num_nodes();
+          elements = ref.mesh().num_elements();
+          fixed = static_cast<Index>(ref.fixed_fem_nodes().size());
+        }
+        py::dict out;
+        out["displacement"] = py::array_t<double>({u.rows(), Eigen::Index(3)}, u.data());
+        out["solve_seconds"] = secs;
+        out["fem_nodes"] = nodes;
+        out["fem_elements"] = elements;
+        out["fixed_fem_nodes"] = fixed;
+        return out;
+      },
+      "vertices"_a, "faces"_a, "centre"_a, "force"_a, "E_kPa"_a = 10.0, "nu"_a = 0.45, "radius"_a = 8.0,
+      "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0), "support_depth"_a = 5.0, "level"_a = 1,
+      "FEM displacement (V, 3) in mm of the vertices of a closed surface (mm) under a force (N) spread\n"
+      "uniformly over the contact disk |x - centre| < radius (mm), with the surface points within\n"
+      "support_depth mm of the extreme point along support_direction fixed. Compressible Neo-Hookean\n"
+      "(E in kPa, nu < 0.5), quadratic tetrahedra from TetGen (level 1: the surface as given; 2, 3:\n"
+      "subdivided), CalculiX NLGEOM static solve, cached. Returns a dict: displacement, solve_seconds,\n"
+      "fem_nodes, fem_elements, fixed_fem_nodes. Raises IoError without ccx, SolverError when it fails.");
+
+  m.def(
+      "spring_displacement",
+      [](const Body& body, py::handle centre, py::handle force, double radius, bool local) {
+        const fem::ContactLoad load{vec3_arg(centre, "centre"), vec3_arg(force, "force"), radius};
+        MatX3 u;
+        {
+          py::gil_scoped_release release;
+          u = local ? fem::spring_displacement_local(body, load) : fem::spring_displacement(body, load);
+        }
+        return py::array_t<double>({u.rows(), Eigen::Index(3)}, u.data());
+      },
+      "body"_a, "centre"_a, "force"_a, "radius"_a = 8.0, "local"_a = false,
+      "Static displacement (S, 3) in mm of a body's surface nodes under a force (N) spread uniformly over\n"
+      "the contact disk |x - centre| < radius (mm), exactly as fem_reference loads the FEM (pin the support\n"
+      "nodes in the body's settings). local=True adds the local-deformation overlay of the contact node.");
+
+  m.def(
+      "calibrate",
+      [](py::handle vertices, py::handle faces, py::handle atoms, py::handle centres, py::handle forces,
+         double E_kPa, double nu, double radius, py::handle support_direction, double support_depth,
+         bool nonlinear) {
+        SurfaceMesh s;
+        s.V = points_arg(vertices, "vertices", -1, "V");
+        s.F = faces_arg(faces, "faces", s.num_vertices());
+        const MatX3 A = points_arg(atoms, "atoms", -1, "A");
+        const MatX3 C = points_arg(centres, "centres", -1, "L");
+        const MatX3 Fs = points_arg(forces, "forces", static_cast<Index>(C.rows()), "L");
+        const fem::SupportRule rule = support_rule(support_direction, support_depth);
+        VecX mult;
+        std::vector<fem::CalibrationCase> training;
+        {
+          py::gil_scoped_release release;
+          const fem::OrganReference ref(s, fem::Material::from_kpa(E_kPa, nu), rule);
+          for (Index i = 0; i < C.rows(); ++i) {
+            fem::CalibrationCase c;
+            c.load = {C.row(i).transpose(), Fs.row(i).transpose(), radius};
+            c.u_fem = ref.surface_displacement(c.load);
+            c.contact = nearest_node(s.V, c.load.centre);
+            training.push_back(std::move(c));
+          }
+          const std::vector<Index> support = fem::support_nodes(s.V, rule);
+          auto response = [&](const VecX& mm, const fem::ContactLoad& load) {
+            HybridSettings hs;
+            hs.k_surf *= mm(0);
+            hs.k_spoke *= mm(1);
+            hs.k_cl *= mm(2);
+            hs.surface_node.return_k *= mm(3);
+            hs.atom_node.return_k *= mm(3);
+            hs.nonlinear = nonlinear;
+            hs.fixed = support;
+            return fem::spring_displacement(HybridKidney(s, A, hs), load);
+          };
+          mult = fem::calibrate_multipliers(response, 4, training);
+        }
+        const HybridSettings d;
+        py::dict out;
+        out["k_surf"] = d.k_surf * mult(0);
+        out["k_spoke"] = d.k_spoke * mult(1);
+        out["k_cl"] = d.k_cl * mult(2);
+        out["k_r"] = d.surface_node.return_k * mult(3);
+        out["k_loc"] = d.k_surf * mult(0);
+        out["support"] = fem::support_nodes(s.V, rule);
+        return out;
+      },
+      "vertices"_a, "faces"_a, "atoms"_a, "centres"_a, "forces"_a, "E_kPa"_a = 10.0, "nu"_a = 0.45,
+      "radius"_a = 8.0, "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0), "support_depth"_a = 5.0,
+      "nonlinear"_a = true,
+      "Fits the hybrid model's stiffnesses (k_surf, k_spoke, k_cl, k_r; N/mm) on the surface (vertices,\n"
+      "faces; mm) with centerline atoms to the FEM response of a tissue (E in kPa, nu) on the training\n"
+      "loads: force rows (L, 3) in N over contact disks at centres (L, 3). The support rule pins the same\n"
+      "nodes in both (returned as 'support'). Returns a dict of the fitted parameters; evaluate them on\n"
+      "loads you did not train on (see examples/python/fit_kidney_to_tissue.py).");
+}
+
+}  // namespace medspring::python

@@ -1,0 +1,79 @@
+#!/usr/bin/env python3
+"""Figures of `medspring accuracy` (docs/accuracy.md): reads DIR/accuracy.json and DIR/error_maps.json and
+writes DIR/figures/speed_accuracy.png and DIR/figures/error_<organ>_<params>.png (matplotlib, Agg)."""
+import json
+import pathlib
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+
+
+def speed_accuracy(acc, out):
+    fig, ax = plt.subplots(figsize=(8, 5))
+    kinds = sorted({r["kind"] for o in acc["organs"] for r in o["models"]})
+    colour = {k: "C%d" % (i % 10) for i, k in enumerate(kinds)}
+    organ_marker = {}
+    for i, organ in enumerate(acc["organs"]):
+        organ_marker[organ["organ"]] = "os^D"[i % 4]
+        for r in organ["models"]:
+            ax.scatter([r["update_us"]], [r["held_out_mean_rms_pct"]], marker=organ_marker[organ["organ"]], s=40,
+                       facecolors=colour[r["kind"]] if r["calibrated"] else "none", edgecolors=colour[r["kind"]])
+        fem_us = organ["fem"]["median_solve_s"] * 1e6
+        ax.axvline(fem_us, color="k", ls="--", lw=0.8)
+        ax.annotate("FEM solve\n%s" % organ["organ"], (fem_us, 0.02 + 0.12 * i), xycoords=("data", "axes fraction"),
+                    fontsize=7, ha="right")
+    handles = [plt.Line2D([], [], color=colour[k], marker="o", ls="", label=k) for k in kinds]
+    handles += [plt.Line2D([], [], color="k", marker=m, ls="", mfc="none", label=o) for o, m in organ_marker.items()]
+    ax.legend(handles=handles, fontsize=7, loc="upper center", ncol=2)
+    ax.set_xscale("log")
+    ax.set_xlabel("time per update (us, median; dashed: one CalculiX static solve)")
+    ax.set_ylabel("RMS surface error, % of FEM contact displacement\n(mean over held-out cases)")
+    ax.set_title("Speed against accuracy (open: default parameters, filled: calibrated)")
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+
+
+def error_map(m, out):
+    V = np.array(m["V"]).reshape(-1, 3)
+    F = np.array(m["F"]).reshape(-1, 3)
+    e = np.array(m["error_mm"])
+    fig = plt.figure(figsize=(7, 5))
+    ax = fig.add_subplot(111, projection="3d")
+    face_err = e[F].mean(axis=1)
+    norm = plt.Normalize(0, max(face_err.max(), 1e-9))
+    cmap = plt.get_cmap("viridis")
+    poly = Poly3DCollection(V[F], facecolors=cmap(norm(face_err)), edgecolors="none")
+    ax.add_collection3d(poly)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    c, r = (lo + hi) / 2, (hi - lo).max() / 2
+    ax.set_xlim(c[0] - r, c[0] + r)
+    ax.set_ylim(c[1] - r, c[1] + r)
+    ax.set_zlim(c[2] - r, c[2] + r)
+    ax.view_init(elev=35, azim=-60)
+    sm = plt.cm.ScalarMappable(cmap=cmap, norm=norm)
+    fig.colorbar(sm, ax=ax, shrink=0.7, label="|u_model - u_FEM| (mm)")
+    ax.set_title(m["title"], fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+
+
+def main():
+    d = pathlib.Path(sys.argv[1])
+    acc = json.loads((d / "accuracy.json").read_text())
+    maps = json.loads((d / "error_maps.json").read_text())
+    (d / "figures").mkdir(exist_ok=True)
+    speed_accuracy(acc, d / "figures" / "speed_accuracy.png")
+    for name, m in maps.items():
+        error_map(m, d / "figures" / ("error_" + name.replace(" ", "_") + ".png"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,80 @@
+// `medspring accuracy --quick` end to end (docs/accuracy.md): the FEM validation at level 1, the kidney
+// phantom against CalculiX at two sites, calibration, the report, JSON and figures; bad input refused.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+int run(const std::string& args, std::string* err = nullptr) {
+  const fs::path dir = medspring::testing::temp_dir("accuracy-cli-io");
+  // a private FEM cache: the test solves with CalculiX and leaves the user's cache alone
+  const std::string cmd = "MEDSPRING_FEM_CACHE='" + (dir / "fem-cache").string() + "' '" +
+                          std::string(MEDSPRING_EXE) + "' " + args + " > '" + (dir / "out").string() +
+                          "' 2> '" + (dir / "err").string() + "'";
+  const int status = std::system(cmd.c_str());
+  if (err) {
+    std::ifstream in(dir / "err");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    *err = ss.str();
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
+  const fs::path out = medspring::testing::temp_dir("accuracy-quick") / "acc";
+  ASSERT_EQ(run("accuracy --quick --quiet --out '" + out.string() + "'", nullptr), 0);
+  for (const char* f : {"accuracy.md", "accuracy.json", "figures/speed_accuracy.png"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  std::ifstream in(out / "accuracy.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  for (const auto& v : j["validation"]) EXPECT_LT(v["rel_error"].get<double>(), 0.05) << v.dump();
+  ASSERT_EQ(j["organs"].size(), 1u);
+  const auto& o = j["organs"][0];
+  EXPECT_GT(o["fem"]["nodes"].get<int>(), 1000);
+  ASSERT_EQ(o["models"].size(), 12u);  // 6 kinds x (default, calibrated)
+  for (const auto& m : o["models"]) {
+    EXPECT_GT(m["update_us"].get<double>(), 0.0);
+    for (const auto& c : m["cases"]) {
+      if (c.contains("error")) {  // a model with no static equilibrium is reported, never a hybrid one here
+        EXPECT_EQ(m["base"], "surface") << c.dump();
+        continue;
+      }
+      EXPECT_TRUE(std::isfinite(c["rms_mm"].get<double>()));
+      EXPECT_GT(c["contact_fem_mm"].get<double>(), 0.0);
+    }
+  }
+  // calibration lowers the training error of the hybrid model (the fit minimises it)
+  double train_default = -1, train_cal = -1;
+  for (const auto& m : o["models"])
+    if (m["kind"] == "hybrid (Duffing)")
+      for (const auto& c : m["cases"])
+        if (c["train"].get<bool>())
+          (m["calibrated"].get<bool>() ? train_cal : train_default) = c["rms_mm"].get<double>();
+  EXPECT_GT(train_default, 0.0);
+  EXPECT_LT(train_cal, train_default);
+}
+
+TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
+  const fs::path out = medspring::testing::temp_dir("accuracy-bad") / "acc";
+  std::string err;
+  EXPECT_NE(run("accuracy --quick --nu 0.5 --out '" + out.string() + "'", &err), 0);
+  EXPECT_NE(err.find("nu must be in (-1, 0.5)"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_NE(run("accuracy --quick --E-kPa -3 --out '" + out.string() + "'", &err), 0);
+  EXPECT_NE(err.find("E must be > 0"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
+}
