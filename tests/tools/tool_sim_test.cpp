@@ -10,6 +10,7 @@
 
 #include "medspring/core/error.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/smrm_vessel.hpp"
 
 namespace medspring {
 namespace {
@@ -146,6 +147,33 @@ TEST(ToolHaptics, ReactionPointsBackAtTheUser) {
   EXPECT_LE(device.norm(), 3.0 + 1e-12);
   EXPECT_EQ(sim.state().warnings.total(), 0u);
   EXPECT_THROW(ToolHapticLoop(tools, 3), InvalidInput);
+}
+
+}  // namespace
+}  // namespace medspring
+
+namespace medspring {
+namespace {
+
+// SMRM: the contact forces reach the atoms through the model's own map (D-14), as point loads do.
+TEST(ToolSimulation, ProbeOnTheSmrmVesselPushesItsAtoms) {
+  auto body = std::make_shared<SmrmVessel>(smrm_phantom(VesselPath::Arc, CrossSectionShape::Circular));
+  Simulation sim(body);
+  ToolSimulation tools(sim);
+  Index top = 0;
+  body->rest_surface().col(2).maxCoeff(&top);
+  const Vec3 x = body->rest_surface().row(top).transpose();
+  const double R = 3.0;
+  const Index k = tools.add_tool(Tool::sphere(R), Pose{x + Vec3(0, 0, R + 0.5), Quat::Identity()});
+  tools.set_path(k, {{0.0, Pose{x + Vec3(0, 0, R + 0.5), Quat::Identity()}},
+                     {100.0, Pose{x + Vec3(0, 0, R - 1.5), Quat::Identity()}}});
+  while (sim.time() < 400) ASSERT_TRUE(tools.update().ok());
+  const ToolState& st = tools.contact().state(k);
+  EXPECT_GT(st.contacts, 0);
+  EXPECT_GT(st.force.z(), 0);
+  EXPECT_GT((sim.state().x - sim.model().x0).rowwise().norm().maxCoeff(), 0.5);  // the atoms moved
+  EXPECT_LT((sim.applied_force() + st.force).norm(), 1e-12 * st.force.norm());
+  EXPECT_EQ(sim.state().warnings.total(), 0u);
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "medspring/scene/scene_tools.hpp"
 #include "medspring/core/types.hpp"
 #include "medspring/core/units.hpp"
 #include "medspring/medial/vessel_phantoms.hpp"
@@ -118,6 +119,8 @@ struct Scene {
   LocalOptions local;             // "local": eq. (6) overlay
   bool local_k_from_body = true;  // k_loc not given: the body's (kidney k_surf, vessel 0.05 N/mm)
   SceneRecord record;
+  std::vector<SceneTool> tools;  // "tools": rigid instruments with pose paths (docs/tools.md)
+  ContactSettings contact;       // "contact": their contact response (dt, min_mass from the model)
 };
 
 /// Reads, parses and validates a scene file. Relative file names inside it are resolved against the
