@@ -318,8 +318,8 @@ json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& pro
     for (Index n : b.trace_nodes) os << ",node_" << n << "_mm";
     for (Index a : b.trace_atoms) os << ",atom_" << a << "_mm";
     for (std::size_t k = 0; k < r.trace.tools.size(); ++k)  // docs/tools.md
-      for (const char* c : {"fx_N", "fy_N", "fz_N", "tx_Nmm", "ty_Nmm", "tz_Nmm", "area_mm2", "penetration_mm",
-                            "grasp_N"})
+      for (const char* c :
+           {"fx_N", "fy_N", "fz_N", "tx_Nmm", "ty_Nmm", "tz_Nmm", "area_mm2", "penetration_mm", "grasp_N"})
         os << ",tool" << k << "_" << c;
     os << "\n";
     const SceneTrace& t = r.trace;

@@ -18,7 +18,6 @@
 #include <string>
 #include <vector>
 
-#include "medspring/scene/scene_tools.hpp"
 #include "medspring/core/types.hpp"
 #include "medspring/core/units.hpp"
 #include "medspring/medial/vessel_phantoms.hpp"
@@ -26,6 +25,7 @@
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/model.hpp"
+#include "medspring/scene/scene_tools.hpp"
 #include "medspring/sim/simulation.hpp"
 
 namespace medspring {
