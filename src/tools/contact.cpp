@@ -203,7 +203,7 @@ Index ContactModel::add_tool(const Tool& tool, const Pose& pose) {
   slot.state.tool = tool;
   slot.state.pose = checked_pose(pose, cat("tools[", k, "].pose"));
   slot.prev = slot.state.pose;
-  slot.held.reserve(static_cast<std::size_t>(F_.rows()));
+  slot.held.reserve(static_cast<std::size_t>(2 * F_.rows()));  // both jaws
   tools_.push_back(std::move(slot));
   contacts_.reserve(static_cast<std::size_t>(2 * F_.rows()) * tools_.size());
   return k;
