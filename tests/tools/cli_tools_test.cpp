@@ -58,7 +58,7 @@ TEST(ToolsCli, HapticsWithASphereWritesTheForceTorqueTrace) {
 
 TEST(ToolsCli, BadToolsAndPathsFailWithOneLine) {
   const std::string traj = (kExamples / "probe_press_slide.csv").string();
-  for (const std::string& tool : {"sphere:0", "sphere:-1", "cube:3", "sphere:nan"}) {
+  for (const char* tool : {"sphere:0", "sphere:-1", "cube:3", "sphere:nan"}) {
     const Result r = medspring("haptics kidney_phantom --trajectory '" + traj + "' --tool " + tool);
     EXPECT_NE(r.rc, 0) << tool;
     EXPECT_NE(r.err.find("tool"), std::string::npos) << r.err;
