@@ -16,9 +16,11 @@
 
 namespace medspring::cli {
 
+int cmd_haptics_tool(const Args& args, const std::string& trajectory_file);  // cmd_haptics_tool.cpp
+
 int cmd_haptics(const Args& args) {
-  args.require_known(
-      {"trajectory", "out", "force", "json", "node", "k-vc", "b-vc", "f-max", "local", "linear", "duration"});
+  args.require_known({"trajectory", "out", "force", "json", "node", "k-vc", "b-vc", "f-max", "local",
+                      "linear", "duration", "tool", "friction"});
   if (args.positional().size() != 1)
     throw InvalidInput("expected exactly one SCENE file or model name (see medspring haptics --help)");
   const auto traj_file = args.get("trajectory");
@@ -27,6 +29,7 @@ int cmd_haptics(const Args& args) {
   const auto out = args.get("out");
   const bool force = args.flag("force");
   if (out) check_output_folder(*out, force);
+  if (args.get("tool")) return cmd_haptics_tool(args, *traj_file);
   const Trajectory path = read_trajectory_file(*traj_file);
 
   const std::string source = args.positional()[0];

@@ -124,7 +124,12 @@ const std::vector<Command>& commands() {
        "  --node N        contact surface node (default: the node nearest the first tool position)\n"
        "  --local         local deformation on the contact patch (eq. 6)\n"
        "  --linear        linear springs (model names only)\n"
-       "  --duration MS   run length (default: the last trajectory time)\n",
+       "  --duration MS   run length (default: the last trajectory time)\n"
+       "  --tool SHAPE    a rigid tool instead of the node coupling (docs/tools.md): sphere:R,\n"
+       "                  capsule:R:L or grasper:R:L:DEG (mm); the tool sits at the device position, the\n"
+       "                  device gets the contact reaction (saturated to --f-max); the trajectory may carry\n"
+       "                  poses: time_ms, x, y, z[, qw, qx, qy, qz[, opening_deg]]\n"
+       "  --friction MU   Coulomb friction of the tool's contact (default 0)\n",
        {"json", "force", "local", "linear"},
        cmd_haptics},
       {"export",

@@ -314,6 +314,10 @@ json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& pro
     os << "time_ms,force_N,max_disp_mm,local_contact_mm,energy_mJ";
     for (Index n : b.trace_nodes) os << ",node_" << n << "_mm";
     for (Index a : b.trace_atoms) os << ",atom_" << a << "_mm";
+    for (std::size_t k = 0; k < r.trace.tools.size(); ++k)  // docs/tools.md
+      for (const char* c :
+           {"fx_N", "fy_N", "fz_N", "tx_Nmm", "ty_Nmm", "tz_Nmm", "area_mm2", "penetration_mm", "grasp_N"})
+        os << ",tool" << k << "_" << c;
     os << "\n";
     const SceneTrace& t = r.trace;
     for (Index q = 0; q < t.size(); ++q) {
@@ -321,6 +325,9 @@ json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& pro
          << t.energy[q];
       for (const auto& v : t.node_disp) os << "," << v[q];
       for (const auto& v : t.atom_disp) os << "," << v[q];
+      for (const SceneTrace::ToolTrace& u : t.tools)
+        for (const auto* v : {&u.fx, &u.fy, &u.fz, &u.tx, &u.ty, &u.tz, &u.area, &u.penetration, &u.grasp})
+          os << "," << (*v)[static_cast<std::size_t>(q)];
       os << "\n";
     }
     write_text(dir / "trace.csv", os.str());

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Compiles the Eigen-only engine layers (core geometry physics local medial models sim) and the embind
+# Compiles the Eigen-only engine layers (core geometry physics local medial models tools sim) and the embind
 # bindings (web/src/bindings.cpp) to WebAssembly with Debian's emscripten: web/dist/medspring.mjs
 # (ES module, wasm embedded: -sSINGLE_FILE, so node and the browser load it without fetch).
 # Usage: bash web/build.sh [BUILD_DIR]   (objects in BUILD_DIR, default build-wasm; incremental)
@@ -13,7 +13,7 @@ mkdir -p "$build/obj" "$here/dist"
 flags=(-std=c++20 -O3 -DNDEBUG -fexceptions -I"$root/include" -I/usr/include/eigen3 -DEIGEN_MPL2_ONLY)
 objs=()
 jobs=0
-for layer in core geometry physics local medial models sim; do
+for layer in core geometry physics local medial models tools sim; do
   for src in "$root"/src/$layer/*.cpp; do
     obj="$build/obj/$layer-$(basename "${src%.cpp}").o"
     objs+=("$obj")

@@ -32,6 +32,7 @@ void bind_local(py::module_& m);
 void bind_models(py::module_& m);
 void bind_sim(py::module_& m);
 void bind_io(py::module_& m);
+void bind_tools(py::module_& m);  // bind_tools.cpp (docs/tools.md)
 
 /// "a float32 array of shape (5, 3)", "a non-contiguous float64 array of shape (5, 3)", "a list".
 std::string describe_object(py::handle obj);

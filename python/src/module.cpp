@@ -81,6 +81,7 @@ PYBIND11_MODULE(_medspring, m) {
   bind_local(m);
   bind_models(m);
   bind_sim(m);
+  bind_tools(m);
 #ifdef MEDSPRING_PYTHON_WITH_IO
   bind_io(m);
   m.attr("has_io") = true;

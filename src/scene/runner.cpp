@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <set>
 
 #include "medspring/core/binary.hpp"
@@ -58,6 +59,16 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   const Scene& scene = b.scene;
   Simulation sim(b.body, b.settings);
   sim.set_loads(b.loads);
+  std::optional<ToolSimulation> tools;  // scene.tools: rigid instruments (docs/tools.md)
+  if (!scene.tools.empty()) {
+    require(hooks.resume == nullptr, scene.file.string(),
+            ": a run with tools cannot be resumed from a checkpoint");
+    tools.emplace(sim, scene.contact);
+    for (const SceneTool& t : scene.tools) {
+      const Index k = tools->add_tool(t.tool, t.path.front().pose);
+      tools->set_path(k, t.path);
+    }
+  }
   const double dt = b.settings.step.dt;
   const long n = std::max(1L, static_cast<long>(std::ceil(scene.duration / dt - 1e-9)));
 
@@ -70,6 +81,7 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   SceneTrace& tr = res.trace;
   tr.node_disp.assign(b.trace_nodes.size(), {});
   tr.atom_disp.assign(b.trace_atoms.size(), {});
+  tr.tools.assign(scene.tools.size(), {});
   std::vector<double> us(static_cast<std::size_t>(n));
   long k0 = 0;        // updates done before this call
   Index frames0 = 0;  // frames recorded before this call
@@ -139,6 +151,17 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
       const Index i = b.trace_atom_dofs[k];
       tr.atom_disp[k].push_back((sim.state().x.row(i) - model.x0.row(i)).norm());
     }
+    for (std::size_t k = 0; k < tr.tools.size(); ++k) {
+      const ToolState& ts = tools->contact().state(static_cast<Index>(k));
+      SceneTrace::ToolTrace& tt = tr.tools[k];
+      for (int d = 0; d < 3; ++d) {
+        (d == 0 ? tt.fx : d == 1 ? tt.fy : tt.fz).push_back(ts.force[d]);
+        (d == 0 ? tt.tx : d == 1 ? tt.ty : tt.tz).push_back(ts.torque[d]);
+      }
+      tt.area.push_back(ts.area);
+      tt.penetration.push_back(ts.penetration);
+      tt.grasp.push_back(ts.grasp_force.norm());
+    }
   };
   auto record = [&] {
     RecordedFrame f{frames0 + static_cast<Index>(res.frames.size()), sim.time()};
@@ -160,7 +183,10 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   long last = n;  // the last update done
   for (long k = k0 + 1; k <= n; ++k) {
     const auto a = std::chrono::steady_clock::now();
-    sim.update();
+    if (tools)
+      tools->update();
+    else
+      sim.update();
     us[static_cast<std::size_t>(k - 1)] =
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count();
     sample();

@@ -577,6 +577,8 @@ Scene parse_scene(const std::string& text, const fs::path& base_dir, const std::
   }
   if (const json* l = o.get("local")) parse_local(c, *l, s);
   if (const json* r = o.get("record")) parse_record(c, *r, s);
+  if (const json* t = o.get("tools")) s.tools = parse_scene_tools(t->dump(), base_dir, origin);
+  if (const json* t = o.get("contact")) s.contact = parse_scene_contact(t->dump(), origin);
   o.finish();
   s.file = origin;
   if (s.name.empty()) s.name = fs::path(origin).stem().string();
@@ -761,6 +763,10 @@ std::string scene_to_json(const Scene& s) {
               {"key_times", s.record.key_times},
               {"nodes", s.record.nodes},
               {"atoms", s.record.atoms}}}};
+  if (!s.tools.empty()) {
+    j["tools"] = json::parse(scene_tools_json(s.tools));
+    j["contact"] = json::parse(scene_contact_json(s.contact));
+  }
   return j.dump(2);
 }
 

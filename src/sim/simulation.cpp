@@ -54,8 +54,20 @@ void Simulation::set_tool_force(Index node, const Vec3& F) {
   tool_force_ = F;
 }
 
+void Simulation::set_surface_forces(const SurfaceForces* forces) {
+  if (forces && local_ && forces->centre >= 0 && forces->total.allFinite()) {
+    require_index(forces->centre, body_->num_surface_nodes(), "surface forces: centre node");
+    MatX3 U;
+    const LocalPatch& P = local_->patch();
+    if (P.contact_local < 0 || P.nodes[static_cast<std::size_t>(P.contact_local)] != forces->centre)
+      local_->compute(forces->centre, forces->total, U);  // factor the new centre's patch now
+  }
+  surface_forces_ = forces;
+}
+
 Vec3 Simulation::applied_force() const {
   Vec3 F = tool_node_ >= 0 ? tool_force_ : Vec3::Zero();
+  if (surface_forces_) F += surface_forces_->total;
   for (const PointLoad& L : loads_) F += L.at(state_.t);
   return F;
 }
@@ -68,6 +80,9 @@ StepStatus Simulation::update() {
     if (s != 0.0) body_->transfer_force(L.node, s * L.force, state_.f_ext);
   }
   if (tool_node_ >= 0) body_->transfer_force(tool_node_, tool_force_, state_.f_ext);
+  if (surface_forces_)
+    for (const Index n : surface_forces_->nodes)
+      body_->transfer_force(n, surface_forces_->force.row(n).transpose(), state_.f_ext);
   const StepStatus st = step(body_->model(), state_, settings_.step);
   refresh_surface();
   return st;
@@ -95,6 +110,11 @@ void Simulation::refresh_surface() {
       best = tool_force_.norm();
       contact = tool_node_;
       F = tool_force_;
+    }
+    if (surface_forces_ && surface_forces_->centre >= 0 && surface_forces_->total.norm() > best) {
+      best = surface_forces_->total.norm();
+      contact = surface_forces_->centre;
+      F = surface_forces_->total;
     }
     for (const PointLoad& L : loads_) {
       const Vec3 f = L.at(state_.t);

@@ -25,6 +25,12 @@ struct SceneTrace {
   std::vector<double> energy;                  // total energy (kinetic + springs + return springs), mJ
   std::vector<std::vector<double>> node_disp;  // [k][frame] |u| of BuiltScene::trace_nodes[k], mm
   std::vector<std::vector<double>> atom_disp;  // [k][frame] |u| of BuiltScene::trace_atoms[k], mm
+  /// [tool][frame] reaction on scene.tools[k] (docs/tools.md): force (N), torque about its pose (N mm),
+  /// rest area of the triangles in contact (mm^2), largest penetration (mm), |grasp force| (N).
+  struct ToolTrace {
+    std::vector<double> fx, fy, fz, tx, ty, tz, area, penetration, grasp;
+  };
+  std::vector<ToolTrace> tools;
   Index size() const { return static_cast<Index>(time.size()); }
 };
 

@@ -25,6 +25,7 @@
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/model.hpp"
+#include "medspring/scene/scene_tools.hpp"
 #include "medspring/sim/simulation.hpp"
 
 namespace medspring {
@@ -119,6 +120,8 @@ struct Scene {
   LocalOptions local;             // "local": eq. (6) overlay
   bool local_k_from_body = true;  // k_loc not given: the body's (kidney k_surf, vessel 0.05 N/mm)
   SceneRecord record;
+  std::vector<SceneTool> tools;  // "tools": rigid instruments with pose paths (docs/tools.md)
+  ContactSettings contact;       // "contact": their contact response (dt, min_mass from the model)
 };
 
 /// Reads, parses and validates a scene file. Relative file names inside it are resolved against the

@@ -14,6 +14,7 @@
 #include "medspring/models/body.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/loads.hpp"
+#include "medspring/tools/contact.hpp"
 
 namespace medspring {
 
@@ -46,6 +47,12 @@ class Simulation {
   /// The tool's node (-1 when none) and force.
   Index tool_node() const { return tool_node_; }
   const Vec3& tool_force() const { return tool_force_; }
+
+  /// Forces on surface nodes from rigid tools (tools/contact.hpp, sim/tool_sim.hpp), refreshed by
+  /// their owner before every update and added to that update's loads; their centre node gets the
+  /// local patch when its total force is the largest load. nullptr: none. The pointee must outlive its
+  /// use. A new centre's patch is factored here (throws InvalidInput like set_tool_force).
+  void set_surface_forces(const SurfaceForces* forces);
 
   /// Advances one frame of settings.step.dt and refreshes the displayed surface. Never throws;
   /// numerical trouble is in the returned status and state().warnings.
@@ -91,6 +98,7 @@ class Simulation {
   bool local_active_ = false;
   Index tool_node_ = -1;
   Vec3 tool_force_ = Vec3::Zero();
+  const SurfaceForces* surface_forces_ = nullptr;
 };
 
 }  // namespace medspring
