@@ -11,5 +11,6 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-matplotlib
   xvfb xauth                         # offscreen rendering of the report figures (VTK under Xvfb)
+  libbullet-dev                      # bench --compare only: Bullet's btSoftBody side by side
 )
 bash "$(dirname "$0")/apt-install.sh" install-deps "${PACKAGES[@]}"
