@@ -311,7 +311,7 @@ void bind_physics(py::module_& m) {
       .def("__repr__", [](const State& s) {
         return cat("<medspring.State ", s.x.rows(), " nodes, t = ", s.t, " ms, ", s.frames, " frames>");
       });
-  m.def("make_state", &make_state, "model"_a,
+  m.def("make_state", py::overload_cast<const Model&>(&make_state), "model"_a,
         "A state at rest (x = x0, v = 0, t = 0) with all scratch allocated.");
 
   // ---- Loads ----

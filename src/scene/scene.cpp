@@ -469,7 +469,8 @@ void parse_integrator_block(const Ctx& c, const json& j, StepSettings& s) {
   if (s.safety > 1) fail(c, "integrator.safety", cat("must be in (0, 1] (got ", s.safety, ")"));
   s.max_substeps = static_cast<int>(o.index("max_substeps", s.max_substeps, 1));
   s.threads = static_cast<int>(o.index("threads", s.threads, 1));
-  if (s.threads > kMaxThreads) fail(c, "integrator.threads", cat("must be in 1..", kMaxThreads, " (got ", s.threads, ")"));
+  if (s.threads > kMaxThreads)
+    fail(c, "integrator.threads", cat("must be in 1..", kMaxThreads, " (got ", s.threads, ")"));
   o.finish();
 }
 
