@@ -18,9 +18,8 @@
 namespace medspring::cli {
 
 int cmd_haptics(const Args& args) {
-  args.require_known(
-      {"trajectory", "out", "force", "json", "node", "k-vc", "b-vc", "f-max", "local", "linear", "duration",
-       "threads"});
+  args.require_known({"trajectory", "out", "force", "json", "node", "k-vc", "b-vc", "f-max", "local",
+                      "linear", "duration", "threads"});
   if (args.positional().size() != 1)
     throw InvalidInput("expected exactly one SCENE file or model name (see medspring haptics --help)");
   const auto traj_file = args.get("trajectory");

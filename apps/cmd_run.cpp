@@ -9,10 +9,10 @@
 
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/physics/parallel.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/checkpoint.hpp"
-#include "medspring/physics/parallel.hpp"
 #include "scene_support.hpp"
 
 namespace medspring::cli {

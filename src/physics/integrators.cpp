@@ -458,7 +458,7 @@ int effective_threads(const Model& m, const StepSettings& s) {
       m.bending.size() > 0)
     return 1;
   const Index by_size = m.num_springs() / kMinSpringsPerThread;
-  return static_cast<int>(std::max<Index>(1, std::min<Index>(s.threads, by_size)));
+  return static_cast<int>(std::max<Index>(1, std::min<Index>(std::min(s.threads, kMaxThreads), by_size)));
 }
 
 namespace {

@@ -190,13 +190,13 @@ TEST(SceneBuild, TimeStepAboveTheStableBoundWithSubsteppingOffIsRejected) {
 }
 
 TEST(SceneParse, ThreadsAreReadWrittenAndRangeChecked) {
-  const Scene s =
-      parse_scene(with("\"duration\": 1000", R"("duration": 1000, "integrator": {"threads": 2})"), ".", "t.json");
+  const Scene s = parse_scene(with("\"duration\": 1000", R"("duration": 1000, "integrator": {"threads": 2})"),
+                              ".", "t.json");
   EXPECT_EQ(s.step.threads, 2);
   EXPECT_NE(scene_to_json(s).find("\"threads\": 2"), std::string::npos);
   for (const char* bad : {"0", "-3", "1000"}) {
-    const std::string e =
-        build_error(with("\"duration\": 1000", cat(R"("duration": 1000, "integrator": {"threads": )", bad, "}")));
+    const std::string e = build_error(
+        with("\"duration\": 1000", cat(R"("duration": 1000, "integrator": {"threads": )", bad, "}")));
     EXPECT_NE(e.find("t.json: integrator.threads: must be"), std::string::npos) << e;
   }
 }
