@@ -4,13 +4,18 @@
 
 #include "cases.hpp"
 #include "commands.hpp"
+#include "compare.hpp"
 
 namespace medspring::cli {
 
 // Real-anatomy cases built by the builders layer (cmd_build.cpp); empty without it or without the data.
 std::vector<bench::BenchCase> builder_bench_cases(const std::string& filter);
 
+// bench_compare.cpp: --compare and --scaling.
+int cmd_bench_compare(const Args& args);
+
 int cmd_bench(const Args& args) {
+  if (args.flag("compare") || args.flag("scaling")) return cmd_bench_compare(args);
   args.require_known({"json", "quick", "filter", "samples"});
   const bool quick = args.flag("quick");
   const std::string filter = args.get_or("filter", "");

@@ -9,6 +9,7 @@
 #include "builtin_models.hpp"
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/physics/parallel.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/haptics.hpp"
@@ -20,7 +21,7 @@ int cmd_haptics_tool(const Args& args, const std::string& trajectory_file);  // 
 
 int cmd_haptics(const Args& args) {
   args.require_known({"trajectory", "out", "force", "json", "node", "k-vc", "b-vc", "f-max", "local",
-                      "linear", "duration", "tool", "friction"});
+                      "linear", "duration", "tool", "friction", "threads"});
   if (args.positional().size() != 1)
     throw InvalidInput("expected exactly one SCENE file or model name (see medspring haptics --help)");
   const auto traj_file = args.get("trajectory");
@@ -49,6 +50,11 @@ int cmd_haptics(const Args& args) {
   }
   if (args.flag("local")) settings.local.enabled = true;
   settings.normals = false;  // a graphics-thread job (§2.5), not part of the haptic tick
+  if (args.get("threads")) {
+    const long threads = args.integer("threads", 1);
+    require_thread_count(threads, "--threads");
+    settings.step.threads = static_cast<int>(threads);
+  }
 
   HapticSettings hs;
   hs.k_vc = args.number("k-vc", hs.k_vc);

@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/physics/parallel.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/checkpoint.hpp"
@@ -18,7 +19,7 @@ namespace medspring::cli {
 
 int cmd_run(const Args& args) {
   args.require_known({"out", "force", "quiet", "json", "static-curve", "checkpoint-every", "checkpoint",
-                      "resume", "stop-at"});
+                      "resume", "stop-at", "threads"});
   if (args.positional().size() != 1)
     throw InvalidInput("expected exactly one SCENE file (see medspring run --help)");
   const auto out = args.get("out");
@@ -39,7 +40,12 @@ int cmd_run(const Args& args) {
   if (const auto file = args.get("resume")) resume = read_checkpoint(*file);  // refused early when bad
 
   check_output_folder(*out, force);  // before the model is built: a refusal costs nothing
-  const Scene scene = load_scene(args.positional()[0]);
+  Scene scene = load_scene(args.positional()[0]);
+  if (args.get("threads")) {  // overrides the scene's integrator.threads
+    const long threads = args.integer("threads", 1);
+    require_thread_count(threads, "--threads");
+    scene.step.threads = static_cast<int>(threads);
+  }
   FileLoader loader;
   progress.begin(cat("build ", scene.name));
   const BuiltScene built = build_scene(scene, &loader);

@@ -12,8 +12,13 @@ const std::vector<Command>& commands() {
        "  --filter TEXT  only cases whose name contains TEXT\n"
        "  --quick        200 samples, no 1M-node case\n"
        "  --json         {\"results\": [{\"name\", \"median_us\", \"p99_us\", \"mean_us\", \"nodes\", "
-       "\"springs\", ...}]}\n",
-       {"json", "quick"},
+       "\"springs\", ...}]}\n"
+       "medspring bench --compare [--threads N] [--quick] [--no-bullet] [--json]\n"
+       "  MedSpring (1 and N threads, default 2), the plain reference loop and Bullet btSoftBody on the\n"
+       "  same tube at 1.2k, 10k, 100k and 1M nodes (--quick: up to 100k), in one run (docs/performance.md)\n"
+       "medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
+       "  the same from 1.2k to 3M nodes; writes DIR/scaling.json and the log-log plot DIR/scaling.png\n",
+       {"json", "quick", "compare", "scaling", "no-bullet"},
        cmd_bench},
       {"info",
        "usage: medspring info FILE [--unit mm|cm|m] [--radius-array NAME] [--json]\n\n"
@@ -85,6 +90,8 @@ const std::vector<Command>& commands() {
        "                  and the traces so far, replaced atomically; default file DIR.mscp beside DIR\n"
        "  --checkpoint FILE     where checkpoints go\n"
        "  --stop-at MS    stop after the update reaching MS (writing a checkpoint and the partial results)\n"
+       "  --threads N     threads of the step (1..256; overrides the scene's integrator.threads;\n"
+       "                  models below 25 000 springs per thread use fewer, docs/performance.md)\n"
        "  --resume FILE   continue the run saved in FILE (same scene): trace.csv and the summary's results\n"
        "                  are those of an uninterrupted run bit for bit; frames are written from the resume\n"
        "                  point on (earlier ones are in the interrupted run's folder)\n",
@@ -129,7 +136,8 @@ const std::vector<Command>& commands() {
        "                  capsule:R:L or grasper:R:L:DEG (mm); the tool sits at the device position, the\n"
        "                  device gets the contact reaction (saturated to --f-max); the trajectory may carry\n"
        "                  poses: time_ms, x, y, z[, qw, qx, qy, qz[, opening_deg]]\n"
-       "  --friction MU   Coulomb friction of the tool's contact (default 0)\n",
+       "  --friction MU   Coulomb friction of the tool's contact (default 0)\n"
+       "  --threads N     threads of the step (1..256; small models use one, docs/performance.md)\n",
        {"json", "force", "local", "linear"},
        cmd_haptics},
       {"export",

@@ -14,5 +14,6 @@ PACKAGES=(
   python3-distributed python3-dask python3-zarr python3-pandas python3-tqdm python3-xarray  # medspring study (Dask)
   python3-pip python3-venv python3-setuptools python3-wheel dpkg-dev make  # package tests: wheel, venv, .deb, pkg-config consumer
   calculix-ccx tetgen                # fem: the FEM reference (medspring accuracy / calibrate, fem tests)
+  libbullet-dev                      # bench --compare only: Bullet's btSoftBody side by side
 )
 bash "$(dirname "$0")/apt-install.sh" install-deps "${PACKAGES[@]}"

@@ -311,7 +311,7 @@ void bind_physics(py::module_& m) {
       .def("__repr__", [](const State& s) {
         return cat("<medspring.State ", s.x.rows(), " nodes, t = ", s.t, " ms, ", s.frames, " frames>");
       });
-  m.def("make_state", &make_state, "model"_a,
+  m.def("make_state", py::overload_cast<const Model&>(&make_state), "model"_a,
         "A state at rest (x = x0, v = 0, t = 0) with all scratch allocated.");
 
   // ---- Loads ----
@@ -373,10 +373,16 @@ void bind_physics(py::module_& m) {
                      "Implicit: relative residual (default 1e-8).")
       .def_readwrite("cg_max_iterations", &StepSettings::cg_max_iterations, "Implicit (default 200).")
       .def_readwrite("newton_iterations", &StepSettings::newton_iterations,
-                     "Implicit: 1 = linearly implicit; > 1 = Newton with line search (default 1).");
+                     "Implicit: 1 = linearly implicit; > 1 = Newton with line search (default 1).")
+      .def_readwrite("threads", &StepSettings::threads,
+                     "Threads of the symplectic step, 1..256 (default 1); models below 25 000 springs per "
+                     "thread use fewer (effective_threads). Deterministic for a given count.");
   def_enum_field(step_settings, "integrator", &StepSettings::integrator,
                  "Integrator (default SymplecticEuler).");
   settings_helpers(step_settings);
+  m.def("effective_threads", &effective_threads, "model"_a, "settings"_a,
+        "Threads the step really uses for this model (1 for small models, the implicit integrator or "
+        "bending terms).");
   m.def("validate_step_settings", &validate_step_settings, "model"_a, "settings"_a,
         "Raises InvalidInput naming the field unless the settings are valid for the model.");
 

@@ -4,48 +4,25 @@
 #include <cmath>
 
 #include "medspring/core/check.hpp"
+#include "spring_kernel.hpp"
 
 namespace medspring {
 
 namespace {
 
-constexpr double kMinLength = 1e-9;  // §1.3: springs shorter than this are skipped
+constexpr double kMinLength = detail::kMinSpringLength;
 
-// Spring pass of the force evaluation (vector form of eqs. 1 and 5, §1.3). Returns max kappa_s/k_s.
-// A plain scalar loop: measured faster here (26 us vs 39 us per 1200-node tube step with
-// -march=native) than a blocked gather / vectorised arithmetic / scatter variant, whose extra
-// passes over the block cost more than the vector sqrt and division save.
-template <bool Soft>
-double spring_forces(const Springs& S, const VecX& inv_k, const double* x, double* f) {
-  const Index ns = S.size();
-  const Index* I = S.i.data();
-  const Index* J = S.j.data();
-  const double* L0 = S.L0.data();
-  const double* K = S.k.data();
-  const double* KP = S.kp.data();
-  const double* IK = inv_k.data();
+// Spring pass of the force evaluation (vector form of eqs. 1 and 5, §1.3). Returns max kappa_s/k_s
+// (1 without Stiff). A plain scalar scatter loop over the springs in their order.
+template <bool Soft, bool Stiff>
+double spring_forces(const Model& m, const double* x, double* f) {
+  const detail::SpringArrays S(m);
+  const Index ns = m.springs.size();
   double stiff = 1.0;
   for (Index s = 0; s < ns; ++s) {
-    const Index a = 3 * I[s], b = 3 * J[s];
-    const double ex = x[b] - x[a], ey = x[b + 1] - x[a + 1], ez = x[b + 2] - x[a + 2];
-    const double L2 = ex * ex + ey * ey + ez * ez;
-    if (L2 < kMinLength * kMinLength) continue;
-    const double L = std::sqrt(L2);
-    const double inv = 1.0 / L;
-    const double d = L - L0[s];
-    const double k = K[s], kp = KP[s];
-    double phi, dphi;
-    if (Soft) {
-      phi = spring_tension(k, kp, d);
-      dphi = spring_tension_derivative(k, kp, d);
-    } else {
-      const double kp_d2 = kp * d * d;
-      phi = d * (k + kp_d2);  // eq. (5)
-      dphi = k + 3.0 * kp_d2;
-    }
-    const double t = phi * inv;  // phi / L
-    stiff = std::max(stiff, std::max(dphi, std::abs(t)) * IK[s]);
-    const double fx = t * ex, fy = t * ey, fz = t * ez;
+    double fx, fy, fz;
+    if (!detail::spring_force<Soft, Stiff>(S, s, x, stiff, fx, fy, fz)) continue;
+    const Index a = 3 * S.I[s], b = 3 * S.J[s];
     f[a] += fx;
     f[a + 1] += fy;
     f[a + 2] += fz;
@@ -69,24 +46,25 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
 
 }  // namespace
 
-double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f) {
-  const Index n = m.num_nodes();
+namespace detail {
+
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening) {
   const double* X = x.data();
-  const double* X0 = m.x0.data();
-  const double* FE = f_ext.data();
-  const double* KR = m.kr.data();
   double* Fo = f.data();
-  for (Index a = 0; a < n; ++a) {  // external force and return springs (§1.4)
-    const double kr = KR[a];
-    const Index q = 3 * a;
-    Fo[q] = FE[q] - kr * (X[q] - X0[q]);
-    Fo[q + 1] = FE[q + 1] - kr * (X[q + 1] - X0[q + 1]);
-    Fo[q + 2] = FE[q + 2] - kr * (X[q + 2] - X0[q + 2]);
-  }
-  const double stiff = m.has_soft_springs ? spring_forces<true>(m.springs, m.inv_k, X, Fo)
-                                          : spring_forces<false>(m.springs, m.inv_k, X, Fo);
+  return_forces(m, X, f_ext.data(), Fo, 0, m.num_nodes());  // external force and return springs (§1.4)
+  double stiff = 1.0;
+  if (m.has_soft_springs)
+    stiff = stiffening ? spring_forces<true, true>(m, X, Fo) : spring_forces<true, false>(m, X, Fo);
+  else
+    stiff = stiffening ? spring_forces<false, true>(m, X, Fo) : spring_forces<false, false>(m, X, Fo);
   if (m.bending.size() > 0) bending_forces(m.bending, x, f);
   return stiff;
+}
+
+}  // namespace detail
+
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f) {
+  return detail::internal_forces(m, x, f_ext, f, true);
 }
 
 double potential_energy(const Model& m, const MatX3& x) {

@@ -6,7 +6,9 @@
 
 #include "medspring/core/check.hpp"
 #include "medspring/physics/forces.hpp"
+#include "medspring/physics/parallel.hpp"
 #include "medspring/physics/stability.hpp"
+#include "spring_kernel.hpp"
 
 namespace medspring {
 
@@ -32,6 +34,7 @@ void validate_step_settings(const Model& model, const StepSettings& s) {
   require_positive(s.cg_tolerance, "step.cg_tolerance");
   require(s.cg_max_iterations >= 1, "step.cg_max_iterations: must be >= 1");
   require(s.newton_iterations >= 1, "step.newton_iterations: must be >= 1");
+  require_thread_count(s.threads, "step.threads");
   if (!s.substep && s.integrator == Integrator::SymplecticEuler) {
     const double bound = model.dt_safe_rest(s.safety);
     require(s.dt <= bound, "step.dt: ", s.dt, " ms is above the stable step ", bound, " ms of model '",
@@ -39,27 +42,105 @@ void validate_step_settings(const Model& model, const StepSettings& s) {
   }
 }
 
+// Worker pool and static partition of the threaded symplectic step. Thread t owns the nodes
+// [node_begin[t], node_begin[t+1]); it evaluates the return springs of its nodes, the springs with both
+// ends among them (scatter, in spring order) and its end of every spring that crosses to another
+// thread's nodes, then (second phase) advances its free nodes. Every force is therefore summed by one
+// thread in a fixed order: reruns with the same thread count are bit-identical.
+struct ThreadedStep {
+  explicit ThreadedStep(int threads) : pool(threads), slot(static_cast<std::size_t>(threads)) {}
+  WorkerPool pool;
+  const Model* model = nullptr;  // the model (and arrays) the partition was made for
+  const double* x0 = nullptr;
+  const Index* spring_i = nullptr;
+  Index nodes = -1, springs = -1;
+  std::vector<Index> node_begin;          // (T + 1)
+  std::vector<std::vector<Index>> inner;  // springs with both ends in thread t's nodes
+  std::vector<std::vector<Index>> cross;  // s: thread t owns end i; -(s + 1): it owns end j
+  std::vector<std::vector<Index>> free;   // free nodes of thread t
+  struct alignas(64) Slot {
+    double stiff = 1.0;
+    int code = 0;  // Substep of the thread's last update phase
+  };
+  std::vector<Slot> slot;
+
+  bool matches(const Model& m) const {
+    return model == &m && x0 == m.x0.data() && spring_i == m.springs.i.data() && nodes == m.num_nodes() &&
+           springs == m.num_springs();
+  }
+  void partition(const Model& m) {
+    const int T = pool.size();
+    const Index n = m.num_nodes(), ns = m.num_springs();
+    node_begin.assign(static_cast<std::size_t>(T) + 1, 0);
+    for (int t = 0; t <= T; ++t)
+      node_begin[static_cast<std::size_t>(t)] = static_cast<Index>(static_cast<long long>(n) * t / T);
+    auto owner = [&](Index a) {
+      int t = static_cast<int>(static_cast<long long>(a) * T / n);
+      while (a >= node_begin[static_cast<std::size_t>(t) + 1]) ++t;
+      while (a < node_begin[static_cast<std::size_t>(t)]) --t;
+      return t;
+    };
+    inner.assign(static_cast<std::size_t>(T), {});
+    cross.assign(static_cast<std::size_t>(T), {});
+    free.assign(static_cast<std::size_t>(T), {});
+    for (Index s = 0; s < ns; ++s) {
+      const int ti = owner(m.springs.i[static_cast<std::size_t>(s)]);
+      const int tj = owner(m.springs.j[static_cast<std::size_t>(s)]);
+      if (ti == tj) {
+        inner[static_cast<std::size_t>(ti)].push_back(s);
+      } else {
+        cross[static_cast<std::size_t>(ti)].push_back(s);
+        cross[static_cast<std::size_t>(tj)].push_back(-(s + 1));
+      }
+    }
+    for (Index a : m.free_nodes) free[static_cast<std::size_t>(owner(a))].push_back(a);
+    model = &m;
+    x0 = m.x0.data();
+    spring_i = m.springs.i.data();
+    nodes = n;
+    springs = ns;
+  }
+};
+
 namespace {
 
 // Outcome of one guarded substep (§2.5).
 enum class Substep { Ok, TooFast, NonFinite };
 
-// One symplectic Euler substep with implicit diagonal damping (§2.1). Returns TooFast / NonFinite (and
-// restores the previous positions and velocities of the nodes already advanced) if a velocity exceeded
-// v_max or became non-finite.
-template <bool Guard>
-Substep symplectic_substep(const Model& m, State& st, double h, double vmax2) {
+// 1 / (m + h d) per node for the substep h (cached while h stays the same).
+void refresh_step_coefficients(const Model& m, State& st, double h) {
   if (st.step_coef_h != h) {
     for (Index a = 0; a < m.num_nodes(); ++a) st.step_coef[a] = 1.0 / (m.mass[a] + h * m.damping[a]);
     st.step_coef_h = h;
   }
+}
+
+// Undoes the symplectic update of the free nodes fr[0 .. count): x_old = x - h v, v_old = (v / c - h g) / m.
+void undo_symplectic(const Model& m, State& st, double h, const Index* fr, Index count) {
   const double* G = st.f.data();
   const double* Mv = m.mass.data();
   const double* C = st.step_coef.data();
   double* X = st.x.data();
   double* V = st.v.data();
-  const Index* fr = m.free_nodes.data();
-  const Index nf = static_cast<Index>(m.free_nodes.size());
+  for (Index r = 0; r < count; ++r) {
+    const Index b = fr[r], p = 3 * b;
+    for (int d = 0; d < 3; ++d) {
+      X[p + d] -= h * V[p + d];
+      V[p + d] = (V[p + d] / C[b] - h * G[p + d]) / Mv[b];
+    }
+  }
+}
+
+// One symplectic Euler substep with implicit diagonal damping (§2.1) of the free nodes fr[0 .. nf), forces
+// in st.f, coefficients refreshed for h. Returns TooFast / NonFinite (and restores the previous positions
+// and velocities of the nodes already advanced) if a velocity exceeded v_max or became non-finite.
+template <bool Guard>
+Substep symplectic_range(const Model& m, State& st, double h, double vmax2, const Index* fr, Index nf) {
+  const double* G = st.f.data();
+  const double* Mv = m.mass.data();
+  const double* C = st.step_coef.data();
+  double* X = st.x.data();
+  double* V = st.v.data();
   for (Index k = 0; k < nf; ++k) {
     const Index a = fr[k], q = 3 * a;
     const double mass = Mv[a], c = C[a];
@@ -68,14 +149,8 @@ Substep symplectic_substep(const Model& m, State& st, double h, double vmax2) {
     const double vz = (mass * V[q + 2] + h * G[q + 2]) * c;
     if constexpr (Guard) {
       const double v2 = vx * vx + vy * vy + vz * vz;
-      if (!(v2 <= vmax2)) {              // also catches NaN
-        for (Index r = 0; r < k; ++r) {  // undo: x_old = x - h v, v_old = (v / c - h g) / m
-          const Index b = fr[r], p = 3 * b;
-          for (int d = 0; d < 3; ++d) {
-            X[p + d] -= h * V[p + d];
-            V[p + d] = (V[p + d] / C[b] - h * G[p + d]) / Mv[b];
-          }
-        }
+      if (!(v2 <= vmax2)) {  // also catches NaN
+        undo_symplectic(m, st, h, fr, k);
         return std::isfinite(v2) ? Substep::TooFast : Substep::NonFinite;
       }
     }
@@ -87,6 +162,87 @@ Substep symplectic_substep(const Model& m, State& st, double h, double vmax2) {
     X[q + 2] += h * vz;
   }
   return Substep::Ok;
+}
+
+template <bool Guard>
+Substep symplectic_substep(const Model& m, State& st, double h, double vmax2) {
+  refresh_step_coefficients(m, st, h);
+  return symplectic_range<Guard>(m, st, h, vmax2, m.free_nodes.data(),
+                                 static_cast<Index>(m.free_nodes.size()));
+}
+
+// Force phase of thread t of the threaded step (see ThreadedStep).
+template <bool Soft, bool Stiff>
+void threaded_forces(const Model& m, State& st, ThreadedStep& P, int t) {
+  const auto ut = static_cast<std::size_t>(t);
+  const double* X = st.x.data();
+  double* f = st.f.data();
+  detail::return_forces(m, X, st.f_ext.data(), f, P.node_begin[ut], P.node_begin[ut + 1]);
+  const detail::SpringArrays S(m);
+  double stiff = 1.0;
+  for (const Index s : P.inner[ut]) {
+    double fx, fy, fz;
+    if (!detail::spring_force<Soft, Stiff>(S, s, X, stiff, fx, fy, fz)) continue;
+    const Index a = 3 * S.I[s], b = 3 * S.J[s];
+    f[a] += fx;
+    f[a + 1] += fy;
+    f[a + 2] += fz;
+    f[b] -= fx;
+    f[b + 1] -= fy;
+    f[b + 2] -= fz;
+  }
+  for (const Index c : P.cross[ut]) {
+    const Index s = c >= 0 ? c : -c - 1;
+    double fx, fy, fz;
+    if (!detail::spring_force<Soft, Stiff>(S, s, X, stiff, fx, fy, fz)) continue;
+    if (c >= 0) {
+      const Index a = 3 * S.I[s];
+      f[a] += fx;
+      f[a + 1] += fy;
+      f[a + 2] += fz;
+    } else {
+      const Index b = 3 * S.J[s];
+      f[b] -= fx;
+      f[b + 1] -= fy;
+      f[b + 2] -= fz;
+    }
+  }
+  P.slot[ut].stiff = stiff;
+}
+
+// One threaded symplectic substep: forces (phase 1), then the node update (phase 2). The result equals
+// the serial substep up to the order of the force sums (rounding, ~1e-16 relative per substep).
+Substep threaded_substep(const Model& m, State& st, ThreadedStep& P, double h, double vmax2, bool guard,
+                         bool stiffening) {
+  refresh_step_coefficients(m, st, h);
+  auto forces = [&](int t) {
+    if (m.has_soft_springs)
+      stiffening ? threaded_forces<true, true>(m, st, P, t) : threaded_forces<true, false>(m, st, P, t);
+    else
+      stiffening ? threaded_forces<false, true>(m, st, P, t) : threaded_forces<false, false>(m, st, P, t);
+  };
+  P.pool.run(forces);
+  double stiff = 1.0;
+  for (const auto& sl : P.slot) stiff = std::max(stiff, sl.stiff);
+  if (stiffening) st.stiffening = stiff;
+  auto update = [&](int t) {
+    const auto ut = static_cast<std::size_t>(t);
+    const Index* fr = P.free[ut].data();
+    const auto nf = static_cast<Index>(P.free[ut].size());
+    P.slot[ut].code = static_cast<int>(guard ? symplectic_range<true>(m, st, h, vmax2, fr, nf)
+                                             : symplectic_range<false>(m, st, h, vmax2, fr, nf));
+  };
+  P.pool.run(update);
+  Substep r = Substep::Ok;
+  for (const auto& sl : P.slot) {
+    const auto c = static_cast<Substep>(sl.code);
+    if (c == Substep::NonFinite || (c == Substep::TooFast && r == Substep::Ok)) r = c;
+  }
+  if (r != Substep::Ok)  // threads that finished their nodes undo them too (the others already did)
+    for (std::size_t t = 0; t < P.slot.size(); ++t)
+      if (static_cast<Substep>(P.slot[t].code) == Substep::Ok)
+        undo_symplectic(m, st, h, P.free[t].data(), static_cast<Index>(P.free[t].size()));
+  return r;
 }
 
 // Per-spring coefficients of K_s = a n n^T + b I at x with the transverse clamp (§2.3).
@@ -297,8 +453,62 @@ Substep implicit_substep(const Model& m, State& st, const StepSettings& s, doubl
 
 }  // namespace
 
+int effective_threads(const Model& m, const StepSettings& s) {
+  if (!threads_supported() || s.threads <= 1 || s.integrator != Integrator::SymplecticEuler ||
+      m.bending.size() > 0)
+    return 1;
+  const Index by_size = m.num_springs() / kMinSpringsPerThread;
+  return static_cast<int>(std::max<Index>(1, std::min<Index>(std::min(s.threads, kMaxThreads), by_size)));
+}
+
+namespace {
+
+bool implicit_scratch_ready(const Model& m, const State& st) {
+  return st.x_save.rows() == m.num_nodes() && st.spring_a.size() == m.num_springs() &&
+         st.jacobi.size() == 3 * m.num_nodes();
+}
+
+}  // namespace
+
+void prepare_step(const Model& m, State& st, const StepSettings& s) {
+  if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st)) {
+    const Index n = m.num_nodes(), ns = m.num_springs();
+    st.x_save.setZero(n, 3);
+    st.v_save.setZero(n, 3);
+    st.x_trial.setZero(n, 3);
+    for (VecX* b : {&st.cg_r, &st.cg_z, &st.cg_p, &st.cg_q, &st.dv, &st.rhs, &st.jacobi}) b->setZero(3 * n);
+    st.spring_a.setZero(ns);
+    st.spring_b.setZero(ns);
+    st.spring_n.setZero(ns, 3);
+  }
+  const int T = effective_threads(m, s);
+  if (T <= 1) return;
+  if (!st.threaded.p || st.threaded.p->pool.size() != T) st.threaded.p = std::make_shared<ThreadedStep>(T);
+  if (!st.threaded.p->matches(m)) st.threaded.p->partition(m);
+}
+
+State make_state(const Model& m, const StepSettings& s) {
+  require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
+  const Index n = m.num_nodes();
+  State st;
+  st.x = m.x0;
+  st.v.setZero(n, 3);
+  st.f_ext.setZero(n, 3);
+  st.f.setZero(n, 3);
+  st.step_coef.setZero(n);
+  prepare_step(m, st, s);
+  return st;
+}
+
 StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vector<PointLoad>* loads) {
   StepStatus status;
+  if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st))
+    prepare_step(m, st, s);  // a state from make_state(model, symplectic settings): allocates once
+  ThreadedStep* par = nullptr;
+  if (s.integrator == Integrator::SymplecticEuler && effective_threads(m, s) > 1) {
+    prepare_step(m, st, s);  // allocates only on the first threaded step of this state
+    par = st.threaded.p.get();
+  }
   const double T = s.dt;
   const double vmax2 = s.v_max * s.v_max;
   long subs = 1;
@@ -324,8 +534,17 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
     if (loads) accumulate_loads(*loads, t, st.f_ext);
     Substep r;
     if (s.integrator == Integrator::SymplecticEuler) {
-      st.stiffening = internal_forces(m, st.x, st.f_ext, st.f);
-      r = s.guard ? symplectic_substep<true>(m, st, h, vmax2) : symplectic_substep<false>(m, st, h, vmax2);
+      // The stiffening (max kappa/k over the springs) sets the substeps of the next frame, so only the
+      // frame's last force evaluation needs it: the substep that ends the frame (left == 1) or the one
+      // whose failure would end it (rollbacks == max_rollbacks). Skipping it elsewhere changes no result.
+      const bool stiffening = left == 1 || rollbacks == s.max_rollbacks;
+      if (par) {
+        r = threaded_substep(m, st, *par, h, vmax2, s.guard, stiffening);
+      } else {
+        const double stiff = detail::internal_forces(m, st.x, st.f_ext, st.f, stiffening);
+        if (stiffening) st.stiffening = stiff;
+        r = s.guard ? symplectic_substep<true>(m, st, h, vmax2) : symplectic_substep<false>(m, st, h, vmax2);
+      }
     } else {
       r = implicit_substep(m, st, s, h, s.guard ? vmax2 : std::numeric_limits<double>::infinity(),
                            status.cg_iterations);

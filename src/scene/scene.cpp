@@ -10,6 +10,7 @@
 
 #include "medspring/core/check.hpp"
 #include "medspring/medial/frames.hpp"
+#include "medspring/physics/parallel.hpp"
 
 #ifndef MEDSPRING_SCENE_DEFAULT_DATA_DIR
 #define MEDSPRING_SCENE_DEFAULT_DATA_DIR "../shared/data"
@@ -484,6 +485,9 @@ void parse_integrator_block(const Ctx& c, const json& j, StepSettings& s) {
   s.safety = o.positive("safety", s.safety);
   if (s.safety > 1) fail(c, "integrator.safety", cat("must be in (0, 1] (got ", s.safety, ")"));
   s.max_substeps = static_cast<int>(o.index("max_substeps", s.max_substeps, 1));
+  s.threads = static_cast<int>(o.index("threads", s.threads, 1));
+  if (s.threads > kMaxThreads)
+    fail(c, "integrator.threads", cat("must be in 1..", kMaxThreads, " (got ", s.threads, ")"));
   o.finish();
 }
 
@@ -754,7 +758,8 @@ std::string scene_to_json(const Scene& s) {
               {"dt", s.step.dt},
               {"substep", s.step.substep},
               {"safety", s.step.safety},
-              {"max_substeps", s.step.max_substeps}}},
+              {"max_substeps", s.step.max_substeps},
+              {"threads", s.step.threads}}},
             {"duration", s.duration},
             {"local", local},
             {"record",

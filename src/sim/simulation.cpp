@@ -10,13 +10,14 @@ namespace medspring {
 
 Simulation::Simulation(BodyPtr body, const SimulationSettings& settings) : body_(std::move(body)) {
   require(body_ != nullptr, "simulation: no body");
-  state_ = make_state(body_->model());
+  state_ = make_state(body_->model(), settings.step);
   set_settings(settings);
 }
 
 void Simulation::set_settings(const SimulationSettings& s) {
   validate_step_settings(body_->model(), s.step);
   settings_ = s;
+  prepare_step(body_->model(), state_, settings_.step);  // worker pool started here, not in update()
   local_.reset();
   local_active_ = false;
   if (s.local.enabled) {
@@ -143,14 +144,14 @@ const std::vector<Index>& Simulation::local_nodes() const {
 }
 
 void Simulation::reset() {
-  state_ = make_state(body_->model());
+  state_ = make_state(body_->model(), settings_.step);
   if (local_) local_->invalidate();
   refresh_surface();
 }
 
 void Simulation::set_state(const State& s) {
   require_state_in_reach(body_->model(), s.x, s.v, "simulation");
-  State t = make_state(body_->model());
+  State t = make_state(body_->model(), settings_.step);
   t.x = s.x;
   t.v = s.v;
   t.t = s.t;
@@ -159,6 +160,7 @@ void Simulation::set_state(const State& s) {
   t.stiffening = s.stiffening;
   t.warnings = s.warnings;
   state_ = std::move(t);
+  prepare_step(body_->model(), state_, settings_.step);
   refresh_surface();
 }
 

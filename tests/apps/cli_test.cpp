@@ -282,6 +282,28 @@ TEST(CliBench, TableCasesAreReportedByBench) {
                                       "table_smrm_1200_nonlinear_local_cache"}));
 }
 
+TEST(CliThreads, BadThreadCountsFailWithOneLine) {
+  const fs::path dir = testing::temp_dir("cli-threads");
+  write(dir / "small.json", kSmallScene);
+  for (const std::string bad : {"0", "-2", "257", "99999999"}) {
+    for (const std::string& cmd :
+         {"bench --compare --threads " + bad, "run " + quote((dir / "small.json").string()) + " --out " +
+                                                  quote((dir / "out").string()) + " --threads " + bad}) {
+      const Result r = medspring(cmd);
+      EXPECT_EQ(r.rc, 1) << cmd;
+      EXPECT_EQ(count_lines(r.err), 1) << r.err;
+      EXPECT_NE(r.err.find("--threads: must be an integer in 1..256 (got " + bad + ")"), std::string::npos)
+          << r.err;
+      EXPECT_FALSE(fs::exists(dir / "out"));
+    }
+  }
+  // a good count runs (the kidney phantom is small: it runs on one thread)
+  const Result ok = medspring("run " + quote((dir / "small.json").string()) + " --out " +
+                              quote((dir / "ok").string()) + " --threads 2 --json");
+  ASSERT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_EQ(nlohmann::json::parse(ok.out)["updates"], 100);
+}
+
 TEST(CliPaper, QuickRunMakesTheReportFiguresAndTablesOnThePhantoms) {
   const fs::path dir = testing::temp_dir("cli-paper");
   const fs::path out = dir / "paper";

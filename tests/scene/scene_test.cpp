@@ -8,6 +8,7 @@
 #include <fstream>
 #include <string>
 
+#include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
 #include "medspring/core/units.hpp"
 #include "medspring/geometry/phantoms.hpp"
@@ -186,6 +187,18 @@ TEST(SceneBuild, TimeStepAboveTheStableBoundWithSubsteppingOffIsRejected) {
   EXPECT_EQ(build_error(
                 with("\"duration\": 1000", R"("duration": 1000, "integrator": {"dt": 2, "substep": true})")),
             "");
+}
+
+TEST(SceneParse, ThreadsAreReadWrittenAndRangeChecked) {
+  const Scene s = parse_scene(with("\"duration\": 1000", R"("duration": 1000, "integrator": {"threads": 2})"),
+                              ".", "t.json");
+  EXPECT_EQ(s.step.threads, 2);
+  EXPECT_NE(scene_to_json(s).find("\"threads\": 2"), std::string::npos);
+  for (const char* bad : {"0", "-3", "1000"}) {
+    const std::string e = build_error(
+        with("\"duration\": 1000", cat(R"("duration": 1000, "integrator": {"threads": )", bad, "}")));
+    EXPECT_NE(e.find("t.json: integrator.threads: must be"), std::string::npos) << e;
+  }
 }
 
 TEST(SceneBuild, PicksAndDirectionsThatTheModelCannotHaveAreRejected) {

@@ -30,11 +30,27 @@ struct StepSettings {
   double cg_tolerance = 1e-8;   // implicit: relative residual
   int cg_max_iterations = 200;  // implicit
   int newton_iterations = 1;    // implicit: 1 = linearly implicit; > 1 = full Newton with line search
+  int threads = 1;  // symplectic: threads of the step, 1..256 (kMaxThreads); see effective_threads
 };
 
 /// Validates settings (finite positive dt, safety in (0, 1], ...). Throws InvalidInput naming the field.
 /// With substep = false and the symplectic integrator, also rejects dt above the model's stable step at rest.
 void validate_step_settings(const Model& model, const StepSettings& s);
+
+/// Threads the step really uses: settings.threads, reduced so that every thread gets at least
+/// kMinSpringsPerThread springs (1 for smaller models), 1 for the implicit integrator, bending terms or a
+/// build without threads (WebAssembly). Deterministic: the same model and settings give the same count.
+int effective_threads(const Model& model, const StepSettings& settings);
+
+/// Readies a state for steps with these settings: allocates the implicit integrator's scratch when it
+/// is used and missing, and starts the worker pool and partitions the model for a threaded step (when
+/// effective_threads > 1). step() does this itself on first use; calling it beforehand keeps thread
+/// creation and allocation out of the first update.
+void prepare_step(const Model& model, State& state, const StepSettings& settings);
+
+/// A state at rest with only the scratch that steps with `settings` need (make_state(model) allocates
+/// the implicit integrator's too: about 360 bytes per node more), prepared by prepare_step.
+State make_state(const Model& model, const StepSettings& settings);
 
 enum class StepCode { Ok, RolledBack, Refused, Failed };
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 
 #include "medspring/core/types.hpp"
 #include "medspring/physics/model.hpp"
@@ -20,6 +21,20 @@ struct Warnings {
   std::uint64_t total() const {
     return nonfinite + velocity_limit + unstable_refused + substeps_capped + cg_not_converged + failed;
   }
+};
+
+struct ThreadedStep;  // worker pool + static partition of the threaded step (integrators.cpp)
+
+/// A State's worker pool for StepSettings::threads > 1. A copied State starts without one (it is made
+/// again by prepare_step or at the copy's first threaded step), so copies never share threads.
+struct ThreadedStepHandle {
+  std::shared_ptr<ThreadedStep> p;
+  ThreadedStepHandle() = default;
+  ThreadedStepHandle(const ThreadedStepHandle&) noexcept {}
+  ThreadedStepHandle& operator=(const ThreadedStepHandle&) noexcept { return *this; }
+  ThreadedStepHandle(ThreadedStepHandle&&) noexcept = default;
+  ThreadedStepHandle& operator=(ThreadedStepHandle&&) noexcept = default;
+  ~ThreadedStepHandle() = default;
 };
 
 /// Everything that changes while simulating. Copying a State is a checkpoint.
@@ -42,6 +57,7 @@ struct State {
   VecX cg_r, cg_z, cg_p, cg_q, dv, rhs, jacobi;  // implicit Euler (3N)
   VecX spring_a, spring_b;                       // implicit: per-spring stiffness coefficients (#S)
   MatX3 spring_n;                                // implicit: per-spring unit directions (#S x 3)
+  ThreadedStepHandle threaded;                   // symplectic, StepSettings::threads > 1
 };
 
 /// A state at rest (x = x0, v = 0, t = 0) with all scratch allocated.
