@@ -1,7 +1,9 @@
 // MedSpring in the browser (docs/web.md): the C++ engine as WebAssembly (dist/medspring.mjs), a three.js
 // view, and a fixed 1 ms physics tick caught up against the wall clock; every animation frame renders the
-// surface of the last tick. Left-drag on the surface pulls the picked node through a virtual-coupling
-// spring (docs/haptics.md); the arrow is the tool force. Tests drive the page through window.medspring.
+// surface of the last tick. Left-drag on the surface presses and slides a rigid spherical probe (the
+// default; docs/tools.md), closes a grasper's jaws on the surface and pulls, or pulls the picked node
+// through a virtual-coupling spring (docs/haptics.md); the arrow is the force on the tissue. Tests drive
+// the page through window.medspring.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
@@ -10,6 +12,9 @@ const MAX_CATCHUP_TICKS = 100; // at most this many ticks per pump; a longer lag
 const F_MAX = 3;              // N, device maximum of the coupling force
 const B_VC = 0.01;            // N ms/mm, coupling damping
 const K_VC0 = 0.1;            // N/mm, default coupling stiffness
+const TOOL_STEP = 0.05;       // a rigid tool moves at most this x its radius per 1 ms tick towards the cursor
+const GRASP_OPEN_DEG = 60;    // grasper: jaws open while approaching
+const GRASP_CLOSE_MS = 250;   // then close over this time once the press is reached
 const BUILTINS = [
   { id: 'builtin:kidney_phantom', builtin: 'kidney_phantom', name: 'Kidney phantom (built-in)', kind: 'hybrid',
     description: 'Procedural kidney (§4.1): hybrid, 458 surface nodes + 42 atoms' },
@@ -30,7 +35,8 @@ const S = {
   models: [],         // {id, name, kind, description, file | builtin}
   defaults: null,     // the model's tissue parameters as loaded
   pendingParams: null,
-  drag: null,         // {node, plane, hit0, tool0} while the left button holds a node
+  drag: null,         // {mode, node, plane, hit0, tool0, ...} while the left button holds the tool
+  mode: 'probe',      // left-drag: 'probe' (sphere), 'grasp' (grasper), 'pull' (node coupling)
   kvc: K_VC0,
   ticks: 0, dropped: 0,
   pending: 0,         // ms of wall clock not yet simulated
@@ -44,7 +50,7 @@ const S = {
 };
 
 // ---------------------------------------------------------------- three.js scene
-let renderer, scene, camera, controls, mesh, centerline, atoms, spokes, arrow, spring, toolDot;
+let renderer, scene, camera, controls, mesh, restMesh, centerline, atoms, spokes, arrow, spring, toolDot, probeMesh, jaws;
 
 function makeScene() {
   const view = $('view');
@@ -75,6 +81,17 @@ function makeScene() {
   toolDot = new THREE.Mesh(new THREE.SphereGeometry(1, 16, 12), new THREE.MeshBasicMaterial({ color: arrowColor }));
   toolDot.visible = false;
   scene.add(toolDot);
+  probeMesh = new THREE.Mesh(new THREE.SphereGeometry(1, 32, 24),
+    new THREE.MeshPhongMaterial({ color: 0xc9d1d9, transparent: true, opacity: 0.55, shininess: 80 }));
+  probeMesh.visible = false;
+  scene.add(probeMesh);
+  jaws = new THREE.Group();
+  for (let j = 0; j < 2; ++j) {
+    const jaw = new THREE.Mesh(new THREE.CylinderGeometry(1, 1, 1, 12), new THREE.MeshPhongMaterial({ color: 0xc9d1d9, shininess: 80 }));
+    jaws.add(jaw);
+  }
+  jaws.visible = false;
+  scene.add(jaws);
   new ResizeObserver(resize).observe(view);
   resize();
 }
@@ -88,13 +105,13 @@ function resize() {
 }
 
 function disposeModelObjects() {
-  for (const o of [mesh, centerline, atoms, spokes]) {
+  for (const o of [mesh, restMesh, centerline, atoms, spokes]) {
     if (!o) continue;
     scene.remove(o);
     o.geometry.dispose();
     o.material.dispose();
   }
-  mesh = centerline = atoms = spokes = null;
+  mesh = restMesh = centerline = atoms = spokes = null;
 }
 
 // Builds the three.js objects of the current engine and frames the camera on it.
@@ -108,6 +125,13 @@ function buildModelObjects() {
   geo.setIndex(new THREE.BufferAttribute(new Uint32Array(e.faces()), 1));
   mesh = new THREE.Mesh(geo, new THREE.MeshPhongMaterial({ vertexColors: true, side: THREE.DoubleSide, shininess: 40 }));
   scene.add(mesh);
+  // The rest surface (never drawn): a rigid tool aims at it, so a dent under the tool does not pull the
+  // cursor's target deeper.
+  const rg = new THREE.BufferGeometry();
+  rg.setAttribute('position', new THREE.BufferAttribute(new Float32Array(e.restPositions()), 3));
+  rg.setIndex(new THREE.BufferAttribute(new Uint32Array(e.faces()), 1));
+  rg.computeBoundingSphere();
+  restMesh = new THREE.Mesh(rg, new THREE.MeshBasicMaterial({ side: THREE.DoubleSide }));
 
   const na = e.numAtoms();
   const cg = new THREE.BufferGeometry();
@@ -203,6 +227,10 @@ function refreshGeometry() {
   // The tool: spring from the contact node to the tool, arrow = force on the tissue F = -reaction.
   const grabbed = e.grabbed();
   arrow.visible = spring.visible = toolDot.visible = grabbed;
+  const ts = e.toolState();
+  probeMesh.visible = !!ts && ts.kind === 'sphere';
+  jaws.visible = !!ts && ts.kind === 'grasper';
+  if (ts) drawTool(ts);
   if (grabbed) {
     const c = e.contact();
     const x = new THREE.Vector3(P[3 * c], P[3 * c + 1], P[3 * c + 2]);
@@ -223,6 +251,36 @@ function refreshGeometry() {
     } else {
       arrow.visible = false;
     }
+  }
+}
+
+// A rigid tool as the engine has it: the sphere, or the grasper's two jaws about their hinge; the arrow
+// is the force on the tissue (-reaction) from the tool's position.
+function drawTool(ts) {
+  const p = new THREE.Vector3().fromArray(ts.position), axis = new THREE.Vector3().fromArray(ts.axis);
+  if (ts.kind === 'sphere') {
+    probeMesh.position.copy(p);
+    probeMesh.scale.setScalar(ts.radius);
+  } else {
+    // jaws run from the hinge along axis rotated by +-opening/2 about the jaw plane's normal
+    const q = new THREE.Quaternion().setFromUnitVectors(new THREE.Vector3(0, 0, -1), axis);
+    const half = THREE.MathUtils.degToRad(ts.opening) / 2;
+    jaws.children.forEach((jaw, j) => {
+      const s = j ? -1 : 1;
+      const dir = new THREE.Vector3(s * Math.sin(half), 0, -Math.cos(half)).applyQuaternion(q);
+      jaw.position.copy(p).addScaledVector(dir, ts.length / 2);
+      jaw.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), dir);
+      jaw.scale.set(ts.radius, ts.length, ts.radius);  // unit cylinder along y
+    });
+  }
+  const F = new THREE.Vector3().fromArray(ts.force).negate();
+  const f = F.length();
+  arrow.visible = f > 1e-9;
+  if (arrow.visible) {
+    arrow.position.copy(p);
+    arrow.setDirection(F.clone().divideScalar(f));
+    const len = Math.max(0.02 * S.size, f * 0.25 * S.size);
+    arrow.setLength(len, Math.min(0.3 * len, 0.05 * S.size), Math.min(0.15 * len, 0.025 * S.size));
   }
 }
 
@@ -249,10 +307,44 @@ function pickAt(clientX, clientY) {
   return { node: best, point: hit.point.clone() };
 }
 
+/// Tool sizes for the current model (mm).
+function toolSizes() {
+  const radius = Number($('radius').value) * S.size;
+  return { radius, depth: Number($('depth').value) * radius, jawRadius: 0.012 * S.size, jawLength: 0.1 * S.size };
+}
+
+/// Where a rigid tool aims for a cursor position: its front at `depth` beyond the rest surface along the
+/// view ray (sphere: the centre a radius before that point; grasper: the hinge so that the jaw
+/// tips reach it). Off the rest surface, the target keeps to the camera-facing plane of the last one.
+function toolTarget(clientX, clientY) {
+  const d = S.drag;
+  raycaster.setFromCamera(ndc(clientX, clientY), camera);
+  const dir = raycaster.ray.direction.clone().normalize();
+  if (d.mode === 'grasp' && d.closedAt !== undefined) {  // holding: the grasp follows the cursor on its plane
+    const p = raycaster.ray.intersectPlane(d.plane, new THREE.Vector3());
+    return p ? d.tool0.clone().add(p.sub(d.hit0)) : null;
+  }
+  const hit = raycaster.intersectObject(restMesh, false)[0];
+  let front;
+  if (hit) {
+    front = hit.point.clone().addScaledVector(dir, d.depth);
+  } else {
+    const p = raycaster.ray.intersectPlane(d.plane, new THREE.Vector3());
+    if (!p) return null;
+    front = p;
+  }
+  d.plane.setFromNormalAndCoplanarPoint(camera.getWorldDirection(new THREE.Vector3()), front);
+  return front.addScaledVector(dir, -d.back);
+}
+
 function onPointerDown(ev) {
   if (ev.button !== 0 || !S.engine || S.drag) return;
   const hit = pickAt(ev.clientX, ev.clientY);
   if (!hit) return;  // a drag outside the surface does nothing
+  if (S.mode !== 'pull') {
+    startTool(ev, hit);
+    return;
+  }
   try {
     S.engine.grab(hit.node, S.kvc, B_VC, F_MAX);
   } catch (err) {
@@ -261,6 +353,7 @@ function onPointerDown(ev) {
   }
   const normal = camera.getWorldDirection(new THREE.Vector3());
   S.drag = {
+    mode: 'pull',
     node: hit.node,
     pointerId: ev.pointerId,
     plane: new THREE.Plane().setFromNormalAndCoplanarPoint(normal, hit.point),
@@ -272,12 +365,79 @@ function onPointerDown(ev) {
   ev.preventDefault();
 }
 
+/// Probe / grasp: the tool is placed outside the surface on the view ray through the picked point and
+/// moves in from there (at most TOOL_STEP x its radius per tick).
+function startTool(ev, hit) {
+  const sz = toolSizes();
+  const dir = hit.point.clone().sub(camera.position).normalize();
+  const grasp = S.mode === 'grasp';
+  const open = THREE.MathUtils.degToRad(GRASP_OPEN_DEG);
+  // sphere: front `depth` beyond the surface, centre r behind it; grasper: jaw tip centres at the surface
+  const back = grasp ? sz.jawLength * Math.cos(open / 2) : sz.radius;
+  const depth = grasp ? 0 : sz.depth;
+  const clearance = grasp ? 1.5 * sz.jawLength + 2 * sz.jawRadius : 1.5 * sz.radius;  // open jaws reach sideways
+  const start = hit.point.clone().addScaledVector(dir, -clearance);
+  const spec = grasp ? `grasper:${sz.jawRadius}:${sz.jawLength}:${GRASP_OPEN_DEG}` : `sphere:${sz.radius}`;
+  const step = TOOL_STEP * (grasp ? sz.jawLength : sz.radius);
+  try {
+    S.engine.placeTool(spec, start.x, start.y, start.z, dir.x, dir.y, dir.z, Number($('friction').value), F_MAX * 3, step);
+  } catch (err) {
+    showError(`${S.mode}: ${errorText(err)}`);
+    return;
+  }
+  S.drag = {
+    mode: S.mode, pointerId: ev.pointerId, dir, depth, back,
+    plane: new THREE.Plane().setFromNormalAndCoplanarPoint(camera.getWorldDirection(new THREE.Vector3()), hit.point),
+    hit0: hit.point.clone(),
+    downAt: performance.now(),
+  };
+  const target = toolTarget(ev.clientX, ev.clientY) || hit.point.clone().addScaledVector(dir, depth - back);
+  S.drag.target = target;
+  S.engine.moveTool(target.x, target.y, target.z);
+  renderer.domElement.setPointerCapture(ev.pointerId);
+  renderer.domElement.style.cursor = 'grabbing';
+  ev.preventDefault();
+}
+
+/// Grasp mode, every pump: once the jaws reached the press, they close over GRASP_CLOSE_MS and hold;
+/// from then on the cursor drags the held tissue.
+function updateGrasp(now) {
+  const d = S.drag;
+  if (!d || d.mode !== 'grasp' || !S.engine.hasTool()) return;
+  const ts = S.engine.toolState();
+  if (d.reachedAt === undefined) {
+    const gap = Math.hypot(ts.position[0] - d.target.x, ts.position[1] - d.target.y, ts.position[2] - d.target.z);
+    if (gap < 1e-6 * S.size + 1e-9) d.reachedAt = now;
+    return;
+  }
+  const s = Math.min(1, (now - d.reachedAt) / GRASP_CLOSE_MS);
+  S.engine.setOpening(GRASP_OPEN_DEG * (1 - s));
+  if (s >= 1 && d.closedAt === undefined) {
+    d.closedAt = now;
+    d.tool0 = new THREE.Vector3().fromArray(ts.position);
+    d.hit0 = d.lastPlanePoint ? d.lastPlanePoint.clone() : d.hit0;
+    d.plane.setFromNormalAndCoplanarPoint(camera.getWorldDirection(new THREE.Vector3()), d.hit0);
+  }
+}
+
 function onPointerMove(ev) {
   if (!S.drag) {  // hover: show whether a press would pick the surface
     if (ev.buttons === 0) renderer.domElement.style.cursor = pickAt(ev.clientX, ev.clientY) ? 'grab' : 'default';
     return;
   }
   if (ev.pointerId !== S.drag.pointerId) return;
+  if (S.drag.mode !== 'pull') {
+    if (S.drag.mode === 'grasp' && S.drag.closedAt === undefined) {  // before the jaws close: remember where
+      raycaster.setFromCamera(ndc(ev.clientX, ev.clientY), camera);
+      S.drag.lastPlanePoint = raycaster.ray.intersectPlane(S.drag.plane, new THREE.Vector3()) || S.drag.lastPlanePoint;
+      return;
+    }
+    const t = toolTarget(ev.clientX, ev.clientY);
+    if (!t) return;
+    S.drag.target = t;
+    S.engine.moveTool(t.x, t.y, t.z);
+    return;
+  }
   raycaster.setFromCamera(ndc(ev.clientX, ev.clientY), camera);
   const p = raycaster.ray.intersectPlane(S.drag.plane, new THREE.Vector3());
   if (!p) return;
@@ -347,6 +507,7 @@ function applyPendingParams() {
   S.pendingParams = null;
   try {
     S.engine.setParams(p);
+    if (S.drag && S.drag.mode !== 'pull') S.drag = null;  // the rebuilt engine removed the rigid tool
     if (S.error.startsWith('Parameters:')) showError('');
   } catch (err) {
     showError(`Parameters: ${errorText(err)}`);
@@ -436,6 +597,7 @@ async function loadModel(id) {
     `${entry.description || engine.description()} — ${engine.numSurfaceNodes()} surface nodes, ` +
     `${engine.numMasses()} masses, ${engine.numSprings()} springs`;
   buildModelObjects();
+  showToolValues();
   showError('');
   // a notice about the previous model (a divergence reset) does not carry over to this one
   $('message').hidden = true;
@@ -470,6 +632,7 @@ function pump() {
   }
   if (n <= 0) return;
   const e = S.engine;
+  updateGrasp(now);
   const t0 = performance.now();
   e.ticks(n);
   const wall = performance.now() - t0;
@@ -527,6 +690,8 @@ function stats() {
     renderMs: S.renderMs.length ? [...S.renderMs].sort((a, b) => a - b)[S.renderMs.length >> 1] : NaN,
     reaction: e ? e.reaction() : [0, 0, 0],
     grabbed: e ? e.grabbed() : false,
+    mode: S.mode,
+    tool: e ? e.toolState() : null,
     maxDisplacement: e ? e.maxDisplacement() : 0,
   };
 }
@@ -614,6 +779,20 @@ function bench({ model = 'kidney_phantom', csv, contact = 223, local = false, ba
   return out;
 }
 
+function setMode(m) {
+  if (!['probe', 'grasp', 'pull'].includes(m)) throw new Error(`unknown mode '${m}' (probe, grasp or pull)`);
+  if (S.drag) { S.drag = null; if (S.engine) S.engine.release(); }
+  S.mode = m;
+  $('mode').value = m;
+}
+function showToolValues() {
+  if (!S.size) return;
+  const sz = toolSizes();
+  $('radius-val').textContent = `${sz.radius.toFixed(1)} mm`;
+  $('depth-val').textContent = `${sz.depth.toFixed(1)} mm`;
+  $('friction-val').textContent = Number($('friction').value).toFixed(2);
+}
+
 // ---------------------------------------------------------------- start
 export async function start() {
   const api = {
@@ -628,7 +807,8 @@ export async function start() {
     get message() { return S.message; },
     get ready() { return !!S.engine && !S.loading; },
     set paused(v) { S.paused = !!v; },
-    loadModel, pickAt, project, stats, canvasStats, bench,
+    get mode() { return S.mode; },
+    loadModel, pickAt, project, stats, canvasStats, bench, setMode, toolSizes,
   };
   window.medspring = api;
   makeScene();
@@ -662,6 +842,10 @@ export async function start() {
   });
   $('kvc').addEventListener('input', () => { S.kvc = logSlider('kvc', K_VC0); showParamValues(sliderParams()); });
   $('reset').addEventListener('click', () => { S.drag = null; S.engine.reset(); });
+  $('mode').addEventListener('change', (ev) => setMode(ev.target.value));
+  for (const id of ['radius', 'depth', 'friction']) $(id).addEventListener('input', showToolValues);
+  const m = new URLSearchParams(location.search).get('mode');
+  if (m) setMode(m);
 
   await loadModelList();
   const wanted = new URLSearchParams(location.search).get('model');

@@ -4,6 +4,7 @@
 # all installed by scripts/install-web-deps.sh.
 #   web_test.sh build OBJ_DIR                                  the wasm engine (web/build.sh, incremental)
 #   web_test.sh wasm REFERENCE_EXE OUT_PREFIX MODEL NODE [reference options]   wasm = native trace
+#   web_test.sh tool MEDSPRING_EXE OUT_DIR MODEL PATH TOOL_SPEC FRICTION   wasm = native, a rigid tool
 #   web_test.sh api MODELS_DIR                                 the JS API of the engine (node)
 #   web_test.sh page MEDSPRING_EXE OUT_DIR MODELS_DIR          the page in headless chromium (Playwright)
 set -euo pipefail
@@ -43,6 +44,12 @@ case "$mode" in
     done
     "$exe" "$model" --node "$node" "${ref[@]}" --out-trace "$out.native.csv"
     exec node "$web/test/wasm_matches_native.mjs" "$traj" "$out.native.csv" "$node" "$model" "${js[@]}"
+    ;;
+  tool)
+    need_node
+    exe="$1" out="$2" model="$3" path="$4" spec="$5" friction="$6"
+    "$exe" haptics "$model" --trajectory "$path" --tool "$spec" --friction "$friction" --out "$out" --force
+    exec node "$web/test/wasm_tool_matches_native.mjs" "$path" "$out/force_trace.csv" "$model" "$spec" "$friction"
     ;;
   api)
     need_node

@@ -1,6 +1,7 @@
 // JavaScript API of the engine (embind), compiled by web/build.sh (docs/web.md). One Engine = one
 // Simulation of a model (a bundled phantom or a model package, models/model_package.hpp) plus a haptic
-// virtual coupling (sim/haptics.hpp) for the mouse tool.
+// virtual coupling (sim/haptics.hpp) for the mouse tool, or a rigid tool (sphere probe, grasper:
+// sim/tool_sim.hpp, docs/tools.md) that presses, slides and grasps through the contact model.
 //
 //   const ms = await createMedSpring();
 //   const e = new ms.Engine('kidney_phantom', true, false);    // or new ms.Engine(uint8array, true, false)
@@ -28,6 +29,8 @@
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 #include "medspring/sim/haptics.hpp"
+#include "medspring/sim/tool_sim.hpp"
+#include "medspring/tools/tool.hpp"
 
 namespace medspring::web {
 namespace {
@@ -163,6 +166,7 @@ class Engine {
   void grab(int i, double k_vc, double b_vc, double f_max) {
     guarded([&] {
       check_node(i);
+      drop_tool();
       haptic_.k_vc = k_vc;
       haptic_.b_vc = b_vc;
       haptic_.f_max = f_max;
@@ -179,9 +183,76 @@ class Engine {
   void release() {
     if (loop_) loop_->release();
     loop_.reset();
+    drop_tool();
     reaction_.setZero();
   }
   bool grabbed() const { return loop_ != nullptr; }
+
+  // ---- a rigid tool (docs/tools.md): "sphere:R" | "capsule:R:L" | "grasper:R:L:DEG"
+  /// Places a rigid tool with its centre (sphere) / tip / hinge at (x, y, z), its local -z along
+  /// (dx, dy, dz) (the direction it presses in), replacing a held node or another tool. Throws an Error
+  /// for a bad tool, pose or friction, or a tool that starts inside the organ. Each tick the tool moves
+  /// towards moveTool()'s target by at most maxStep (mm; 0 = no limit) and the contact reaction is
+  /// reaction() (saturated to f_max N).
+  void placeTool(const std::string& spec, double x, double y, double z, double dx, double dy, double dz,
+                 double friction, double f_max, double max_step) {
+    guarded([&] {
+      const Tool t = parse_tool(spec);
+      const Vec3 p(x, y, z), d(dx, dy, dz);
+      require(p.allFinite() && d.allFinite() && d.norm() > 0,
+              "placeTool: the position and a non-zero direction must be finite");
+      require(std::isfinite(max_step) && max_step >= 0, "placeTool: maxStep must be >= 0 (got ", max_step,
+              ")");
+      release();
+      Pose pose;
+      pose.position = p;
+      pose.rotation = Quat::FromTwoVectors(Vec3(0, 0, -1), d.normalized());
+      ContactSettings cs;
+      cs.friction = friction;
+      HapticSettings hs;
+      hs.f_max = f_max;
+      hs.record = false;
+      auto tools = std::make_unique<ToolSimulation>(*sim_, cs);
+      tools->add_tool(t, pose);
+      tool_loop_ = std::make_unique<ToolHapticLoop>(*tools, 0, hs);
+      tools_ = std::move(tools);
+      tool_ = p;
+      max_step_ = max_step;
+      return 0;
+    });
+  }
+  /// Opening of the grasper (degrees): closing to <= the grasp angle holds what the jaws touch.
+  void setOpening(double degrees) {
+    guarded([&] {
+      require(tools_ != nullptr, "setOpening: no tool placed");
+      tools_->set_opening(0, degrees * 3.14159265358979323846 / 180.0);
+      return 0;
+    });
+  }
+  bool hasTool() const { return tools_ != nullptr; }
+  /// The placed tool: {kind, radius, length, opening (deg), position [xyz], axis [xyz] (local -z),
+  /// force [xyz] (N, on the tool), torque, area (mm^2), penetration (mm), contacts, grasping,
+  /// attached, graspForce (N)}; null without a tool.
+  val toolState() const {
+    if (!tools_) return val::null();
+    const ToolState& s = tools_->contact().state(0);
+    val o = val::object();
+    o.set("kind", to_string(s.tool.kind));
+    o.set("radius", s.tool.radius);
+    o.set("length", s.tool.length);
+    o.set("opening", s.tool.opening * 180.0 / 3.14159265358979323846);
+    o.set("position", vec(s.pose.position));
+    o.set("axis", vec(s.pose.rotation * Vec3(0, 0, -1)));
+    o.set("force", vec(s.force));
+    o.set("torque", vec(s.torque));
+    o.set("area", s.area);
+    o.set("penetration", s.penetration);
+    o.set("contacts", static_cast<double>(s.contacts));
+    o.set("grasping", s.grasping);
+    o.set("attached", static_cast<double>(s.attached));
+    o.set("graspForce", s.grasp_force.norm());
+    return o;
+  }
   int contact() const { return loop_ ? static_cast<int>(loop_->contact()) : -1; }
   val tool() const { return vec(tool_); }
   /// Reaction for the device (-F, N) of the last tick; zero when nothing is grabbed.
@@ -254,7 +325,8 @@ class Engine {
     return o;
   }
   /// Sets any of {k, eta, kr, beta, nonlinear} and rebuilds the body; the state (positions,
-  /// velocities, time) and a grabbed tool are kept when the DOF count is unchanged. Invalid values
+  /// velocities, time) and a grabbed node are kept when the DOF count is unchanged (a rigid tool is
+  /// removed). Invalid values
   /// throw an Error naming the parameter, and nothing changes.
   void setParams(const val& p) {
     guarded([&] {
@@ -284,6 +356,7 @@ class Engine {
       }
       const Index contact = loop_ ? loop_->contact() : -1;
       loop_.reset();
+      drop_tool();  // a rigid tool belongs to the old simulation: it is removed
       package_ = std::move(next);
       body_ = std::move(body);
       sim_ = std::move(sim);
@@ -335,12 +408,50 @@ class Engine {
       return o;
     });
   }
+  /// Replays a tool path CSV (time_ms, x, y, z) with a rigid tool exactly as `medspring haptics
+  /// --tool SPEC --friction MU` does; returns per tick [t, tool xyz, reaction on the tool xyz] flat.
+  val runToolTrajectory(const std::string& csv, const std::string& spec, double friction) {
+    return guarded([&] {
+      release();
+      std::istringstream in(csv);
+      const ToolPath path = read_tool_path(in, "tool path");
+      require(!path.empty(), "tool path: no rows");
+      ContactSettings cs;
+      cs.friction = friction;
+      HapticSettings hs;
+      ToolSimulation tools(*sim_, cs);
+      const Tool t = parse_tool(spec);
+      tools.add_tool(t, path.front().pose);
+      ToolHapticLoop loop(tools, 0, hs);
+      const long n = static_cast<long>(std::floor(path.back().t / hs.tick + 1e-9));
+      for (long i = 0; i < n; ++i) {
+        const ToolKeyframe f = tool_path_at(path, static_cast<double>(i) * hs.tick);
+        Pose p = tools.contact().state(0).pose;
+        p.rotation = f.pose.rotation;
+        tools.set_pose(0, p);
+        if (f.opening >= 0 && t.kind == ToolKind::Grasper) tools.set_opening(0, f.opening);
+        loop.tick(f.pose.position);
+      }
+      val a = val::array();
+      for (const HapticSample& s : loop.samples()) {
+        a.call<void>("push", s.t);
+        for (int c = 0; c < 3; ++c) a.call<void>("push", s.tool(c));
+        for (int c = 0; c < 3; ++c) a.call<void>("push", -s.force(c));
+      }
+      mirror();
+      return a;
+    });
+  }
 
  private:
   static val vec(const Vec3& v) {
     val a = val::array();
     for (int c = 0; c < 3; ++c) a.call<void>("push", v(c));
     return a;
+  }
+  void drop_tool() {
+    tool_loop_.reset();
+    tools_.reset();  // detaches its surface forces from the simulation
   }
   void check_node(int i) const {
     if (i < 0 || i >= body_->num_surface_nodes())
@@ -352,6 +463,11 @@ class Engine {
     const auto a = std::chrono::steady_clock::now();
     if (loop_) {
       reaction_ = loop_->tick(tool_);
+    } else if (tool_loop_) {
+      const Vec3 at = tools_->contact().state(0).pose.position;
+      Vec3 step = tool_ - at;
+      if (max_step_ > 0 && step.norm() > max_step_) step *= max_step_ / step.norm();
+      reaction_ = tool_loop_->tick(at + step);
     } else {
       reaction_.setZero();
       sim_->update();
@@ -414,6 +530,9 @@ class Engine {
   BodyPtr body_;
   std::unique_ptr<Simulation> sim_;
   std::unique_ptr<HapticLoop> loop_;
+  std::unique_ptr<ToolSimulation> tools_;  // a rigid tool (placeTool), or none
+  std::unique_ptr<ToolHapticLoop> tool_loop_;
+  double max_step_ = 0;
   HapticSettings haptic_;
   Vec3 tool_ = Vec3::Zero(), reaction_ = Vec3::Zero();
   std::vector<float> pos_, rest_, atoms_;
@@ -473,6 +592,11 @@ EMSCRIPTEN_BINDINGS(medspring) {
       .function("moveTool", &Engine::moveTool)
       .function("release", &Engine::release)
       .function("grabbed", &Engine::grabbed)
+      .function("placeTool", &Engine::placeTool)
+      .function("setOpening", &Engine::setOpening)
+      .function("hasTool", &Engine::hasTool)
+      .function("toolState", &Engine::toolState)
+      .function("runToolTrajectory", &Engine::runToolTrajectory)
       .function("contact", &Engine::contact)
       .function("tool", &Engine::tool)
       .function("reaction", &Engine::reaction)

@@ -128,6 +128,52 @@ check('a diverged state is reset to rest with a message', () => {
   e.delete();
 });
 
+check('a rigid probe: press, the surface outside the sphere, the reaction against the press, release', () => {
+  const e = new ms.Engine('kidney_phantom', true, false);
+  throwsWith(() => e.placeTool('sphere:8', 0, 0, 0, 0, 0, -1, 0, 3, 0), /inside/);
+  throwsWith(() => e.placeTool('sphere:-1', 0, 0, 40, 0, 0, -1, 0, 3, 0), /radius/);
+  throwsWith(() => e.placeTool('sphere:8', 0, 0, 40, 0, 0, 0, 0, 3, 0), /direction/);
+  assert.equal(e.hasTool(), false);
+  assert.equal(e.toolState(), null);
+  // examples/tools/probe_press_slide.csv: r = 8 mm from z = 27 to 23 on the broad +z face
+  e.placeTool('sphere:8', 0, 0, 27, 0, 0, -1, 0.2, 10, 0.4);
+  e.moveTool(0, 0, 23);
+  e.ticks(300);
+  const ts = e.toolState(), P = e.positions(), c = ts.position;
+  assert.equal(ts.kind, 'sphere');
+  assert.ok(Math.abs(c[2] - 23) < 1e-12, `probe at ${c}`);
+  let closest = Infinity;
+  for (let i = 0; i < P.length; i += 3) closest = Math.min(closest, Math.hypot(P[i] - c[0], P[i + 1] - c[1], P[i + 2] - c[2]));
+  assert.ok(closest >= 0.95 * 8, `a node ${closest} mm from the centre`);
+  assert.ok(ts.contacts > 0 && ts.penetration <= 0.05 * 8, JSON.stringify(ts));
+  const r = e.reaction();
+  assert.ok(r[2] > 0.05 && Math.hypot(r[0], r[1]) < 0.2 * r[2], `reaction ${r} (the press is along -z)`);
+  e.release();
+  assert.equal(e.hasTool(), false);
+  assert.deepEqual(e.reaction(), [0, 0, 0]);
+  const pressed = e.maxDisplacement();
+  e.ticks(2000);
+  assert.ok(e.maxDisplacement() < 0.01 * pressed, `${pressed} -> ${e.maxDisplacement()} mm after release`);
+  e.delete();
+});
+
+check('a grasper closes on the surface, holds points and pulls them out', () => {
+  const e = new ms.Engine('kidney_phantom', true, false);
+  // examples/tools/grasp_pull.json: jaws r = 1.5 mm, 12 mm, opened 60 degrees, hinge at z = 28.4
+  e.placeTool('grasper:1.5:12:60', 0, 0, 32, 0, 0, -1, 0, 10, 0.5);
+  e.moveTool(0, 0, 28.4);
+  e.ticks(50);
+  for (let k = 1; k <= 10; ++k) { e.setOpening(60 * (1 - k / 10)); e.ticks(10); }
+  const held = e.toolState();
+  assert.ok(held.grasping && held.attached > 0, JSON.stringify(held));
+  e.moveTool(0, 0, 36.4);
+  e.ticks(300);
+  const pulled = e.toolState();
+  assert.ok(pulled.grasping && pulled.graspForce > 1e-3 && e.maxDisplacement() > 2, JSON.stringify(pulled));
+  throwsWith(() => new ms.Engine('kidney_phantom', true, false).setOpening(10), /no tool/);
+  e.delete();
+});
+
 if (modelsDir && existsSync(path.join(modelsDir, 'models.json'))) {
   const list = JSON.parse(readFileSync(path.join(modelsDir, 'models.json'), 'utf8'));
   const models = Array.isArray(list) ? list : list.models;

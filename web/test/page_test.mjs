@@ -1,11 +1,15 @@
 // The browser page end to end (playwright-core driving Debian's chromium, headless, WebGL2 through
 // SwiftShader), served by `medspring view`:
-//   the page loads and the canvas is not blank; a scripted mouse drag on the kidney moves the nodes under
+//   the page loads and the canvas is not blank; the default left-drag presses a rigid sphere (the probe)
+//   into the kidney and slides it: every surface node stays outside the sphere (>= 0.95 R from its
+//   centre), the reaction on the probe points back at the user (against the press), and the tissue
+//   returns to rest after release; the grasp mode closes two jaws on the kidney, holds surface points and
+//   pulls them out with the cursor; in the pull mode a scripted mouse drag on the kidney moves the nodes under
 //   the cursor in the drag direction and gives a non-zero reaction force; after release the surface
 //   returns to rest within 1e-3 mm; a drag outside the surface does nothing; switching to the vessel works;
 //   a broken model file shows an error message (the canvas stays drawn); a diverged state is reset with
 //   a visible message; a parameter slider rebuilds the model.
-// Screenshots (rest, pulled, released, vessel, broken) go to OUT_DIR as test artifacts.
+// Screenshots (rest, probe, grasp, pulled, released, vessel, broken) go to OUT_DIR as test artifacts.
 //
 // Usage: node web/test/page_test.mjs --medspring PATH/TO/medspring --out OUT_DIR [--chromium /usr/bin/chromium]
 //                                    [--models DIR]   (default: medspring export --web into OUT_DIR/models)
@@ -103,7 +107,6 @@ try {
   await page.screenshot({ path: path.join(args.out, 'rest.png') });
   ok(`canvas not blank: ${(100 * canvas.foreground).toFixed(1)} % foreground, ${canvas.colours} colours`);
 
-  // ---- the drag: pick near the middle of the canvas, pull right and up
   const box = await page.locator('#view canvas').boundingBox();
   const start = await page.evaluate(({ x0, y0, w, h }) => {
     for (let r = 0; r < 200; r += 10)
@@ -114,6 +117,75 @@ try {
     return null;
   }, { x0: box.x + box.width / 2, y0: box.y + box.height / 2, w: box.width, h: box.height });
   assert.ok(start, 'no surface under the middle of the canvas');
+
+  // ---- the probe (default mode): press the kidney, slide, hold; the surface stays outside the sphere and
+  // the reaction on the probe points back at the user
+  assert.equal(await page.evaluate(() => window.medspring.mode), 'probe');
+  const probeState = () => page.evaluate(() => {
+    const ms = window.medspring, e = ms.engine, ts = e.toolState();
+    if (!ts) return { tool: null, reaction: e.reaction(), max: e.maxDisplacement() };
+    const P = e.positions(), c = ts.position;
+    let closest = Infinity;
+    for (let i = 0; i < P.length; i += 3) closest = Math.min(closest, Math.hypot(P[i] - c[0], P[i + 1] - c[1], P[i + 2] - c[2]));
+    const cam = ms.camera.position, dir = [c[0] - cam.x, c[1] - cam.y, c[2] - cam.z];
+    const dn = Math.hypot(...dir), r = e.reaction(), rn = Math.hypot(...r);
+    const cosine = rn > 0 ? (r[0] * dir[0] + r[1] * dir[1] + r[2] * dir[2]) / (rn * dn) : 0;
+    return { tool: ts, closest, cosine, reaction: r, max: e.maxDisplacement(), size: ms.toolSizes() };
+  });
+  await page.mouse.move(start.x, start.y);
+  await page.mouse.down();
+  await sleep(1200);
+  const pressed = await probeState();
+  for (let k = 1; k <= 10; ++k) {
+    await page.mouse.move(start.x + 3 * k, start.y);
+    await sleep(15);
+  }
+  await sleep(1200);
+  const slid = await probeState();
+  await page.screenshot({ path: path.join(args.out, 'probe.png') });
+  for (const [what, st] of [['pressed', pressed], ['slid', slid]]) {
+    assert.ok(st.tool && st.tool.kind === 'sphere', `${what}: no probe ${JSON.stringify(st)}`);
+    const R = st.tool.radius;
+    assert.ok(st.tool.contacts > 0 && st.max > 0.25 * st.size.depth, `${what}: the probe does not press: ${JSON.stringify(st)}`);
+    assert.ok(st.closest >= 0.95 * R, `${what}: a surface node ${st.closest} mm from the centre of the ${R} mm probe`);
+    assert.ok(Math.hypot(...st.reaction) > 1e-3 && st.cosine < -0.3,
+      `${what}: the reaction ${st.reaction} does not point back at the user (cosine with the press ${st.cosine})`);
+  }
+  const slide = Math.hypot(...[0, 1, 2].map((c) => slid.tool.position[c] - pressed.tool.position[c]));
+  assert.ok(slide > 0.5, `the probe did not slide with the cursor (${slide} mm)`);
+  ok(`probe r = ${pressed.tool.radius.toFixed(2)} mm pressed ${pressed.size.depth.toFixed(2)} mm and slid ${slide.toFixed(2)} mm: ` +
+    `closest surface node ${(pressed.closest / pressed.tool.radius).toFixed(3)} R / ${(slid.closest / slid.tool.radius).toFixed(3)} R ` +
+    `from the centre, reaction ${Math.hypot(...pressed.reaction).toFixed(3)} / ${Math.hypot(...slid.reaction).toFixed(3)} N at ` +
+    `cosine ${pressed.cosine.toFixed(3)} / ${slid.cosine.toFixed(3)} with the press, ${slid.tool.contacts} contacts`);
+  await page.mouse.up();
+  await page.waitForFunction(() => window.medspring.engine.maxDisplacement() <= 1e-3, null, { timeout: 30000, polling: 50 });
+  const probeOff = await probeState();
+  assert.equal(probeOff.tool, null);
+  assert.deepEqual(probeOff.reaction, [0, 0, 0]);
+  ok('probe released: no tool, zero reaction, back to rest within 1e-3 mm');
+
+  // ---- grasp: the jaws close on the surface, hold points and pull them towards the cursor
+  await page.selectOption('#mode', 'grasp');
+  await page.mouse.move(start.x, start.y);
+  await page.mouse.down();
+  await page.waitForFunction(() => { const t = window.medspring.engine.toolState(); return t && t.grasping; }, null,
+    { timeout: 10000, polling: 20 });
+  const held = await page.evaluate(() => ({ ...window.medspring.engine.toolState(), max: window.medspring.engine.maxDisplacement() }));
+  await page.mouse.move(start.x, start.y - 60, { steps: 10 });
+  await sleep(1200);
+  const pulledOut = await page.evaluate(() => ({ ...window.medspring.engine.toolState(), max: window.medspring.engine.maxDisplacement() }));
+  await page.screenshot({ path: path.join(args.out, 'grasp.png') });
+  assert.ok(held.attached > 0, JSON.stringify(held));
+  assert.ok(pulledOut.grasping && pulledOut.attached > 0 && pulledOut.graspForce > 1e-3, JSON.stringify(pulledOut));
+  assert.ok(pulledOut.max > held.max + 0.5, `the grasp did not pull the tissue: ${held.max} -> ${pulledOut.max} mm`);
+  ok(`grasp: ${held.attached} points held, pulled: max displacement ${pulledOut.max.toFixed(2)} mm, grasp force ` +
+    `${pulledOut.graspForce.toFixed(3)} N`);
+  await page.mouse.up();
+  await page.waitForFunction(() => window.medspring.engine.maxDisplacement() <= 1e-3, null, { timeout: 30000, polling: 50 });
+  ok('grasp released: back to rest');
+
+  // ---- the node pull (the pull mode): pick near the middle of the canvas, pull right and up
+  await page.selectOption('#mode', 'pull');
   // The nodes under the cursor: the picked node and its neighbours on screen (within 25 px).
   const before = await page.evaluate(({ node }) => {
     const ms = window.medspring, n = ms.engine.numSurfaceNodes(), c = ms.project(node), near = [];
