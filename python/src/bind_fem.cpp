@@ -2,6 +2,9 @@
 // closed surface under a contact-disk load, at its vertices) and medspring.calibrate (hybrid-model
 // stiffnesses fitted to that reference). Needs ccx (calculix-ccx) and tetgen; the GIL is released while
 // they run.
+#include <optional>
+#include <vector>
+
 #include "bind_common.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
@@ -80,7 +83,7 @@ void bind_fem(py::module_& m) {
       "calibrate",
       [](py::handle vertices, py::handle faces, py::handle atoms, py::handle centres, py::handle forces,
          double E_kPa, double nu, double radius, py::handle support_direction, double support_depth,
-         bool nonlinear) {
+         bool nonlinear, py::object fem_displacements) {
         SurfaceMesh s;
         s.V = points_arg(vertices, "vertices", -1, "V");
         s.F = faces_arg(faces, "faces", s.num_vertices());
@@ -88,15 +91,27 @@ void bind_fem(py::module_& m) {
         const MatX3 C = points_arg(centres, "centres", -1, "L");
         const MatX3 Fs = points_arg(forces, "forces", static_cast<Index>(C.rows()), "L");
         const fem::SupportRule rule = support_rule(support_direction, support_depth);
+        // Precomputed FEM displacements (one (V, 3) array per training load, e.g. solved as Dask tasks by
+        // medspring.study.fem): the fit then runs no CalculiX solve of its own.
+        std::vector<MatX3> given;
+        if (!fem_displacements.is_none()) {
+          const py::sequence seq = fem_displacements.cast<py::sequence>();
+          if (static_cast<Index>(py::len(seq)) != C.rows())
+            throw InvalidInput(cat("calibrate: fem_displacements has ", py::len(seq), " arrays for ",
+                                   C.rows(), " training loads"));
+          for (std::size_t i = 0; i < py::len(seq); ++i)
+            given.push_back(points_arg(seq[i], cat("fem_displacements[", i, "]"), s.num_vertices(), "V"));
+        }
         VecX mult;
         std::vector<fem::CalibrationCase> training;
         {
           py::gil_scoped_release release;
-          const fem::OrganReference ref(s, fem::Material::from_kpa(E_kPa, nu), rule);
+          std::optional<fem::OrganReference> ref;
+          if (given.empty()) ref.emplace(s, fem::Material::from_kpa(E_kPa, nu), rule);
           for (Index i = 0; i < C.rows(); ++i) {
             fem::CalibrationCase c;
             c.load = {C.row(i).transpose(), Fs.row(i).transpose(), radius};
-            c.u_fem = ref.surface_displacement(c.load);
+            c.u_fem = given.empty() ? ref->surface_displacement(c.load) : given[static_cast<std::size_t>(i)];
             c.contact = nearest_node(s.V, c.load.centre);
             training.push_back(std::move(c));
           }
@@ -126,12 +141,14 @@ void bind_fem(py::module_& m) {
       },
       "vertices"_a, "faces"_a, "atoms"_a, "centres"_a, "forces"_a, "E_kPa"_a = 10.0, "nu"_a = 0.45,
       "radius"_a = 8.0, "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0), "support_depth"_a = 5.0,
-      "nonlinear"_a = true,
+      "nonlinear"_a = true, "fem_displacements"_a = py::none(),
       "Fits the hybrid model's stiffnesses (k_surf, k_spoke, k_cl, k_r; N/mm) on the surface (vertices,\n"
       "faces; mm) with centerline atoms to the FEM response of a tissue (E in kPa, nu) on the training\n"
       "loads: force rows (L, 3) in N over contact disks at centres (L, 3). The support rule pins the same\n"
       "nodes in both (returned as 'support'). Returns a dict of the fitted parameters; evaluate them on\n"
-      "loads you did not train on (see examples/python/fit_kidney_to_tissue.py).");
+      "loads you did not train on (see examples/python/fit_kidney_to_tissue.py). fem_displacements: the\n"
+      "training loads' FEM displacements (L arrays (V, 3), from fem_reference with the same material,\n"
+      "radius and support) instead of solving them here (medspring.study.fem solves them as Dask tasks).");
 }
 
 }  // namespace medspring::python

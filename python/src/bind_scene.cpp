@@ -6,6 +6,7 @@
 //   r = SceneRunner()
 //   out = r.run(json_text, base_dir, "study run 17", field_times=[500.0])
 //   out["summary"]["contact_hold_mm"], out["fields"]  # (T, S, 3) float64 displacement, mm
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -129,6 +130,9 @@ struct RunOutput {
   double run_seconds = 0.0;
   bool model_built = false;  // the model was built by this run (not found in the cache)
   Index num_surface_nodes = 0;
+  // The first tool (scene "tools", docs/tools.md), over every update: the peak and final magnitude of
+  // its reaction force (N) and its peak penetration (mm); 0 without tools.
+  double tool_peak_force = 0.0, tool_final_force = 0.0, tool_peak_penetration = 0.0;
 };
 
 // Builds and runs scenes, keeping every model it built (by model key) for later runs.
@@ -184,6 +188,15 @@ class SceneRunner {
       };
     const SceneResult r = run_scene(built, hooks);
     out.summary = r.summary;
+    if (!r.trace.tools.empty()) {
+      const SceneTrace::ToolTrace& tt = r.trace.tools.front();
+      for (std::size_t k = 0; k < tt.fx.size(); ++k) {
+        const double f = std::sqrt(tt.fx[k] * tt.fx[k] + tt.fy[k] * tt.fy[k] + tt.fz[k] * tt.fz[k]);
+        out.tool_peak_force = std::max(out.tool_peak_force, f);
+        out.tool_final_force = f;
+        out.tool_peak_penetration = std::max(out.tool_peak_penetration, tt.penetration[k]);
+      }
+    }
     for (double t : times) {
       std::size_t j = 0;
       while (j + 1 < frame_times.size() && frame_times[j] < t - 1e-9) ++j;
@@ -221,7 +234,11 @@ py::dict summary_dict(const RunSummary& s) {
 
 py::dict output_dict(RunOutput& o, bool fields) {
   py::dict d;
-  d["summary"] = summary_dict(o.summary);
+  py::dict summary = summary_dict(o.summary);
+  summary["tool_peak_force_N"] = o.tool_peak_force;
+  summary["tool_final_force_N"] = o.tool_final_force;
+  summary["tool_peak_penetration_mm"] = o.tool_peak_penetration;
+  d["summary"] = summary;
   d["load_node"] = o.load_node;
   d["load_force"] = copy_of(o.load_force);
   d["build_seconds"] = o.build_seconds;
