@@ -11,6 +11,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "accuracy_summary.hpp"
 #include "commands.hpp"
 #include "medspring/builders/output_folder.hpp"
 #include "medspring/core/check.hpp"
@@ -450,6 +451,9 @@ int cmd_accuracy(const Args& args) {
                       (dir / "figures.log").string()));
     fs::remove(dir / "figures.log");
   });
+  // The full run is kept as the latest for `medspring paper`'s summary (accuracy_summary.hpp).
+  if (!st.quick && !keep_latest_accuracy(j) && !args.flag("json"))
+    std::cout << "accuracy: note: could not keep the run as " << latest_accuracy_path().string() << std::endl;
   if (args.flag("json"))
     std::cout << j.dump(1) << '\n';
   else

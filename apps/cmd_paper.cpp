@@ -18,6 +18,7 @@
 #include <optional>
 #include <sstream>
 
+#include "accuracy_summary.hpp"
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/scene/build.hpp"
@@ -302,7 +303,7 @@ std::string img(const std::string& rel, const std::string& alt) {
 
 int cmd_paper(const Args& args) {
   const auto t_start = clock_type::now();
-  args.require_known({"out", "force", "quick", "quiet", "json", "scenes"});
+  args.require_known({"out", "force", "quick", "quiet", "json", "scenes", "accuracy"});
   if (!args.positional().empty())
     throw InvalidInput(cat("unexpected argument '", args.positional()[0], "' (see medspring paper --help)"));
   const auto out_arg = args.get("out");
@@ -310,6 +311,33 @@ int cmd_paper(const Args& args) {
   const bool force = args.flag("force"), quick = args.flag("quick"), as_json = args.flag("json");
   Progress progress(args.flag("quiet") || as_json);
   check_output_folder(*out_arg, force);
+  // Accuracy against the FEM: read from a previous `medspring accuracy` run (--accuracy FILE, else the
+  // latest one kept beside the FEM cache), never run here (it takes minutes); a bad file is refused now.
+  std::string accuracy_section;
+  {
+    const auto given = args.get("accuracy");
+    const fs::path file = given && !given->empty() ? fs::path(*given) : latest_accuracy_path();
+    std::error_code ec;
+    if (fs::is_regular_file(file, ec)) {
+      try {
+        accuracy_section =
+            accuracy_summary_markdown(json::parse(std::ifstream(file)), cat("`", file.string(), "`"));
+      } catch (const json::exception& e) {
+        if (given)
+          throw InvalidInput(cat("--accuracy: ", file.string(), ": not an accuracy.json (", e.what(), ")"));
+        accuracy_section =
+            cat("## Accuracy against the FEM reference\n\nThe latest `medspring accuracy` run (",
+                file.string(), ") could not be read (", e.what(), ").\n\n");
+      }
+    } else if (given) {
+      throw InvalidInput(cat("--accuracy: ", file.string(), ": no such file"));
+    } else {
+      accuracy_section = cat(
+          "## Accuracy against the FEM reference\n\nNo `medspring accuracy` run was found (", file.string(),
+          "); run `medspring accuracy --out DIR` (CalculiX, ~15 min) and the next report "
+          "summarises it here.\n\n");
+    }
+  }
 
   // Resources, data and the figure tool chain, checked before anything runs.
   const fs::path scenes_dir =
@@ -927,6 +955,8 @@ int cmd_paper(const Args& args) {
           "Institute, National Institutes of Health, Department of Health and Human Services, under Contract "
           "No. "
           "HHSN268201100035C.\n\n";
+  md << accuracy_section;
+
   // Files
   md << "## Files\n\n"
      << "- `tables.json`: Tables I and II (measured and the paper's), every timing case, the ordering checks "

@@ -112,7 +112,9 @@ const std::vector<Command>& commands() {
        "  --quiet        no progress on stderr\n"
        "  --json         print the tables and per-scene results as JSON on stdout\n"
        "  --scenes DIR   the bundled scene folder (default: the source tree's scenes/, then\n"
-       "                 <prefix>/share/medspring/scenes)\n",
+       "                 <prefix>/share/medspring/scenes)\n"
+       "  --accuracy FILE  the accuracy.json summarised in the report (default: the latest full\n"
+       "                 `medspring accuracy` run, kept beside the FEM cache; CalculiX is never run here)\n",
        {"force", "quick", "quiet", "json"},
        cmd_paper},
       {"haptics",

@@ -11,6 +11,7 @@
 #include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/models/tissue.hpp"
 
 namespace medspring::python {
 
@@ -558,6 +559,60 @@ void bind_models(py::module_& m) {
       "path"_a,
       "Rebuilds the body saved in a model package. Raises IoError (truncated, corrupted, other version) or "
       "InvalidInput (invalid contents), naming the file.");
+  // ---- Tissue materials (models/tissue.hpp, docs/accuracy.md) ----
+  m.def(
+      "tissue_settings",
+      [](py::handle material, const std::string& kind, bool nonlinear,
+         const std::string& organ) -> py::object {
+        TissueMaterial t;
+        if (py::isinstance<py::str>(material)) {
+          t = tissue_preset(material.cast<std::string>());
+        } else if (py::isinstance<py::dict>(material)) {
+          const auto d = material.cast<py::dict>();
+          for (const auto& item : d) {
+            const auto key = item.first.cast<std::string>();
+            if (key != "preset" && key != "E_kPa" && key != "nu")
+              throw InvalidInput("material." + key + ": unknown key (expected one of: preset, E_kPa, nu)");
+          }
+          if (d.contains("preset")) t = tissue_preset(d["preset"].cast<std::string>());
+          if (!d.contains("preset") && !d.contains("E_kPa"))
+            throw InvalidInput("material.E_kPa: is required (Young's modulus, kPa) unless a preset is named");
+          if (d.contains("E_kPa")) t.E_kPa = d["E_kPa"].cast<double>();
+          if (d.contains("nu")) t.nu = d["nu"].cast<double>();
+        } else {
+          throw InvalidInput("material: must be a preset name (kidney, aorta) or a dict {E_kPa, nu}");
+        }
+        check_tissue(t, "material");
+        require(organ == "phantom" || organ == "kidney", "organ: must be phantom or kidney (got ", organ,
+                ")");
+        const TissueOrgan o = organ == "phantom" ? TissueOrgan::Phantom : TissueOrgan::RealKidney;
+        if (kind == "hybrid") {
+          HybridSettings s;
+          s.nonlinear = nonlinear;
+          apply_tissue(t, o, s);
+          return py::cast(s);
+        }
+        if (kind == "surface") {
+          SurfaceBodyParams p;
+          if (!nonlinear) p.duffing.mode = DuffingMode::Linear;
+          apply_tissue(t, o, p);
+          return py::cast(p);
+        }
+        if (kind == "smrm") {
+          SmrmSettings s;
+          s.chain.nonlinear = nonlinear;
+          apply_tissue(t, s);
+          return py::cast(s);
+        }
+        throw InvalidInput("kind: must be hybrid, surface or smrm (got " + kind + ")");
+      },
+      "material"_a, "kind"_a = "hybrid", "nonlinear"_a = true, "organ"_a = "phantom",
+      "Settings of a model kind for a tissue: material is a preset ('kidney', 'aorta') or a dict {'E_kPa', "
+      "'nu'} "
+      "(or {'preset'}); hybrid and surface get the stiffnesses calibrated against the CalculiX reference "
+      "(organ: "
+      "'phantom' or 'kidney', the calibration's body), scaled by the shear modulus; smrm gets the wall's E. "
+      "Raises InvalidInput for E <= 0, nu outside (-1, 0.5) or an unknown preset, naming the key.");
 }
 
 }  // namespace medspring::python

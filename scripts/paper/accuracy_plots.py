@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Figures of `medspring accuracy` (docs/accuracy.md): reads DIR/accuracy.json and DIR/error_maps.json and
-writes DIR/figures/speed_accuracy.png and DIR/figures/error_<organ>_<params>.png (matplotlib, Agg)."""
+writes DIR/figures/speed_accuracy.png, DIR/figures/error_<organ>_<params>.png and
+DIR/figures/force_displacement_<organ>.png (matplotlib, Agg)."""
 import json
 import pathlib
 import sys
@@ -40,6 +41,46 @@ def speed_accuracy(acc, out):
     plt.close(fig)
 
 
+def force_displacement(organ, out):
+    """Contact displacement against force at every site: the FEM (black) and each model kind (colour; dashed:
+    default parameters, solid: calibrated). Returns the number of curves drawn."""
+    sites = sorted({c["site"] for r in organ["models"] for c in r["cases"]})
+    kinds = sorted({r["kind"] for r in organ["models"]})
+    colour = {k: "C%d" % (i % 10) for i, k in enumerate(kinds)}
+    fig, axes = plt.subplots(1, len(sites), figsize=(3.2 * len(sites), 3.6), squeeze=False, sharey=True)
+    drawn = 0
+    for ax, site in zip(axes[0], sites):
+        fem = {}
+        for r in organ["models"]:
+            pts = sorted((c["force_N"], c["contact_model_mm"]) for c in r["cases"]
+                         if c["site"] == site and "contact_model_mm" in c)
+            for c in r["cases"]:
+                if c["site"] == site and "contact_fem_mm" in c:
+                    fem[c["force_N"]] = c["contact_fem_mm"]
+            if pts:
+                f, u = zip(*pts)
+                ax.plot(f, u, "-" if r["calibrated"] else "--", color=colour[r["kind"]], marker=".", lw=1)
+                drawn += 1
+        if fem:
+            f = sorted(fem)
+            ax.plot([0.0] + f, [0.0] + [fem[x] for x in f], "k-o", lw=2, ms=4)
+            drawn += 1
+        ax.set_title("site %d" % site, fontsize=9)
+        ax.set_xlabel("force (N)")
+        ax.grid(True, alpha=0.3)
+    axes[0][0].set_ylabel("contact displacement (mm)")
+    handles = [plt.Line2D([], [], color="k", lw=2, label="FEM (CalculiX)")]
+    handles += [plt.Line2D([], [], color=colour[k], label=k) for k in kinds]
+    handles += [plt.Line2D([], [], color="grey", ls="--", label="default"),
+                plt.Line2D([], [], color="grey", ls="-", label="calibrated")]
+    fig.legend(handles=handles, fontsize=6, loc="upper right", ncol=2)
+    fig.suptitle("Force against contact displacement: %s" % organ["organ"], fontsize=10, x=0.3)
+    fig.tight_layout(rect=(0, 0, 1, 0.8))
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+    return drawn
+
+
 def error_map(m, out):
     V = np.array(m["V"]).reshape(-1, 3)
     F = np.array(m["F"]).reshape(-1, 3)
@@ -71,6 +112,8 @@ def main():
     maps = json.loads((d / "error_maps.json").read_text())
     (d / "figures").mkdir(exist_ok=True)
     speed_accuracy(acc, d / "figures" / "speed_accuracy.png")
+    for organ in acc["organs"]:
+        force_displacement(organ, d / "figures" / ("force_displacement_" + organ["organ"].replace(" ", "_") + ".png"))
     for name, m in maps.items():
         error_map(m, d / "figures" / ("error_" + name.replace(" ", "_") + ".png"))
 

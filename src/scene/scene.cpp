@@ -385,6 +385,44 @@ void parse_parameters(const Ctx& c, const json& j, const std::string& path, Scen
   o.finish();
 }
 
+// "material": "kidney" | {"preset": "aorta"} | {"E_kPa": 12, "nu": 0.45} -> calibrated stiffnesses of the
+// kind (models/tissue.hpp); "parameters" parsed afterwards override them.
+void parse_material(const Ctx& c, const json& j, const std::string& path, SceneModel& m) {
+  TissueMaterial t;
+  if (j.is_string()) {
+    const std::string name = as_string(c, j, path);
+    t = with_path(c, path, [&] { return tissue_preset(name); });
+  } else {
+    Obj o(c, j, path);
+    const json* preset = o.get("preset");
+    if (preset) {
+      const std::string name = as_string(c, *preset, o.at("preset"));
+      t = with_path(c, o.at("preset"), [&] { return tissue_preset(name); });
+    }
+    const json* e = o.get("E_kPa");
+    if (!e && !preset) fail(c, o.at("E_kPa"), "is required (Young's modulus, kPa) unless a preset is named");
+    if (e) {
+      t.E_kPa = as_number(c, *e, o.at("E_kPa"));
+      t.preset.clear();
+    }
+    t.nu = o.number("nu", t.nu);
+    if (o.has("nu")) t.preset.clear();
+    o.finish();
+  }
+  if (!(std::isfinite(t.E_kPa) && t.E_kPa > 0))
+    fail(c, path + ".E_kPa", cat("must be > 0 (got ", t.E_kPa, ")"));
+  if (!(std::isfinite(t.nu) && t.nu > -1.0 && t.nu < 0.5))
+    fail(c, path + ".nu", cat("must be in (-1, 0.5) (got ", t.nu, ")"));
+  const TissueOrgan organ =
+      m.source.type == ModelSource::Type::Phantom ? TissueOrgan::Phantom : TissueOrgan::RealKidney;
+  m.hybrid.nonlinear = m.nonlinear;
+  if (!m.nonlinear) m.surface.duffing.mode = DuffingMode::Linear;
+  if (m.kind == ModelKind::Hybrid) apply_tissue(t, organ, m.hybrid);
+  if (m.kind == ModelKind::Surface) apply_tissue(t, organ, m.surface);
+  if (m.kind == ModelKind::Smrm) apply_tissue(t, m.smrm);
+  m.material = t;
+}
+
 void parse_model(const Ctx& c, const json& j, SceneModel& m) {
   Obj o(c, j, "model");
   const json* kind = o.get("kind");
@@ -395,6 +433,7 @@ void parse_model(const Ctx& c, const json& j, SceneModel& m) {
   if (!source) fail(c, "model.source", "is required");
   parse_source(c, *source, "model.source", m);
   m.nonlinear = o.boolean("nonlinear", true);
+  if (const json* t = o.get("material")) parse_material(c, *t, "model.material", m);
   m.surface_nodes = o.index("surface_nodes", 0, 0);
   if (m.surface_nodes > 0 && m.surface_nodes < 20) fail(c, "model.surface_nodes", "must be 0 or >= 20");
   if (m.surface_nodes > 0 && m.source.type != ModelSource::Type::Mesh &&
@@ -722,6 +761,12 @@ std::string scene_to_json(const Scene& s) {
                 {"surface_nodes", m.surface_nodes},
                 {"parameters", params}};
   if (m.kind != ModelKind::Surface) model["atoms"] = m.atoms;
+  if (m.material) {
+    if (!m.material->preset.empty())
+      model["material"] = m.material->preset;
+    else
+      model["material"] = {{"E_kPa", m.material->E_kPa}, {"nu", m.material->nu}};
+  }
 
   json loads = json::array();
   for (const SceneLoad& L : s.loads) {

@@ -269,6 +269,13 @@ TEST(CliHelp, RunAndPaperAreListedAndHaveHelp) {
   }
   EXPECT_NE(medspring("paper --out x --bogus").rc, 0);
   EXPECT_NE(medspring("paper").rc, 0);
+  // an --accuracy file that is not there is refused before anything runs, and nothing is written
+  const fs::path dir = testing::temp_dir("cli-paper-accuracy");
+  const Result bad = medspring("paper --quick --out " + quote((dir / "p").string()) + " --accuracy " +
+                               quote((dir / "missing.json").string()));
+  EXPECT_NE(bad.rc, 0);
+  EXPECT_NE(bad.err.find("--accuracy"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "p" / "report.md"));
 }
 
 TEST(CliBench, TableCasesAreReportedByBench) {
@@ -307,10 +314,31 @@ TEST(CliThreads, BadThreadCountsFailWithOneLine) {
 TEST(CliPaper, QuickRunMakesTheReportFiguresAndTablesOnThePhantoms) {
   const fs::path dir = testing::temp_dir("cli-paper");
   const fs::path out = dir / "paper";
-  const Result r = medspring("paper --quick --out " + quote(out.string()));
+  // A previous accuracy run (two held-out cases of one model kind) is summarised, not re-run.
+  using nlohmann::json;
+  const auto held_out = [](double contact, double rms, bool train) {
+    return json{
+        {"site", 1}, {"force_N", 0.2}, {"train", train}, {"contact_error_pct", contact}, {"rms_pct", rms}};
+  };
+  const json model = {{"kind", "hybrid (Duffing)"},
+                      {"calibrated", true},
+                      {"update_us", 12.5},
+                      {"cases", json::array({held_out(1.0, 1.0, true), held_out(6.0, 9.0, false),
+                                             held_out(10.0, 11.0, false)})}};
+  const json organ = {
+      {"organ", "kidney phantom"}, {"fem", {{"median_solve_s", 4.2}}}, {"models", json::array({model})}};
+  const json accuracy = {{"material", {{"E_kPa", 10}, {"nu", 0.45}}},
+                         {"contact_radius_mm", 8},
+                         {"organs", json::array({organ})}};
+  const fs::path acc = dir / "accuracy.json";
+  std::ofstream(acc) << accuracy.dump();
+  const Result r =
+      medspring("paper --quick --out " + quote(out.string()) + " --accuracy " + quote(acc.string()));
   ASSERT_EQ(r.rc, 0) << r.err;
   const std::string report = slurp(out / "report.md");
-  for (const char* part : {"## Fig. 9", "## Fig. 10", "**Table I**", "**Table II**", "## Parameters used"})
+  for (const char* part : {"## Fig. 9", "## Fig. 10", "**Table I**", "**Table II**", "## Parameters used",
+                           "## Accuracy against the FEM reference (CalculiX)",
+                           "| kidney phantom | hybrid (Duffing) | — | 8.0 % | — | 10.0 % | 12.5 |", "4.2 s"})
     EXPECT_NE(report.find(part), std::string::npos) << part;
   for (const char* png : {"fig9_A", "fig9_B", "fig9_C", "fig9_D", "fig10_A", "fig10_B", "fig10_C", "fig10_D",
                           "fig10_E", "fig10_F", "fig9_displacement", "fig10_displacement",

@@ -23,6 +23,7 @@
 #include "medspring/medial/vessel_phantoms.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/smrm_vessel.hpp"
+#include "medspring/models/tissue.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/scene/scene_tools.hpp"
@@ -79,6 +80,9 @@ struct SceneModel {
   HybridSettings hybrid;      // kind "hybrid" (nonlinear copied in by the parser)
   SurfaceBodyParams surface;  // kind "surface" (duffing.mode Linear when not nonlinear)
   SmrmSettings smrm;          // kind "smrm" (chain.nonlinear copied in by the parser)
+  // "material": a preset name or {"E_kPa", "nu"} (or {"preset"}): resolved by the parser to the calibrated
+  // stiffnesses of the kind (models/tissue.hpp) before "parameters", which override them.
+  std::optional<TissueMaterial> material;
 };
 
 /// A point force of a scene, before it is resolved on the built model (build_scene).
