@@ -778,11 +778,13 @@ int cmd_paper(const Args& args) {
                                       [&](const SceneRun& r) { return r.e.file == "tree_strong_" + site; });
     const Vec3 n = v.dir_force;
     const Vec3 view = (perpendicular(v.tangent, n) - 0.5 * n).normalized();
-    jobs.push_back(render_job(
+    json job = render_job(
         v, kHold, fig / ("tree_" + site + ".png"),
         "Vessel tree - strong force 0.5 N on the " + std::string(site == "arch" ? "arch" : "branch"),
         primary == "real" ? "VMR 0159 aorta with its branches" : "vessel tree phantom", view, -n,
-        v.summary["max_disp_peak_mm"].get<double>(), true));
+        v.summary["max_disp_peak_mm"].get<double>(), true);
+    job.erase("atoms_vtp");  // the run's atom file is one polyline in atom order, not the tree's branches
+    jobs.push_back(job);
   }
   const fs::path jobs_file = root / "data" / "render_jobs.json";
   write_text(jobs_file, json{{"width", 1000}, {"height", 750}, {"jobs", jobs}}.dump(2));

@@ -184,6 +184,17 @@ TEST(CliBuildVessel, SceneWithAllBranchesRunsTheTreeAndReturnsToRest) {
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.err.find("model.source.centerline.branches: must be \"all\""), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(tmp / "bad"));
+  // A tree's traced atoms are checked against its atom count (60) once it is built.
+  std::ofstream(tmp / "bad_atom.json")
+      << R"({"name": "bad_atom", "model": {"kind": "smrm", "source": {"centerline": {"file": ")"
+      << file.string()
+      << R"(", "unit": "cm", "branches": "all"}}}, "record": {"atoms": [60]}, "duration": 10})";
+  const CliRun bad_atom = run_cli(
+      "run \"" + (tmp / "bad_atom.json").string() + "\" --out \"" + (tmp / "bad_atom").string() + "\"", tmp);
+  EXPECT_EQ(bad_atom.code, 1);
+  EXPECT_NE(bad_atom.err.find("record.atoms[0]: index 60 out of range [0, 60)"), std::string::npos)
+      << bad_atom.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad_atom"));
 }
 
 TEST(CliBuildVessel, FromTheAortaSegmentationReportsItsDistanceToTheInput) {
