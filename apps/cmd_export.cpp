@@ -8,7 +8,9 @@
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/geometry/phantoms.hpp"
+#include "medspring/io/centerline_io.hpp"
 #include "medspring/models/model_package.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "scene_support.hpp"
@@ -80,6 +82,19 @@ int cmd_export(const Args& args) {
                                    "VMR 0159 aorta (arch and descending aorta): SMRM vessel, 40 atoms x 30 "
                                    "spokes rebuilt from the centerline and its radii",
                                    loader, progress));
+      {  // the whole VMR 0159 tree: its 4 polylines merged into branches (docs/vessels.md)
+        const std::string name = "Real aorta tree", file = "aorta_tree.msm";
+        progress.begin(cat("build ", name));
+        const auto tree = std::make_shared<SmrmTree>(merge_centerlines(
+            read_centerlines(data / "vmr-0159-aorta-centerline.vtp", LengthUnit::Centimetre)));
+        const std::string description =
+            cat("VMR 0159 aorta with its branches: SMRM vessel tree, ", tree->num_branches(), " branches, ",
+                tree->num_junctions(), " junctions, ", tree->num_atoms(),
+                " atoms (shared at the junctions), one 30-spoke tube per branch, wall bending");
+        progress.end(cat(tree->kind(), ", ", tree->num_surface_nodes(), " surface nodes, ", tree->num_atoms(),
+                         " masses"));
+        entries.push_back({file, name, description, package_of(*tree, name, description)});
+      }
     } else {
       notes.push_back(
           cat("the real anatomy was not found in ", data.string(), " (set MEDSPRING_DATA): phantoms only"));

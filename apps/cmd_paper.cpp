@@ -21,6 +21,8 @@
 #include "accuracy_summary.hpp"
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/io/centerline_io.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "scene_support.hpp"
@@ -293,6 +295,76 @@ Vec3 perpendicular(const Vec3& a, const Vec3& b) {
   return c.normalized();
 }
 
+// ---- the vessel tree (issue 17, docs/vessels.md) ------------------------------------------------------
+
+/// The phantom tree in VMTK style (two polylines sharing their trunk, mm): an aorta-like trunk of radius
+/// 6 mm that goes on (radius 5 mm) past a junction where a 2.5 mm branch leaves upwards.
+std::vector<Centerline> phantom_tree_lines() {
+  auto line = [](const std::vector<Vec3>& pts, const std::vector<double>& r, const std::string& name) {
+    Centerline c;
+    c.name = name;
+    c.points.resize(static_cast<Index>(pts.size()), 3);
+    c.radii.resize(static_cast<Index>(pts.size()));
+    for (std::size_t k = 0; k < pts.size(); ++k) {
+      c.points.row(static_cast<Index>(k)) = pts[k].transpose();
+      c.radii[static_cast<Index>(k)] = r[k];
+    }
+    return c;
+  };
+  std::vector<Vec3> trunk;
+  std::vector<double> rt;
+  for (int k = 0; k <= 20; ++k) {  // 0..40 mm along x, turning gently towards -y
+    const double x = 2.0 * k;
+    trunk.emplace_back(x, -0.004 * x * x, 0.0);
+    rt.push_back(6.0 - 0.02 * x);
+  }
+  std::vector<Vec3> a = trunk, b = trunk;
+  std::vector<double> ra = rt, rb = rt;
+  const Vec3 j = trunk.back();
+  for (int k = 1; k <= 30; ++k) {  // the aorta goes on and down
+    const double s = 2.0 * k;
+    a.push_back(j + Vec3(s, -0.3 * s - 0.004 * s * s, 0.0));
+    ra.push_back(5.0);
+  }
+  for (int k = 1; k <= 15; ++k) {  // the branch leaves upwards
+    const double s = 2.0 * k;
+    b.push_back(j + Vec3(0.3 * s, s, 0.05 * s));
+    rb.push_back(2.5);
+  }
+  return {line(a, ra, "aorta"), line(b, rb, "branch")};
+}
+
+/// The tree scene of the paper's tree experiments: the whole tree, nonlinear chain, a force on surface
+/// node `node` along the inward normal, ramp 20 ms, held to 500 ms, released, run to 1000 ms.
+std::string tree_scene_json(const std::string& name, const fs::path& file, const std::string& unit,
+                            Index node, Index atom, double force, Index every) {
+  const json j = {
+      {"name", name},
+      {"description", "vessel tree (issue 17): every branch of the centerline file, shared junction atoms"},
+      {"model",
+       {{"kind", "smrm"},
+        {"source", {{"centerline", {{"file", file.string()}, {"unit", unit}, {"branches", "all"}}}}},
+        {"nonlinear", true}}},
+      {"loads", json::array({{{"node", node},
+                              {"direction", "inward_normal"},
+                              {"magnitude", force},
+                              {"t_ramp", 20},
+                              {"t_release", 500}}})},
+      {"integrator", {{"method", "symplectic_euler"}, {"dt", 0.5}, {"substep", true}}},
+      {"duration", 1000},
+      {"local", {{"enabled", false}}},
+      {"record",
+       {{"every", every},
+        {"key_times", json::array({495, 500, 505, 510, 520, 1000})},
+        {"atoms", json::array({atom})}}}};
+  return j.dump(2);
+}
+
+/// The surface node on ring `local` (spoke 0) of a tree branch.
+Index tree_node(const SmrmTree& t, Index branch, Index local) {
+  return t.node_begin(branch) + local * t.settings().vessel.spokes;
+}
+
 // ---- report --------------------------------------------------------------------------------------------
 
 std::string img(const std::string& rel, const std::string& alt) {
@@ -427,6 +499,132 @@ int cmd_paper(const Args& args) {
     }
     r.notes = built.notes;
     progress.end(cat(r.summary["updates"].get<long>(), " updates, ", r.summary["frames"].size(), " frames"));
+  }
+
+  // ---- the whole vessel tree (issue 17): light and strong force on the arch and on a branch -----------
+  std::vector<SceneRun> tree_runs;
+  json tree_json = json::object();
+  {
+    fs::path file;
+    std::string unit = "mm";
+    if (primary == "real") {
+      file = data / "vmr-0159-aorta-centerline.vtp";
+      unit = "cm";
+    } else {
+      file = root / "data" / "phantom_tree.vtp";
+      write_centerlines(file, phantom_tree_lines());
+    }
+    const Index every = quick ? 100 : 20;
+    progress.begin(cat("vessel tree (", primary, ")"));
+    // The sites: "arch" = the middle atom of the longest root-to-leaf path (the aorta itself; on VMR 0159
+    // its arch), "branch" = the middle atom of the longest leaf branch off that path.
+    const BuiltScene probe = build_scene(
+        parse_scene(tree_scene_json("probe", file, unit, 0, 0, 0.05, every), root, "tree scene"), &loader);
+    const auto& tree = dynamic_cast<const SmrmTree&>(*probe.body);
+    const Index nb = tree.num_branches();
+    std::vector<double> path_len(static_cast<std::size_t>(nb), 0.0);
+    std::vector<char> has_child(static_cast<std::size_t>(nb), 0);
+    for (Index b = 0; b < nb; ++b) {
+      const Index p = tree.parent(b);
+      const double len = static_cast<double>(tree.branch_atoms(b).size() - 1);
+      path_len[static_cast<std::size_t>(b)] = len + (p >= 0 ? path_len[static_cast<std::size_t>(p)] : 0.0);
+      if (p >= 0) has_child[static_cast<std::size_t>(p)] = 1;
+    }
+    Index leaf = 0;
+    for (Index b = 0; b < nb; ++b)
+      if (!has_child[static_cast<std::size_t>(b)] &&
+          path_len[static_cast<std::size_t>(b)] > path_len[static_cast<std::size_t>(leaf)])
+        leaf = b;
+    std::vector<Index> path;  // branches root .. leaf
+    for (Index b = leaf; b >= 0; b = tree.parent(b)) path.insert(path.begin(), b);
+    // the middle atom of the longest path: walk half its atom steps
+    Index arch_branch = path.front(), arch_local = 1;
+    {
+      double half = 0.5 * path_len[static_cast<std::size_t>(leaf)];
+      for (Index b : path) {
+        const double len = static_cast<double>(tree.branch_atoms(b).size() - 1);
+        if (half <= len || b == path.back()) {
+          arch_branch = b;
+          arch_local = std::clamp<Index>(static_cast<Index>(std::lround(half)), 1,
+                                         static_cast<Index>(tree.branch_atoms(b).size()) - 2);
+          break;
+        }
+        half -= len;
+      }
+    }
+    Index side = -1;
+    for (Index b = 0; b < nb; ++b)
+      if (!has_child[static_cast<std::size_t>(b)] && std::find(path.begin(), path.end(), b) == path.end() &&
+          (side < 0 || tree.branch_atoms(b).size() > tree.branch_atoms(side).size()))
+        side = b;
+    if (side < 0) side = leaf;
+    const Index side_local = static_cast<Index>(tree.branch_atoms(side).size()) / 2;
+    SmrmTree::Workspace ws = tree.make_workspace();
+    const CurvatureCheck rest_check = tree.validity(tree.model().x0, ws);
+    tree_json = {
+        {"set", primary},
+        {"branches", nb},
+        {"junctions", tree.num_junctions()},
+        {"atoms", tree.num_atoms()},
+        {"surface_nodes", tree.num_surface_nodes()},
+        {"rest_max_rho_kappa", rest_check.max_rho_kappa},
+        {"rest_rho_kappa_violations", rest_check.violations},
+        {"arch",
+         {{"branch", arch_branch},
+          {"atom", tree.branch_atoms(arch_branch)[static_cast<std::size_t>(arch_local)]}}},
+        {"branch",
+         {{"branch", side}, {"atom", tree.branch_atoms(side)[static_cast<std::size_t>(side_local)]}}},
+        {"runs", json::array()}};
+    struct Site {
+      std::string key, label;
+      Index node;
+    };
+    const std::vector<Site> sites = {{"arch", "arch", tree_node(tree, arch_branch, arch_local)},
+                                     {"branch", cat("branch ", side), tree_node(tree, side, side_local)}};
+    for (const Site& site : sites)
+      for (const double f : {0.05, 0.5}) {
+        SceneRun r;
+        const std::string strength = f < 0.1 ? "light" : "strong";
+        r.e = {cat("tree_", strength, "_", site.key),
+               "tree",
+               f,
+               true,
+               false,
+               false,
+               cat(strength, " ", sig(f), " N on the ", site.label)};
+        r.set = primary;
+        r.scene =
+            parse_scene(tree_scene_json(r.e.file, file, unit, site.node, tree.node_atom(site.node), f, every),
+                        root, "tree scene");
+        const BuiltScene built = build_scene(r.scene, &loader);
+        r.rel = cat("scenes/", r.set, "/", r.e.file);
+        r.dir = root / r.rel;
+        r.summary = run_scene_to_folder(built, r.dir, progress, SceneRunOptions{});
+        const MatX3& S0 = built.body->rest_surface();
+        r.contact = S0.row(built.loads.front().node).transpose();
+        r.dir_force = built.loads.front().force.normalized();
+        r.center = 0.5 * (S0.colwise().minCoeff() + S0.colwise().maxCoeff()).transpose();
+        r.size = (S0.colwise().maxCoeff() - S0.colwise().minCoeff()).norm();
+        const Index a = tree.node_atom(site.node);
+        const Index b = tree.node_branch(site.node);
+        const auto& ids = tree.branch_atoms(b);
+        const auto it = std::find(ids.begin(), ids.end(), a);
+        const std::size_t k = static_cast<std::size_t>(it - ids.begin());
+        const MatX3& X0 = tree.model().x0;
+        r.tangent = (X0.row(ids[std::min(k + 1, ids.size() - 1)]) - X0.row(ids[k > 0 ? k - 1 : 0]))
+                        .transpose()
+                        .normalized();
+        r.radius = (r.contact - X0.row(a).transpose()).norm();
+        json s = r.summary;
+        s.erase("frames");
+        s.erase("atoms_rest");
+        s["folder"] = r.rel;
+        s["site"] = site.key;
+        s["loaded_atom"] = a;
+        tree_json["runs"].push_back(s);
+        tree_runs.push_back(std::move(r));
+      }
+    progress.end(cat(nb, " branches, ", tree_runs.size(), " runs"));
   }
 
   // ---- Tables I and II -------------------------------------------------------------------------------
@@ -603,6 +801,19 @@ int cmd_paper(const Args& args) {
       }
     }
   }
+  for (const std::string site : {"arch", "branch"}) {  // the tree under the strong force
+    const SceneRun& v = *std::find_if(tree_runs.begin(), tree_runs.end(),
+                                      [&](const SceneRun& r) { return r.e.file == "tree_strong_" + site; });
+    const Vec3 n = v.dir_force;
+    const Vec3 view = (perpendicular(v.tangent, n) - 0.5 * n).normalized();
+    json job = render_job(
+        v, kHold, fig / ("tree_" + site + ".png"),
+        "Vessel tree - strong force 0.5 N on the " + std::string(site == "arch" ? "arch" : "branch"),
+        primary == "real" ? "VMR 0159 aorta with its branches" : "vessel tree phantom", view, -n,
+        v.summary["max_disp_peak_mm"].get<double>(), true);
+    job.erase("atoms_vtp");  // the run's atom file is one polyline in atom order, not the tree's branches
+    jobs.push_back(job);
+  }
   const fs::path jobs_file = root / "data" / "render_jobs.json";
   write_text(jobs_file, json{{"width", 1000}, {"height", 750}, {"jobs", jobs}}.dump(2));
   run_logged("rendering (VTK under xvfb-run)",
@@ -661,6 +872,7 @@ int cmd_paper(const Args& args) {
   tables_out["scenes"] = scenes_json;
   tables_out["paper_seconds"] = seconds;
   tables_out["quick"] = quick;
+  tables_out["tree"] = tree_json;
   write_text(root / "tables.json", tables_out.dump(2) + "\n");
 
   std::ostringstream md;
@@ -819,6 +1031,44 @@ int cmd_paper(const Args& args) {
        << fixed(S(lf, "local_hold_mm"), 3)
        << " mm under the light force (= 39/172 · F / k_loc, §6.6) on top of the bend: small next to the "
           "vessel's radius, so the close-up F colours the nodes by the local displacement alone.\n\n";
+  }
+  // The vessel tree
+  {
+    md << "## The whole vessel tree — light and strong force on the arch and on a branch\n\n"
+       << "Not in the paper (its future work; issue 17, docs/vessels.md): the "
+       << (primary == "real" ? "VMR 0159 centerline with all its polylines"
+                             : "phantom tree (a trunk and a branch)")
+       << " merged into a tree of " << tree_json["branches"].get<long>() << " branches and "
+       << tree_json["junctions"].get<long>() << " junction(s), " << tree_json["atoms"].get<long>()
+       << " atoms (a child's first atom is its parent's last), one 30-spoke SMRM tube per branch ("
+       << tree_json["surface_nodes"].get<long>()
+       << " surface nodes), wall bending, the root's first and every leaf's last atom fixed. The force "
+          "acts on spoke 0 of the middle ring of the longest root-to-leaf path (\"arch\", atom "
+       << tree_json["arch"]["atom"].get<long>() << ") or of the longest side branch (\"branch "
+       << tree_json["branch"]["branch"].get<long>() << "\", atom " << tree_json["branch"]["atom"].get<long>()
+       << "), along the inward normal, transferred to its atom; ramp 20 ms, hold to 500 ms, release. Δα: the "
+          "largest change of a branch's turning angle from rest with the force held; ρκ: the validity of "
+          "§5.6 over every branch's interior atoms (at rest its largest value is "
+       << sig(tree_json["rest_max_rho_kappa"].get<double>()) << ", with "
+       << tree_json["rest_rho_kappa_violations"].get<long>() << " atom(s) ≥ 1"
+       << (tree_json["rest_rho_kappa_violations"].get<long>() > 0
+               ? ": thin, tightly curved branches sampled at the aorta's spacing; they count in every update"
+               : "")
+       << ").\n\n"
+       << "| | |\n|---|---|\n"
+       << "| " << img("figures/tree_arch.png", "tree, strong force on the arch") << " | "
+       << img("figures/tree_branch.png", "tree, strong force on a branch") << " |\n\n"
+       << "| run | loaded atom, force held | contact node, force held | max surface | back within 1e-3 mm "
+          "after release | bend Δα, force held | max ρκ | updates with ρκ ≥ 1 | median update |\n"
+          "|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& r : tree_runs)
+      md << "| " << r.e.label << " | " << fixed(S(r, "atom_hold_mm"), 3) << " mm | "
+         << fixed(S(r, "contact_hold_mm"), 3) << " mm | " << fixed(S(r, "max_disp_peak_mm"), 3) << " mm | "
+         << fixed(S(r, "return_ms"), 1) << " ms | " << fixed(S(r, "hold_turning_change_deg"), 1) << "° | "
+         << sig(S(r, "max_rho_kappa")) << " | " << S(r, "rho_kappa_updates") << " | "
+         << fixed(S(r, "median_update_us"), 1) << " µs |\n";
+    md << "\nThe per-run folders are `scenes/" << primary
+       << "/tree_*` (the same files as the other runs).\n\n";
   }
   // Force-displacement
   md << "## Force–displacement, linear vs nonlinear\n\n"

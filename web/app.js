@@ -137,9 +137,19 @@ function buildModelObjects() {
   const cg = new THREE.BufferGeometry();
   cg.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * Math.max(na, 1)), 3).setUsage(THREE.DynamicDrawUsage));
   cg.setDrawRange(0, na);
-  centerline = new THREE.Line(cg, new THREE.LineBasicMaterial({ color: 0x7ee787, depthTest: false }));
+  const ag = cg.clone();
+  // The centerline's segments (atom pairs): a vessel tree's branches meet at shared junction atoms.
+  const edges = new Uint32Array(e.centerlineEdges());
+  const lineMaterial = new THREE.LineBasicMaterial({ color: 0x7ee787, depthTest: false });
+  if (edges.length > 0) {
+    cg.setIndex(new THREE.BufferAttribute(edges, 1));
+    cg.setDrawRange(0, edges.length);
+    centerline = new THREE.LineSegments(cg, lineMaterial);
+  } else {
+    centerline = new THREE.Line(cg, lineMaterial);
+  }
   centerline.renderOrder = 2;
-  atoms = new THREE.Points(cg.clone(), new THREE.PointsMaterial({ color: 0xff7b72, size: 7, sizeAttenuation: false, depthTest: false }));
+  atoms = new THREE.Points(ag, new THREE.PointsMaterial({ color: 0xff7b72, size: 7, sizeAttenuation: false, depthTest: false }));
   atoms.renderOrder = 3;
   const pairs = e.spokes();
   const sg = new THREE.BufferGeometry();

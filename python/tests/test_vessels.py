@@ -62,3 +62,18 @@ def test_tree_from_numpy_parent_indices_is_exact_at_rest_and_moves_the_loaded_br
     assert int(np.argmax(u)) in leaf
     with pytest.raises(ms.InvalidInput, match=r"parent\[2\]: 5 is not -1"):
         ms.smrm_tree_from_parents(atoms[:3], np.array([-1, 0, 5]), np.ones(3))
+
+
+def test_tree_model_package_round_trip(tmp_path):
+    # A Y tree saved as a model package (kind smrm_tree) rebuilds the same tree and surface.
+    atoms = np.array([[0, 0, 0], [5, 0, 0], [10, 0, 0], [15, 0, 0], [20, 3, 0], [25, 6, 0], [30, 9, 0],
+                      [20, -3, 0], [25, -6, 0], [30, -9, 0]], float)
+    parent = np.array([-1, 0, 1, 2, 3, 4, 5, 3, 7, 8])
+    tree = ms.smrm_tree_from_parents(atoms, parent, np.full(10, 1.0), ms.SmrmSettings(atoms=7))
+    path = str(tmp_path / "y.msm")
+    ms.save_model_package(path, tree, "Y tree")
+    back = ms.load_model_package(path)
+    assert back.kind == "smrm_tree"
+    assert back.num_branches == 3 and back.num_junctions == 1
+    np.testing.assert_array_equal(back.rest_surface, tree.rest_surface)
+    np.testing.assert_array_equal(back.model.x0, tree.model.x0)

@@ -219,6 +219,12 @@ void write_vessel_files(const std::filesystem::path& dir, const VesselBuild& bui
                        package_of(*build.vessel, build.vessel->name(),
                                   cat("SMRM vessel from ", build.summary.input_kind, " ", build.summary.input,
                                       ", ", na, " atoms x ", build.summary.spokes, " spokes")));
+  else
+    save_model_package(
+        dir / "vessel.msm",
+        package_of(*build.tree, "vessel tree",
+                   cat("SMRM vessel tree from ", build.summary.input_kind, " ", build.summary.input, ", ",
+                       build.tree->num_branches(), " branches, ", na, " atoms")));
 }
 
 }  // namespace medspring

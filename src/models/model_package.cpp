@@ -84,6 +84,52 @@ DuffingSettings get_duffing(ByteReader& r) {
   return d;
 }
 
+void put_smrm_settings(ByteWriter& w, const SmrmSettings& s) {
+  w.i64(s.atoms);
+  w.i64(s.spokes);
+  w.u8(static_cast<std::uint8_t>(s.frames.mode));
+  w.u8(static_cast<std::uint8_t>(s.frames.anchor));
+  const ChainSettings& c = s.chain;
+  for (double v : {c.k, c.kr, c.mass, c.beta}) w.f64(v);
+  w.flag(c.nonlinear);
+  put_duffing(w, c.duffing);
+  w.flag(c.fix_first);
+  w.flag(c.fix_last);
+  w.f64(c.kb);
+  for (double v : {s.k_loc, s.dedup_tolerance, s.max_radius_factor}) w.f64(v);
+  w.u8(static_cast<std::uint8_t>(s.bending));  // version 2
+  w.f64(s.wall.E);
+  w.f64(s.wall.thickness_ratio);
+}
+void get_smrm_settings(ByteReader& r, SmrmSettings& s, std::uint32_t version) {
+  const std::int64_t atoms = r.i64(), sp = r.i64();
+  if (atoms < 0 || sp < 0 || atoms > (1 << 24) || sp > (1 << 24))
+    r.fail(cat("settings: atoms ", atoms, ", spokes ", sp));
+  s.atoms = static_cast<Index>(atoms);
+  s.spokes = static_cast<Index>(sp);
+  s.frames.mode = get_enum<FrameMode>(r, "frames.mode", 2);
+  s.frames.anchor = get_enum<FrameAnchor>(r, "frames.anchor", 3);
+  ChainSettings& c = s.chain;
+  c.k = r.f64();
+  c.kr = r.f64();
+  c.mass = r.f64();
+  c.beta = r.f64();
+  c.nonlinear = r.flag("chain.nonlinear");
+  c.duffing = get_duffing(r);
+  c.fix_first = r.flag("chain.fix_first");
+  c.fix_last = r.flag("chain.fix_last");
+  c.kb = r.f64();
+  s.k_loc = r.f64();
+  s.dedup_tolerance = r.f64();
+  s.max_radius_factor = r.f64();
+  if (version >= 2) {
+    s.bending = get_enum<BendingMode>(r, "bending", 2);
+    s.wall.E = r.f64();
+    s.wall.thickness_ratio = r.f64();
+  } else {
+    s.bending = BendingMode::Constant;  // version 1 packages were saved from the chain.kb model
+  }
+}
 }  // namespace
 
 ModelPackage package_of(const Body& body, const std::string& name, const std::string& description) {
@@ -105,6 +151,9 @@ ModelPackage package_of(const Body& body, const std::string& name, const std::st
     p.atom_radius = v->atom_radius();
     p.binding = v->binding();
     p.smrm = v->settings();
+  } else if (const auto* t = dynamic_cast<const SmrmTree*>(&body)) {
+    p.tree = t->centerline_tree();
+    p.smrm = t->settings().vessel;
   } else {
     throw InvalidInput(cat("package_of: unknown body kind '", body.kind(), "'"));
   }
@@ -129,10 +178,11 @@ BodyPtr make_body(const ModelPackage& p) {
       parts.grid = p.grid;
       return std::make_shared<SmrmVessel>(std::move(parts), p.smrm);
     }
+    if (p.kind == "smrm_tree") return std::make_shared<SmrmTree>(p.tree, SmrmTreeSettings{p.smrm});
   } catch (const InvalidInput& e) {
     throw InvalidInput(cat(w, ": ", e.what()));
   }
-  throw InvalidInput(cat(w, ": unknown kind '", p.kind, "' (expected surface, hybrid or smrm)"));
+  throw InvalidInput(cat(w, ": unknown kind '", p.kind, "' (expected surface, hybrid, smrm or smrm_tree)"));
 }
 
 std::string encode_model_package(const ModelPackage& p) {
@@ -173,22 +223,16 @@ std::string encode_model_package(const ModelPackage& p) {
     w.u64(b.lambda.size());
     for (double l : b.lambda) w.f64(l);
     put_points(w, b.offset);
-    const SmrmSettings& s = p.smrm;
-    w.i64(s.atoms);
-    w.i64(s.spokes);
-    w.u8(static_cast<std::uint8_t>(s.frames.mode));
-    w.u8(static_cast<std::uint8_t>(s.frames.anchor));
-    const ChainSettings& c = s.chain;
-    for (double v : {c.k, c.kr, c.mass, c.beta}) w.f64(v);
-    w.flag(c.nonlinear);
-    put_duffing(w, c.duffing);
-    w.flag(c.fix_first);
-    w.flag(c.fix_last);
-    w.f64(c.kb);
-    for (double v : {s.k_loc, s.dedup_tolerance, s.max_radius_factor}) w.f64(v);
-    w.u8(static_cast<std::uint8_t>(s.bending));  // version 2
-    w.f64(s.wall.E);
-    w.f64(s.wall.thickness_ratio);
+    put_smrm_settings(w, p.smrm);
+  } else if (p.kind == "smrm_tree") {
+    w.u64(p.tree.branches.size());
+    for (const CenterlineTree::Branch& b : p.tree.branches) {
+      w.str(b.line.name, kMaxText);
+      w.i64(b.parent);
+      put_points(w, b.line.points);
+      put_doubles(w, b.line.radii);
+    }
+    put_smrm_settings(w, p.smrm);
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -205,8 +249,8 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
   p.name = r.str("name", kMaxText);
   p.description = r.str("description", kMaxText);
   p.kind = r.str("kind");
-  if (p.kind != "surface" && p.kind != "hybrid" && p.kind != "smrm")
-    r.fail(cat("kind: '", p.kind, "' (expected surface, hybrid or smrm)"));
+  if (p.kind != "surface" && p.kind != "hybrid" && p.kind != "smrm" && p.kind != "smrm_tree")
+    r.fail(cat("kind: '", p.kind, "' (expected surface, hybrid, smrm or smrm_tree)"));
   p.surface.V = get_points(r, "surface vertices");
   const Index nv = static_cast<Index>(p.surface.V.rows());
   const Index nf = r.count("surface faces", 3 * 8);
@@ -241,7 +285,7 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     if (k < 0 || k > nv) r.fail(cat("spokes_per_atom: ", k, " out of range [0, ", nv, "]"));
     h.spokes_per_atom = static_cast<Index>(k);
     h.fixed = get_indices(r, "fixed", nv);
-  } else {
+  } else if (p.kind == "smrm") {
     p.atoms = get_points(r, "atoms");
     const Index na = static_cast<Index>(p.atoms.rows());
     p.atom_radius = get_doubles(r, "atom radius");
@@ -260,34 +304,26 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     if (m != nv || b.offset.rows() != m || (nl != 0 && nl != m))
       r.fail(cat("binding: ", m, " nodes, ", b.offset.rows(), " offsets, ", nl, " bracket parameters for ",
                  nv, " surface vertices"));
-    SmrmSettings& s = p.smrm;
-    const std::int64_t atoms = r.i64(), sp = r.i64();
-    if (atoms < 0 || sp < 0 || atoms > (1 << 24) || sp > (1 << 24))
-      r.fail(cat("settings: atoms ", atoms, ", spokes ", sp));
-    s.atoms = static_cast<Index>(atoms);
-    s.spokes = static_cast<Index>(sp);
-    s.frames.mode = get_enum<FrameMode>(r, "frames.mode", 2);
-    s.frames.anchor = get_enum<FrameAnchor>(r, "frames.anchor", 3);
-    ChainSettings& c = s.chain;
-    c.k = r.f64();
-    c.kr = r.f64();
-    c.mass = r.f64();
-    c.beta = r.f64();
-    c.nonlinear = r.flag("chain.nonlinear");
-    c.duffing = get_duffing(r);
-    c.fix_first = r.flag("chain.fix_first");
-    c.fix_last = r.flag("chain.fix_last");
-    c.kb = r.f64();
-    s.k_loc = r.f64();
-    s.dedup_tolerance = r.f64();
-    s.max_radius_factor = r.f64();
-    if (version >= 2) {
-      s.bending = get_enum<BendingMode>(r, "bending", 2);
-      s.wall.E = r.f64();
-      s.wall.thickness_ratio = r.f64();
-    } else {
-      s.bending = BendingMode::Constant;  // version 1 packages were saved from the chain.kb model
+    get_smrm_settings(r, p.smrm, version);
+  } else {  // smrm_tree
+    const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
+    p.tree.branches.resize(static_cast<std::size_t>(nb));
+    for (Index b = 0; b < nb; ++b) {
+      CenterlineTree::Branch& br = p.tree.branches[static_cast<std::size_t>(b)];
+      br.line.name = r.str("branch name", kMaxText);
+      const std::int64_t parent = r.i64();
+      if (b == 0 ? parent != -1 : (parent < 0 || parent >= b))
+        r.fail(cat("tree branch ", b, ": parent ", parent,
+                   (b == 0 ? " (the root's is -1)" : " out of range [0, "),
+                   (b == 0 ? std::string() : cat(b, ")"))));
+      br.parent = static_cast<Index>(parent);
+      br.line.points = get_points(r, "tree branch points");
+      br.line.radii = get_doubles(r, "tree branch radii");
+      if (br.line.radii.size() != br.line.points.rows())
+        r.fail(cat("tree branch ", b, ": ", br.line.radii.size(), " radii for ", br.line.points.rows(),
+                   " points"));
     }
+    get_smrm_settings(r, p.smrm, version);
   }
   p.fingerprint = r.u64();
   r.finish();
@@ -348,7 +384,7 @@ void set_tissue_params(ModelPackage& p, const TissueParams& t) {
     if (t.nonlinear && h.duffing.mode == DuffingMode::Linear) h.duffing.mode = DuffingMode::Strain;
     h.surface_node.return_k = h.atom_node.return_k = t.kr;
     h.surface_node.beta = h.atom_node.beta = t.beta;
-  } else if (p.kind == "smrm") {
+  } else if (p.kind == "smrm" || p.kind == "smrm_tree") {
     ChainSettings& c = p.smrm.chain;
     c.k = t.k;
     c.duffing.eta = t.eta;

@@ -181,7 +181,8 @@ CenterlineTree tree_from_parents(const MatX3& atoms, const std::vector<Index>& p
 
 // ---------------------------------------------------------------------------------------------------
 
-SmrmTree::SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings) : settings_(settings) {
+SmrmTree::SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings)
+    : settings_(settings), tree_(tree) {
   const SmrmSettings& vs = settings.vessel;
   const Index nb = static_cast<Index>(tree.branches.size());
   require(nb >= 1, "vessel tree: has no branches");
@@ -346,6 +347,38 @@ void SmrmTree::map_to_surface(const MatX3& x, Workspace& ws, MatX3& surface) con
     branches_[b]->map_to_surface(A, ws.vessel[b], ws.surface[b]);
     surface.middleRows(node_begin_[b], ws.surface[b].rows()) = ws.surface[b];
   }
+}
+
+CurvatureCheck SmrmTree::validity(const MatX3& x, Workspace& ws) const {
+  CurvatureCheck r;
+  for (std::size_t b = 0; b < branches_.size(); ++b) {
+    const std::vector<Index>& ids = atoms_[b];
+    MatX3& A = ws.atoms[b];
+    for (std::size_t k = 0; k < ids.size(); ++k) A.row(static_cast<Index>(k)) = x.row(ids[k]);
+    const CurvatureCheck c = branches_[b]->validity(A);
+    r.max_rho_kappa = std::max(r.max_rho_kappa, c.max_rho_kappa);
+    r.violations += c.violations;
+    if (r.first_atom < 0 && c.first_atom >= 0) r.first_atom = ids[static_cast<std::size_t>(c.first_atom)];
+  }
+  return r;
+}
+
+double SmrmTree::max_turning_change_deg(const MatX3& x, Workspace& ws, Index* atom) const {
+  double best = 0.0;
+  Index where = -1;
+  for (std::size_t b = 0; b < branches_.size(); ++b) {
+    const std::vector<Index>& ids = atoms_[b];
+    MatX3& A = ws.atoms[b];
+    for (std::size_t k = 0; k < ids.size(); ++k) A.row(static_cast<Index>(k)) = x.row(ids[k]);
+    Index local = -1;
+    const double d = branches_[b]->max_turning_change_deg(A, &local);
+    if (local >= 0 && (d > best || where < 0)) {
+      best = d;
+      where = ids[static_cast<std::size_t>(local)];
+    }
+  }
+  if (atom) *atom = where;
+  return best;
 }
 
 void SmrmTree::map_to_surface(const State& state, MatX3& surface) const {

@@ -321,7 +321,10 @@ struct Builder {
       if (std::find(out.trace_nodes.begin(), out.trace_nodes.end(), n) == out.trace_nodes.end())
         out.trace_nodes.push_back(n);
     }
-    for (const Index a : scene.record.atoms) {
+    for (std::size_t k = 0; k < scene.record.atoms.size(); ++k) {
+      const Index a = scene.record.atoms[k];
+      if (a >= num_atoms)
+        fail(cat("record.atoms[", k, "]"), cat("index ", a, " out of range [0, ", num_atoms, ")"));
       out.trace_atoms.push_back(a);
       out.trace_atom_dofs.push_back(vessel || tree ? a : S + a);
     }

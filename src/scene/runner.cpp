@@ -9,6 +9,7 @@
 
 #include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/static_solve.hpp"
@@ -118,16 +119,21 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   const Index contact = b.loads.empty() ? -1 : b.loads.front().node;
 
   const auto* vessel = dynamic_cast<const SmrmVessel*>(b.body.get());
+  const auto* tree = dynamic_cast<const SmrmTree*>(b.body.get());  // vessel trees: per branch
+  SmrmTree::Workspace tree_ws;
+  if (tree) tree_ws = tree->make_workspace();
   std::vector<double> turning;  // max_i |alpha_i - alpha_i^0| per sampled frame (vessels)
   auto sample = [&] {
-    if (vessel) {
+    if (vessel || tree) {
       RunSummary& q = res.summary;
-      const CurvatureCheck v = vessel->validity(sim.state().x);
+      const CurvatureCheck v =
+          vessel ? vessel->validity(sim.state().x) : tree->validity(sim.state().x, tree_ws);
       q.max_rho_kappa = std::max(q.max_rho_kappa, v.max_rho_kappa);
       q.rho_kappa_violations += v.violations;
       q.rho_kappa_updates += v.violations > 0 ? 1 : 0;
       Index atom = -1;
-      const double t = vessel->max_turning_change_deg(sim.state().x, &atom);
+      const double t = vessel ? vessel->max_turning_change_deg(sim.state().x, &atom)
+                              : tree->max_turning_change_deg(sim.state().x, tree_ws, &atom);
       if (t > q.max_turning_change_deg || q.max_turning_atom < 0) {
         q.max_turning_change_deg = t;
         q.max_turning_atom = atom;
@@ -229,7 +235,7 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   }
   if (!tr.atom_disp.empty()) s.atom_hold_mm = tr.atom_disp[0][hold];
   s.local_hold_mm = tr.local_contact[hold];
-  if (vessel && !turning.empty()) {
+  if ((vessel || tree) && !turning.empty()) {
     const Index offset = T - static_cast<Index>(turning.size());  // a resumed run samples from its resume
     if (hold >= offset) s.hold_turning_change_deg = turning[static_cast<std::size_t>(hold - offset)];
   }

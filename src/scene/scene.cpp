@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -626,7 +627,8 @@ Scene parse_scene(const std::string& text, const fs::path& base_dir, const std::
   s.file = origin;
   if (s.name.empty()) s.name = fs::path(origin).stem().string();
   if (s.model.kind == ModelKind::Hybrid || s.model.kind == ModelKind::Smrm) {
-    const Index na = s.model.atoms;
+    // A tree's atom count is known once it is built (scene/build.cpp checks its indices then).
+    const Index na = s.model.source.all_branches ? std::numeric_limits<Index>::max() : s.model.atoms;
     for (std::size_t k = 0; k < s.record.atoms.size(); ++k)
       if (s.record.atoms[k] >= na)
         fail(c, cat("record.atoms[", k, "]"),

@@ -353,6 +353,28 @@ TEST(CliPaper, QuickRunMakesTheReportFiguresAndTablesOnThePhantoms) {
   EXPECT_DOUBLE_EQ(t["table1"]["mass_spring"]["linear"]["paper_ms"].get<double>(), 18.0);
   EXPECT_DOUBLE_EQ(t["table2"]["smrm"]["with_local"]["paper_ms"].get<double>(), 27.0);
   EXPECT_EQ(t["scenes"].size(), 12u);
+  // The whole vessel tree (issue 17): the phantom tree, light and strong force on the arch and a branch.
+  EXPECT_NE(report.find("## The whole vessel tree"), std::string::npos);
+  for (const char* png : {"tree_arch", "tree_branch"}) {
+    const fs::path p = out / "figures" / (std::string(png) + ".png");
+    ASSERT_TRUE(fs::exists(p)) << p;
+    EXPECT_GT(fs::file_size(p), 10000u) << p;
+  }
+  const nlohmann::json& tree = t["tree"];
+  EXPECT_EQ(tree["branches"].get<int>(), 3);
+  EXPECT_EQ(tree["junctions"].get<int>(), 1);
+  ASSERT_EQ(tree["runs"].size(), 4u);
+  for (std::size_t k = 0; k < 4; k += 2) {  // light then strong at each site
+    const nlohmann::json &light = tree["runs"][k], &strong = tree["runs"][k + 1];
+    EXPECT_EQ(light["site"], strong["site"]);
+    EXPECT_EQ(light["model"]["kind"], "smrm_tree");
+    // 10x the force moves the loaded atom more (the chain stiffens: less than 10x), and both return.
+    EXPECT_GT(strong["atom_hold_mm"].get<double>(), 2.0 * light["atom_hold_mm"].get<double>());
+    EXPECT_GT(light["atom_hold_mm"].get<double>(), 0.0);
+    EXPECT_LT(strong["return_ms"].get<double>(), 200.0);
+    EXPECT_LT(strong["hold_turning_change_deg"].get<double>(), 25.0);  // a smooth bend, no kink
+    EXPECT_EQ(strong["warnings"].get<int>(), 0);
+  }
   EXPECT_TRUE(
       fs::exists(out / "scenes" / "phantom" / "kidney_1.0N_nonlinear" / "phantom_kidney_1.0N_nonlinear.pvd"));
   // a second run into the same folder is refused without --force and leaves the report as it was

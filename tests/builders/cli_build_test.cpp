@@ -12,6 +12,7 @@
 
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/volume_io.hpp"
+#include "medspring/models/model_package.hpp"
 #include "test_support.hpp"
 
 namespace medspring {
@@ -142,7 +143,13 @@ TEST(CliBuildVessel, AllBranchesOfTheVmrFileMakeATree) {
   EXPECT_LE(json_number(r.out, "rest_error_mm"), 1e-9);
   for (const char* f : {"surface.vtp", "atoms.vtp", "spokes.vtp", "summary.json"})
     EXPECT_TRUE(fs::exists(tmp / "tree" / f)) << f;
-  EXPECT_FALSE(fs::exists(tmp / "tree" / "vessel.msm"));
+  // The tree's model package (kind smrm_tree) rebuilds the same model.
+  const ModelPackage pkg = read_model_package(tmp / "tree" / "vessel.msm");
+  EXPECT_EQ(pkg.kind, "smrm_tree");
+  EXPECT_EQ(pkg.tree.branches.size(), 7u);
+  const BodyPtr rebuilt = make_body(pkg);
+  EXPECT_TRUE(check_fingerprint(pkg, *rebuilt));
+  EXPECT_EQ(static_cast<double>(rebuilt->num_surface_nodes()), json_number(r.out, "surface_nodes"));
   EXPECT_EQ(read_centerlines(tmp / "tree" / "atoms.vtp").size(), 7u);
   const CliRun bad = run_cli("build vessel --centerline \"" + file.string() +
                                  "\" --unit cm --branches some --out \"" + (tmp / "bad").string() + "\"",
@@ -177,6 +184,17 @@ TEST(CliBuildVessel, SceneWithAllBranchesRunsTheTreeAndReturnsToRest) {
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.err.find("model.source.centerline.branches: must be \"all\""), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(tmp / "bad"));
+  // A tree's traced atoms are checked against its atom count (60) once it is built.
+  std::ofstream(tmp / "bad_atom.json")
+      << R"({"name": "bad_atom", "model": {"kind": "smrm", "source": {"centerline": {"file": ")"
+      << file.string()
+      << R"(", "unit": "cm", "branches": "all"}}}, "record": {"atoms": [60]}, "duration": 10})";
+  const CliRun bad_atom = run_cli(
+      "run \"" + (tmp / "bad_atom.json").string() + "\" --out \"" + (tmp / "bad_atom").string() + "\"", tmp);
+  EXPECT_EQ(bad_atom.code, 1);
+  EXPECT_NE(bad_atom.err.find("record.atoms[0]: index 60 out of range [0, 60)"), std::string::npos)
+      << bad_atom.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad_atom"));
 }
 
 TEST(CliBuildVessel, FromTheAortaSegmentationReportsItsDistanceToTheInput) {

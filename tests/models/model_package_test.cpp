@@ -25,6 +25,15 @@ BodyPtr kidney() {
 BodyPtr vessel() {
   return std::make_shared<SmrmVessel>(smrm_phantom(VesselPath::Arc, CrossSectionShape::NonPlanar));
 }
+// A Y-shaped vessel tree (issue 17): trunk 0-1-2-3, branches 3-4-5-6 and 3-7-8-9, radii tapering.
+BodyPtr vessel_tree() {
+  MatX3 X(10, 3);
+  X << 0, 0, 0, 5, 0, 0, 10, 0, 0, 15, 0, 0, 20, 3, 0, 25, 6, 0, 30, 9, 0, 20, -3, 1, 25, -6, 2, 30, -9, 3;
+  VecX r(10);
+  r << 2.0, 2.0, 1.9, 1.8, 1.5, 1.4, 1.3, 1.2, 1.1, 1.0;
+  return std::make_shared<SmrmTree>(tree_from_parents(X, {-1, 0, 1, 2, 3, 4, 5, 3, 7, 8}, r),
+                                    SmrmTreeSettings{.vessel = {.atoms = 9, .spokes = 12}});
+}
 
 // 200 updates with a force on node 5 ramped in and released: the final surface.
 MatX3 run(const BodyPtr& body) {
@@ -47,8 +56,10 @@ class RoundTrip : public ::testing::TestWithParam<int> {
         return surface_tube();
       case 1:
         return kidney();
-      default:
+      case 2:
         return vessel();
+      default:
+        return vessel_tree();
     }
   }
 };
@@ -73,9 +84,45 @@ TEST_P(RoundTrip, RebuildsTheSameModelBitForBit) {
 }
 
 std::string kind_name(const ::testing::TestParamInfo<int>& p) {
-  return p.param == 0 ? "surface" : p.param == 1 ? "hybrid" : "smrm";
+  return p.param == 0 ? "surface" : p.param == 1 ? "hybrid" : p.param == 2 ? "smrm" : "smrm_tree";
 }
-INSTANTIATE_TEST_SUITE_P(Kinds, RoundTrip, ::testing::Values(0, 1, 2), kind_name);
+INSTANTIATE_TEST_SUITE_P(Kinds, RoundTrip, ::testing::Values(0, 1, 2, 3), kind_name);
+
+TEST(ModelPackage, VesselTreeKeepsItsBranchesAndRefusesABadOne) {
+  const BodyPtr a = vessel_tree();
+  ModelPackage p = package_of(*a, "Y");
+  ASSERT_EQ(p.tree.branches.size(), 3u);
+  EXPECT_EQ(p.tree.branches[2].parent, 0);
+  EXPECT_EQ(p.smrm.atoms, 9);
+  const auto& tree = dynamic_cast<const SmrmTree&>(*make_body(decode_model_package(encode_model_package(p))));
+  EXPECT_EQ(tree.num_branches(), 3);
+  EXPECT_EQ(tree.num_junctions(), 1);
+  // Tissue parameters act on the tree's chain like on a vessel's.
+  TissueParams t = tissue_params(p);
+  EXPECT_EQ(t.k, p.smrm.chain.k);
+  t.k *= 3;
+  set_tissue_params(p, t);
+  EXPECT_EQ(make_body(p)->model().springs.k[0], 3 * a->model().springs.k[0]);
+  EXPECT_EQ(p.fingerprint, 0u);  // no longer the model it was saved from
+  // A branch whose parent is not an earlier branch is refused while decoding, naming it.
+  p.tree.branches[1].parent = 2;
+  try {
+    decode_model_package(encode_model_package(p), "Y.msm");
+    ADD_FAILURE() << "accepted a forward parent";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("tree branch 1: parent 2"), std::string::npos) << e.what();
+  }
+  // Branches that do not meet: decoded, then refused by the constructor, naming the package.
+  p.tree.branches[1].parent = 0;
+  p.tree.branches[1].line.points(0, 1) += 1.0;
+  try {
+    make_body(decode_model_package(encode_model_package(p), "Y.msm"));
+    ADD_FAILURE() << "accepted branches that do not meet";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("model package 'Y'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("branch 1"), std::string::npos) << e.what();
+  }
+}
 
 TEST(ModelPackage, FileIsWrittenAtomicallyAndReadBack) {
   const auto path = std::filesystem::temp_directory_path() / "medspring_package_test.msm";
@@ -88,13 +135,15 @@ TEST(ModelPackage, FileIsWrittenAtomicallyAndReadBack) {
 }
 
 TEST(ModelPackage, EveryTruncationIsRefusedWithIoError) {
-  const std::string bytes = encode_model_package(package_of(*vessel()));
-  for (std::size_t n = 0; n < bytes.size(); n += 1 + n / 7) {
-    try {
-      decode_model_package(std::string_view(bytes).substr(0, n), "pkg");
-      ADD_FAILURE() << "accepted " << n << " of " << bytes.size() << " bytes";
-    } catch (const IoError& e) {
-      EXPECT_NE(std::string(e.what()).find("pkg: "), std::string::npos) << e.what();
+  for (const BodyPtr& body : {vessel(), vessel_tree()}) {
+    const std::string bytes = encode_model_package(package_of(*body));
+    for (std::size_t n = 0; n < bytes.size(); n += 1 + n / 7) {
+      try {
+        decode_model_package(std::string_view(bytes).substr(0, n), "pkg");
+        ADD_FAILURE() << "accepted " << n << " of " << bytes.size() << " bytes";
+      } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("pkg: "), std::string::npos) << e.what();
+      }
     }
   }
 }
@@ -159,7 +208,8 @@ TEST(ModelPackage, InvalidContentsAreRefusedByMakeBody) {
     make_body(decode_model_package(encode_model_package(offset)));
     FAIL();
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("binding offset of surface node[40]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("binding offset of surface node[40]"), std::string::npos)
+        << e.what();
   }
 }
 

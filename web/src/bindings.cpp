@@ -26,6 +26,7 @@
 #include "medspring/medial/vessel_phantoms.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/model_package.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 #include "medspring/sim/haptics.hpp"
@@ -147,6 +148,9 @@ class Engine {
   val atoms() const { return float_array(atoms_); }
   /// The centerline: the polyline through atoms() in order (the same view; for readability).
   val centerline() const { return float_array(atoms_); }
+  /// Centerline segments as pairs of atom indices (#segments*2): the springs between atoms (an SMRM
+  /// chain: i, i+1; a vessel tree: its branches, meeting at shared junction atoms).
+  val centerlineEdges() const { return float_array(edges_); }
   /// Spokes as pairs (surface node, atom), #spokes*2: hybrid spokes (D-9), SMRM node -> its atom.
   val spokes() const { return float_array(spokes_); }
   /// Exact (double) position of one surface node, for tests.
@@ -508,6 +512,23 @@ class Engine {
         spokes_.push_back(static_cast<std::uint32_t>(i));
         spokes_.push_back(static_cast<std::uint32_t>(v->node_atom(i)));
       }
+    } else if (const auto* t = dynamic_cast<const SmrmTree*>(body_.get())) {
+      atom_offset_ = 0;
+      for (Index i = 0; i < t->num_surface_nodes(); ++i) {
+        spokes_.push_back(static_cast<std::uint32_t>(i));
+        spokes_.push_back(static_cast<std::uint32_t>(t->node_atom(i)));
+      }
+    }
+    // Centerline segments as atom pairs: the springs between atoms (a tree's branches meet at shared atoms).
+    edges_.clear();
+    if (atom_offset_ >= 0) {
+      const Springs& sp = body_->model().springs;
+      for (std::size_t k = 0; k < sp.i.size(); ++k) {
+        const Index a = sp.i[k] - atom_offset_, b = sp.j[k] - atom_offset_;
+        if (a < 0 || b < 0) continue;  // hybrid: surface springs and spokes
+        edges_.push_back(static_cast<std::uint32_t>(a));
+        edges_.push_back(static_cast<std::uint32_t>(b));
+      }
     }
   }
 
@@ -536,7 +557,7 @@ class Engine {
   HapticSettings haptic_;
   Vec3 tool_ = Vec3::Zero(), reaction_ = Vec3::Zero();
   std::vector<float> pos_, rest_, atoms_;
-  std::vector<std::uint32_t> faces_, spokes_;
+  std::vector<std::uint32_t> faces_, spokes_, edges_;
   Index atom_offset_ = -1;  // first atom DOF (hybrid: #S, smrm: 0), -1 without atoms
   double size_ = 0;
   std::vector<double> times_ = std::vector<double>(1000, 0.0);
@@ -586,6 +607,7 @@ EMSCRIPTEN_BINDINGS(medspring) {
       .function("atoms", &Engine::atoms)
       .function("centerline", &Engine::centerline)
       .function("spokes", &Engine::spokes)
+      .function("centerlineEdges", &Engine::centerlineEdges)
       .function("node", &Engine::node)
       .function("maxDisplacement", &Engine::maxDisplacement)
       .function("grab", &Engine::grab)

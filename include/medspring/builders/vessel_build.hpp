@@ -78,8 +78,8 @@ VesselBuild build_vessel(const VesselBuildSettings& settings);
 
 /// Writes surface.vtp (rebuilt rest surface, point arrays "atom" and "branch"), atoms.vtp (the atoms of
 /// every branch as a polyline with "MaximumInscribedSphereRadius", readable by read_centerlines),
-/// spokes.vtp (atom -> surface node segments) and, for one branch, vessel.msm (the model package; a tree
-/// has no package format yet) into the existing folder `dir`.
+/// spokes.vtp (atom -> surface node segments) and vessel.msm (the model package; kind smrm_tree for a
+/// tree) into the existing folder `dir`.
 void write_vessel_files(const std::filesystem::path& dir, const VesselBuild& build);
 
 }  // namespace medspring

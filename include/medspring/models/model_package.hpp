@@ -22,6 +22,7 @@
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/models/body.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 
@@ -35,7 +36,7 @@ inline constexpr std::uint32_t kModelPackageMinVersion = 1;  // version 1 smrm: 
 struct ModelPackage {
   std::string name;         // shown to users ("real kidney")
   std::string description;  // one line: source data, sizes
-  std::string kind;         // Body::kind(): "surface", "hybrid" or "smrm"
+  std::string kind;         // Body::kind(): "surface", "hybrid", "smrm" or "smrm_tree"
   SurfaceMesh surface;      // rest surface (mm) and its triangles
   GridLayout grid;          // rings x spokes of a tube grid, if any
   // surface
@@ -46,13 +47,15 @@ struct ModelPackage {
   // smrm
   VecX atom_radius;        // (#n) local radius, mm
   SurfaceBinding binding;  // how the surface nodes ride on the atoms
-  SmrmSettings smrm;
+  SmrmSettings smrm;       // smrm and smrm_tree (the tree's SmrmTreeSettings::vessel)
+  // smrm_tree: the centerline tree it is built from (SmrmTree resamples it deterministically)
+  CenterlineTree tree;
   /// model_fingerprint() of the model the package was made from (0 = unknown). make_body does not
   /// require a match (another compiler may round the rest lengths differently); check_fingerprint does.
   std::uint64_t fingerprint = 0;
 };
 
-/// The package of a built body (SurfaceBody, HybridKidney or SmrmVessel).
+/// The package of a built body (SurfaceBody, HybridKidney, SmrmVessel or SmrmTree).
 ModelPackage package_of(const Body& body, const std::string& name = "", const std::string& description = "");
 
 /// Rebuilds the body. Throws InvalidInput naming the package and the part at fault.

@@ -67,6 +67,11 @@ class SmrmTree final : public Body {
   double local_stiffness() const override { return settings_.vessel.k_loc; }
   double spoke_length(Index node) const override;
 
+  /// The tree and settings it was built from (a model package stores them: make_body rebuilds the same
+  /// model from them, docs/model_packages.md).
+  const CenterlineTree& centerline_tree() const { return tree_; }
+  const SmrmTreeSettings& settings() const { return settings_; }
+
   Index num_branches() const { return static_cast<Index>(branches_.size()); }
   Index num_junctions() const { return junctions_; }
   Index num_atoms() const { return model_.num_nodes(); }
@@ -88,9 +93,17 @@ class SmrmTree final : public Body {
   Workspace make_workspace() const;
   /// Surface (#S x 3) of tree atoms (#n x 3); no allocation once `surface` has its size.
   void map_to_surface(const MatX3& atoms, Workspace& ws, MatX3& surface) const;
+  /// §5.6 validity rho kappa < 1 of every branch's interior atoms (SmrmVessel::validity per branch;
+  /// first_atom is a tree atom). The junction's own turn is not a branch's interior: not counted.
+  /// No allocation (ws from make_workspace).
+  CurvatureCheck validity(const MatX3& atoms, Workspace& ws) const;
+  /// Largest |alpha_i - alpha_i^0| over every branch's interior atoms, degrees; the tree atom where it is
+  /// largest in *atom. No allocation.
+  double max_turning_change_deg(const MatX3& atoms, Workspace& ws, Index* atom = nullptr) const;
 
  private:
   SmrmTreeSettings settings_;
+  CenterlineTree tree_;
   std::vector<std::shared_ptr<const SmrmVessel>> branches_;
   std::vector<std::vector<Index>> atoms_;
   std::vector<Index> parent_;
