@@ -146,7 +146,8 @@ const std::vector<Command>& commands() {
       {"export",
        "usage: medspring export --web --out DIR [--force] [--quiet] [--json] [--scenes DIR]\n"
        "       medspring export SCENE... --out DIR [--force] [--quiet] [--json]\n\n"
-       "Writes built models as model packages (.msm, docs/model_packages.md): the inputs of the engine's constructors\n"
+       "Writes built models as model packages (.msm, docs/model_packages.md): the inputs of the engine's "
+       "constructors\n"
        "(rest surface, atoms, spokes or spoke offsets, parameters), so the engine alone -- the browser "
        "page's\n"
        "WebAssembly build, a simulator without VTK/CGAL -- rebuilds the model exactly and can change its\n"
@@ -195,11 +196,16 @@ const std::vector<Command>& commands() {
       {"accuracy",
        "usage: medspring accuracy --out DIR [--force] [--quick] [--quiet] [--json] [--E-kPa 10] [--nu 0.45]\n"
        "                          [--radius 8] [--level 1] [--scenes DIR]\n\n"
-       "Measures the spring models against an independent FEM reference (CalculiX, compressible Neo-Hookean,\n"
-       "NLGEOM; docs/accuracy.md): first the FEM pipeline against closed forms (uniaxial stretch, cantilever,\n"
-       "Boussinesq) at three refinements, then the kidney phantom and the real kidney under contact-disk loads\n"
-       "of 0.2 / 0.5 / 1.0 N at 4 sites, support opposite the load: contact, RMS and max surface error of the\n"
-       "surface and hybrid models (linear, Duffing, + local), default and calibrated (fitted on two sites at\n"
+       "Measures the spring models against an independent FEM reference (CalculiX, compressible "
+       "Neo-Hookean,\n"
+       "NLGEOM; docs/accuracy.md): first the FEM pipeline against closed forms (uniaxial stretch, "
+       "cantilever,\n"
+       "Boussinesq) at three refinements, then the kidney phantom and the real kidney under contact-disk "
+       "loads\n"
+       "of 0.2 / 0.5 / 1.0 N at 4 sites, support opposite the load: contact, RMS and max surface error of "
+       "the\n"
+       "surface and hybrid models (linear, Duffing, + local), default and calibrated (fitted on two sites "
+       "at\n"
        "0.5 N, errors reported on every other case). Writes DIR/accuracy.md, accuracy.json, error_maps.json\n"
        "and figures/*.png (matplotlib). Needs ccx (calculix-ccx) and tetgen; FEM results are cached\n"
        "($MEDSPRING_FEM_CACHE, default ~/.cache/medspring/fem).\n"
@@ -212,9 +218,12 @@ const std::vector<Command>& commands() {
       {"calibrate",
        "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface] [--linear] [--E-kPa 10]\n"
        "                           [--nu 0.45] [--radius 8] [--json] [--quiet]\n\n"
-       "Fits the stiffness of each spring family (surface: k, k_r; hybrid: k_surf, k_spoke, k_cl, k_r; k_loc =\n"
-       "k_surf) to the CalculiX FEM response of a tissue (E, nu) on training loads (two sites at 0.5 N), and\n"
-       "reports the error on the held-out loads and sites (docs/accuracy.md). Prints the parameters in N/mm.\n",
+       "Fits the stiffness of each spring family (surface: k, k_r; hybrid: k_surf, k_spoke, k_cl, k_r; k_loc "
+       "=\n"
+       "k_surf) to the CalculiX FEM response of a tissue (E, nu) on training loads (two sites at 0.5 N), "
+       "and\n"
+       "reports the error on the held-out loads and sites (docs/accuracy.md). Prints the parameters in "
+       "N/mm.\n",
        {"json", "quiet", "linear"},
        cmd_calibrate},
   };

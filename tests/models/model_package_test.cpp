@@ -94,7 +94,8 @@ TEST(ModelPackage, VesselTreeKeepsItsBranchesAndRefusesABadOne) {
   ASSERT_EQ(p.tree.branches.size(), 3u);
   EXPECT_EQ(p.tree.branches[2].parent, 0);
   EXPECT_EQ(p.smrm.atoms, 9);
-  const auto& tree = dynamic_cast<const SmrmTree&>(*make_body(decode_model_package(encode_model_package(p))));
+  const BodyPtr rebuilt = make_body(decode_model_package(encode_model_package(p)));
+  const auto& tree = dynamic_cast<const SmrmTree&>(*rebuilt);
   EXPECT_EQ(tree.num_branches(), 3);
   EXPECT_EQ(tree.num_junctions(), 1);
   // Tissue parameters act on the tree's chain like on a vessel's.

@@ -129,7 +129,9 @@ class Engine {
 
   // ---- what the model is
   int numSurfaceNodes() const { return static_cast<int>(body_->num_surface_nodes()); }
-  int numAtoms() const { return static_cast<int>(atom_offset_ < 0 ? 0 : sim_->state().x.rows() - atom_offset_); }
+  int numAtoms() const {
+    return static_cast<int>(atom_offset_ < 0 ? 0 : sim_->state().x.rows() - atom_offset_);
+  }
   std::string kind() const { return body_->kind(); }
   std::string name() const { return package_.name; }
   std::string description() const { return package_.description; }
@@ -163,7 +165,9 @@ class Engine {
     });
   }
   /// max_i |x_i - x0_i| over the displayed surface, mm.
-  double maxDisplacement() const { return (sim_->surface() - body_->rest_surface()).rowwise().norm().maxCoeff(); }
+  double maxDisplacement() const {
+    return (sim_->surface() - body_->rest_surface()).rowwise().norm().maxCoeff();
+  }
 
   // ---- the tool (virtual coupling, docs/haptics.md)
   /// Couples the tool to surface node i at its current position (no force until the tool moves).
@@ -181,7 +185,8 @@ class Engine {
     });
   }
   void moveTool(double x, double y, double z) {
-    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) throw_js("moveTool: non-finite position");
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+      throw_js("moveTool: non-finite position");
     tool_ = Vec3(x, y, z);
   }
   void release() {
@@ -403,7 +408,8 @@ class Engine {
       std::vector<double> times;
       for (const HapticSample& s : loop.samples()) times.push_back(s.compute_us);
       val o = val::object();
-      o.set("times", val::global("Float64Array").new_(val(emscripten::typed_memory_view(times.size(), times.data()))));
+      o.set("times",
+            val::global("Float64Array").new_(val(emscripten::typed_memory_view(times.size(), times.data()))));
       o.set("median", st.median_us);
       o.set("p99", st.p99_us);
       o.set("max", st.max_us);
@@ -479,7 +485,8 @@ class Engine {
     }
     const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count();
     times_[static_cast<std::size_t>(tick_count_ % static_cast<long>(times_.size()))] = us;
-    if (tick_count_ < static_cast<long>(times_.size())) times_used_ = static_cast<std::size_t>(tick_count_ + 1);
+    if (tick_count_ < static_cast<long>(times_.size()))
+      times_used_ = static_cast<std::size_t>(tick_count_ + 1);
     ++tick_count_;
     const State& s = sim_->state();
     if (!finite())
@@ -571,7 +578,9 @@ class Engine {
 Engine* make_engine(val model, bool nonlinear, bool local) {
   return guarded([&] { return new Engine(model, nonlinear, local); });
 }
-Engine* make_engine_default(val model) { return make_engine(std::move(model), true, false); }
+Engine* make_engine_default(val model) {
+  return make_engine(std::move(model), true, false);
+}
 
 /// Checks a model package without building an engine: {name, kind, description, params} or an Error.
 val inspect_package(const val& bytes) {
@@ -586,7 +595,9 @@ val inspect_package(const val& bytes) {
   });
 }
 
-std::string error_message(std::intptr_t ptr) { return reinterpret_cast<std::exception*>(ptr)->what(); }
+std::string error_message(std::intptr_t ptr) {
+  return reinterpret_cast<std::exception*>(ptr)->what();
+}
 
 EMSCRIPTEN_BINDINGS(medspring) {
   emscripten::class_<Engine>("Engine")
