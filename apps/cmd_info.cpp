@@ -4,11 +4,17 @@
 #include "medspring/core/check.hpp"
 #include "medspring/core/units.hpp"
 #include "medspring/io/info.hpp"
+#include "medspring/scene/parameter_docs.hpp"
 
 namespace medspring::cli {
 
 int cmd_info(const Args& args) {
-  args.require_known({"json", "unit", "radius-array"});
+  args.require_known({"json", "unit", "radius-array", "params"});
+  if (args.flag("params")) {  // the declared parameter sets (docs/parameters.md)
+    if (!args.positional().empty()) throw InvalidInput("info --params: takes no FILE");
+    std::cout << parameter_tables_markdown();
+    return 0;
+  }
   if (args.positional().size() != 1)
     throw InvalidInput("info: expected exactly one FILE (see medspring info --help)");
   DescribeOptions opt;

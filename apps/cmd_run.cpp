@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "medspring/scene/parameter_docs.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/parallel.hpp"
 #include "medspring/scene/build.hpp"
@@ -19,7 +20,7 @@ namespace medspring::cli {
 
 int cmd_run(const Args& args) {
   args.require_known({"out", "force", "quiet", "json", "static-curve", "checkpoint-every", "checkpoint",
-                      "resume", "stop-at", "threads"});
+                      "resume", "stop-at", "threads", "set"});
   if (args.positional().size() != 1)
     throw InvalidInput("expected exactly one SCENE file (see medspring run --help)");
   const auto out = args.get("out");
@@ -41,6 +42,7 @@ int cmd_run(const Args& args) {
 
   check_output_folder(*out, force);  // before the model is built: a refusal costs nothing
   Scene scene = load_scene(args.positional()[0]);
+  if (auto set = args.get("set")) apply_scene_settings(scene, *set);  // docs/parameters.md
   if (args.get("threads")) {  // overrides the scene's integrator.threads
     const long threads = args.integer("threads", 1);
     require_thread_count(threads, "--threads");

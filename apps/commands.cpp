@@ -21,10 +21,12 @@ const std::vector<Command>& commands() {
        {"json", "quick", "compare", "scaling", "no-bullet"},
        cmd_bench},
       {"info",
-       "usage: medspring info FILE [--unit mm|cm|m] [--radius-array NAME] [--json]\n\n"
+       "usage: medspring info FILE [--unit mm|cm|m] [--radius-array NAME] [--json]\n"
+       "       medspring info --params\n\n"
        "Summarises a mesh (.obj .stl .ply .vtp .vtk), a label volume (.nii .nii.gz .mha .mhd .nrrd) or a\n"
-       "centerline (.vtp .vtk polylines with a radius array): counts, bounds in mm, units, validity.\n",
-       {"json"},
+       "centerline (.vtp .vtk polylines with a radius array): counts, bounds in mm, units, validity.\n"
+       "  --params  every declared parameter (name, unit, default, range, meaning) as docs/parameters.md\n",
+       {"json", "params"},
        cmd_info},
       {"demo",
        "usage: medspring demo [--force N] [--json]\n\n"
@@ -91,6 +93,8 @@ const std::vector<Command>& commands() {
        "                  and the traces so far, replaced atomically; default file DIR.mscp beside DIR\n"
        "  --checkpoint FILE     where checkpoints go\n"
        "  --stop-at MS    stop after the update reaching MS (writing a checkpoint and the partial results)\n"
+       "  --set P=V[,P=V] set declared parameters of the scene (docs/parameters.md), e.g.\n"
+       "                  --set integrator.dt=0.25,model.parameters.k_spoke=0.08\n"
        "  --threads N     threads of the step (1..256; overrides the scene's integrator.threads;\n"
        "                  models below 25 000 springs per thread use fewer, docs/performance.md)\n"
        "  --resume FILE   continue the run saved in FILE (same scene): trace.csv and the summary's results\n"

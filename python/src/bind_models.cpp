@@ -1,6 +1,7 @@
 // Models layer: the Body interface and its three kinds (SurfaceBody, HybridKidney, SmrmVessel), with the
 // medial pieces they are built from (chain settings, frames, vessel phantoms).
 #include "bind_common.hpp"
+#include "bind_params.hpp"
 #include "medspring/medial/chain.hpp"
 #include "medspring/medial/frames.hpp"
 #include "medspring/medial/reconstruction.hpp"
@@ -190,13 +191,8 @@ void bind_models(py::module_& m) {
                                 "Parameters of the hybrid kidney (§4, kidney column of §9).");
   hs.def_readwrite("surface_node", &HybridSettings::surface_node, "NodeParams of surface nodes.")
       .def_readwrite("atom_node", &HybridSettings::atom_node, "NodeParams of centerline atoms.")
-      .def_readwrite("k_surf", &HybridSettings::k_surf, "Surface springs, N/mm (0.05).")
-      .def_readwrite("k_spoke", &HybridSettings::k_spoke, "Spokes, N/mm (0.05).")
-      .def_readwrite("k_cl", &HybridSettings::k_cl, "Centerline springs, N/mm (0.1).")
-      .def_readwrite("nonlinear", &HybridSettings::nonlinear, "Every inter-node spring Duffing (D-4) (True).")
-      .def_readwrite("duffing", &HybridSettings::duffing, "DuffingSettings (Strain, eta = 1).")
-      .def_readwrite("spokes_per_atom", &HybridSettings::spokes_per_atom, "K_a of the union rule D-9 (8).")
-      .def_readwrite("fixed", &HybridSettings::fixed, "Pinned surface nodes (assign a new list).");
+      .def_readwrite("nonlinear", &HybridSettings::nonlinear, "Every inter-node spring Duffing (D-4) (True).");
+  def_params(hs);  // mass, k_spoke, spokes_per_atom, ...: declared in models/hybrid_kidney.hpp
   settings_helpers(hs);
   py::class_<HybridStats>(m, "HybridStats", "Statistics of a hybrid model.")
       .def_readonly("surface_nodes", &HybridStats::surface_nodes, "Surface nodes.")

@@ -3,6 +3,7 @@
 #include <pybind11/eigen.h>
 
 #include "bind_common.hpp"
+#include "bind_params.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/loads.hpp"
@@ -73,11 +74,7 @@ void bind_physics(py::module_& m) {
 
   py::class_<DuffingSettings> duffing_cls(m, "DuffingSettings",
                                           "Choice of the Duffing coefficient k' (D-3).");
-  def_enum_field(duffing_cls, "mode", &DuffingSettings::mode, "DuffingMode (default Strain).");
-  duffing_cls.def_readwrite("eta", &DuffingSettings::eta, "Strain mode strength (dimensionless, default 1).")
-      .def_readwrite("length", &DuffingSettings::length, "Absolute mode Duffing length, mm (default 10).")
-      .def_readwrite("soft", &DuffingSettings::soft,
-                     "Soft spring (k' < 0, clamped beyond its peak) if True.");
+  def_params(duffing_cls);  // declared in physics/spring_law.hpp
   settings_helpers(duffing_cls);
 
   m.def("duffing_coefficient", &duffing_coefficient, "k"_a, "L0"_a, "settings"_a = DuffingSettings{},
@@ -360,25 +357,7 @@ void bind_physics(py::module_& m) {
 
   py::class_<StepSettings> step_settings(m, "StepSettings",
                                          "Settings of one frame of time integration (§2).");
-  step_settings.def_readwrite("dt", &StepSettings::dt, "Frame duration, ms (default 0.5).")
-      .def_readwrite("substep", &StepSettings::substep,
-                     "Split a frame above dt_safe into equal substeps (default True); False: refuse it.")
-      .def_readwrite("safety", &StepSettings::safety, "dt_safe = safety * 2 / omega (default 0.8).")
-      .def_readwrite("max_substeps", &StepSettings::max_substeps, "Cap on substeps per frame (default 4096).")
-      .def_readwrite("guard", &StepSettings::guard,
-                     "Roll back and halve the step on NaN/Inf or |v| > v_max (default True).")
-      .def_readwrite("v_max", &StepSettings::v_max, "mm/ms (default 100).")
-      .def_readwrite("max_rollbacks", &StepSettings::max_rollbacks, "Halvings tried (default 6).")
-      .def_readwrite("cg_tolerance", &StepSettings::cg_tolerance,
-                     "Implicit: relative residual (default 1e-8).")
-      .def_readwrite("cg_max_iterations", &StepSettings::cg_max_iterations, "Implicit (default 200).")
-      .def_readwrite("newton_iterations", &StepSettings::newton_iterations,
-                     "Implicit: 1 = linearly implicit; > 1 = Newton with line search (default 1).")
-      .def_readwrite("threads", &StepSettings::threads,
-                     "Threads of the symplectic step, 1..256 (default 1); models below 25 000 springs per "
-                     "thread use fewer (effective_threads). Deterministic for a given count.");
-  def_enum_field(step_settings, "integrator", &StepSettings::integrator,
-                 "Integrator (default SymplecticEuler).");
+  def_params(step_settings);  // declared in physics/integrators.hpp
   settings_helpers(step_settings);
   m.def("effective_threads", &effective_threads, "model"_a, "settings"_a,
         "Threads the step really uses for this model (1 for small models, the implicit integrator or "

@@ -26,15 +26,8 @@ std::string to_string(Integrator integrator) {
 }
 
 void validate_step_settings(const Model& model, const StepSettings& s) {
-  require_positive(s.dt, "step.dt");
-  require(s.safety > 0 && s.safety <= 1, "step.safety: must be in (0, 1] (got ", s.safety, ")");
-  require(s.max_substeps >= 1, "step.max_substeps: must be >= 1 (got ", s.max_substeps, ")");
-  require_positive(s.v_max, "step.v_max");
-  require(s.max_rollbacks >= 0, "step.max_rollbacks: must be >= 0");
-  require_positive(s.cg_tolerance, "step.cg_tolerance");
-  require(s.cg_max_iterations >= 1, "step.cg_max_iterations: must be >= 1");
-  require(s.newton_iterations >= 1, "step.newton_iterations: must be >= 1");
-  require_thread_count(s.threads, "step.threads");
+  static_assert(kMaxThreads == 256, "StepSettings::threads is declared 1..256 in integrators.hpp");
+  validate_params(s, "step");  // the ranges declared in integrators.hpp
   if (!s.substep && s.integrator == Integrator::SymplecticEuler) {
     const double bound = model.dt_safe_rest(s.safety);
     require(s.dt <= bound, "step.dt: ", s.dt, " ms is above the stable step ", bound, " ms of model '",

@@ -12,6 +12,7 @@
 #include "medspring/core/check.hpp"
 #include "medspring/medial/frames.hpp"
 #include "medspring/physics/parallel.hpp"
+#include "params_json.hpp"
 
 #ifndef MEDSPRING_SCENE_DEFAULT_DATA_DIR
 #define MEDSPRING_SCENE_DEFAULT_DATA_DIR "../shared/data"
@@ -100,6 +101,17 @@ Vec3 as_vec3(const Ctx& c, const json& j, const std::string& path) {
   if (!j.is_array() || j.size() != 3) fail(c, path, "must be an array of 3 numbers");
   return {as_number(c, j[0], path + "[0]"), as_number(c, j[1], path + "[1]"),
           as_number(c, j[2], path + "[2]")};
+}
+
+// Runs a reader of declared parameters (params_json.hpp), whose errors name the JSON path, and rethrows
+// them with the scene's name in front.
+template <class F>
+void with_origin(const Ctx& c, F&& f) {
+  try {
+    f();
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(cat(c.origin, ": ", e.what()));
+  }
 }
 
 // Runs a parse function of the engine (throwing InvalidInput) and rethrows with the JSON path.
@@ -322,22 +334,10 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
 void parse_parameters(const Ctx& c, const json& j, const std::string& path, SceneModel& m) {
   Obj o(c, j, path);
   switch (m.kind) {
-    case ModelKind::Hybrid: {
-      HybridSettings& h = m.hybrid;
-      h.surface_node.mass = o.positive("mass", h.surface_node.mass);
-      h.surface_node.beta = o.nonnegative("beta", h.surface_node.beta);
-      h.surface_node.return_k = o.nonnegative("k_r", h.surface_node.return_k);
-      h.atom_node.mass = o.positive("atom_mass", h.atom_node.mass);
-      h.atom_node.beta = o.nonnegative("atom_beta", h.atom_node.beta);
-      h.atom_node.return_k = o.nonnegative("atom_k_r", h.atom_node.return_k);
-      h.k_surf = o.positive("k_surf", h.k_surf);
-      h.k_spoke = o.positive("k_spoke", h.k_spoke);
-      h.k_cl = o.positive("k_cl", h.k_cl);
-      h.spokes_per_atom = o.index("spokes_per_atom", h.spokes_per_atom, 1);
-      if (const json* d = o.get("duffing")) h.duffing = parse_duffing(c, *d, o.at("duffing"), h.duffing);
-      if (const json* f = o.get("fixed")) h.fixed = parse_index_list(c, *f, o.at("fixed"));
-      break;
-    }
+    case ModelKind::Hybrid:
+      // Declared once (models/hybrid_kidney.hpp, for_each_field): every key, type and range checked there.
+      with_origin(c, [&] { params_from_json(j, path, m.hybrid); });
+      return;
     case ModelKind::Surface: {
       SurfaceBodyParams& p = m.surface;
       p.node.mass = o.positive("mass", p.node.mass);
@@ -515,20 +515,7 @@ SceneLoad parse_load(const Ctx& c, const json& j, const std::string& path) {
 }
 
 void parse_integrator_block(const Ctx& c, const json& j, StepSettings& s) {
-  Obj o(c, j, "integrator");
-  if (const json* m = o.get("method")) {
-    const std::string t = as_string(c, *m, "integrator.method");
-    s.integrator = with_path(c, "integrator.method", [&] { return parse_integrator(t); });
-  }
-  s.dt = o.positive("dt", s.dt);
-  s.substep = o.boolean("substep", s.substep);
-  s.safety = o.positive("safety", s.safety);
-  if (s.safety > 1) fail(c, "integrator.safety", cat("must be in (0, 1] (got ", s.safety, ")"));
-  s.max_substeps = static_cast<int>(o.index("max_substeps", s.max_substeps, 1));
-  s.threads = static_cast<int>(o.index("threads", s.threads, 1));
-  if (s.threads > kMaxThreads)
-    fail(c, "integrator.threads", cat("must be in 1..", kMaxThreads, " (got ", s.threads, ")"));
-  o.finish();
+  with_origin(c, [&] { params_from_json(j, "integrator", s); });  // physics/integrators.hpp
 }
 
 void parse_local(const Ctx& c, const json& j, Scene& scene) {
@@ -718,19 +705,7 @@ std::string scene_to_json(const Scene& s) {
   json params;
   const SceneModel& m = s.model;
   if (m.kind == ModelKind::Hybrid) {
-    const HybridSettings& h = m.hybrid;
-    params = {{"mass", h.surface_node.mass},
-              {"beta", h.surface_node.beta},
-              {"k_r", h.surface_node.return_k},
-              {"atom_mass", h.atom_node.mass},
-              {"atom_beta", h.atom_node.beta},
-              {"atom_k_r", h.atom_node.return_k},
-              {"k_surf", h.k_surf},
-              {"k_spoke", h.k_spoke},
-              {"k_cl", h.k_cl},
-              {"spokes_per_atom", h.spokes_per_atom},
-              {"duffing", duffing_json(h.duffing)},
-              {"fixed", h.fixed}};
+    params = params_to_json(m.hybrid);
   } else if (m.kind == ModelKind::Surface) {
     const SurfaceBodyParams& p = m.surface;
     params = {{"mass", p.node.mass},
@@ -800,13 +775,7 @@ std::string scene_to_json(const Scene& s) {
             {"description", s.description},
             {"model", model},
             {"loads", loads},
-            {"integrator",
-             {{"method", to_string(s.step.integrator)},
-              {"dt", s.step.dt},
-              {"substep", s.step.substep},
-              {"safety", s.step.safety},
-              {"max_substeps", s.step.max_substeps},
-              {"threads", s.step.threads}}},
+            {"integrator", params_to_json(s.step)},
             {"duration", s.duration},
             {"local", local},
             {"record",

@@ -27,6 +27,30 @@ struct HybridSettings {
   std::vector<Index> fixed;                 // pinned surface nodes (default none)
 };
 
+/// The declaration of HybridSettings (core/params.hpp): the "parameters" of a hybrid model in a scene,
+/// the Python properties and keywords of HybridSettings, `medspring build kidney --set NAME=VALUE`, the
+/// table in docs/parameters.md. A new parameter: a member above and a line here (CONTRIBUTING.md).
+/// `nonlinear` is the model's "nonlinear" key, not a parameter.
+template <ParamOf<HybridSettings> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"mass", "g", "mass of a surface node"}.positive(), s.surface_node.mass);
+  v(ParamSpec{"beta", "1/ms", "mass-proportional damping of a surface node, d = beta m"}.nonnegative(),
+    s.surface_node.beta);
+  v(ParamSpec{"k_r", "N/mm", "return spring of a surface node to its rest position"}.nonnegative(),
+    s.surface_node.return_k);
+  v(ParamSpec{"atom_mass", "g", "mass of a centerline atom"}.positive(), s.atom_node.mass);
+  v(ParamSpec{"atom_beta", "1/ms", "mass-proportional damping of an atom"}.nonnegative(), s.atom_node.beta);
+  v(ParamSpec{"atom_k_r", "N/mm", "return spring of an atom"}.nonnegative(), s.atom_node.return_k);
+  v(ParamSpec{"k_surf", "N/mm", "surface springs (one per mesh edge)"}.positive(), s.k_surf);
+  v(ParamSpec{"k_spoke", "N/mm", "spokes between surface nodes and atoms (D-9)"}.positive(), s.k_spoke);
+  v(ParamSpec{"k_cl", "N/mm", "centerline springs between consecutive atoms"}.positive(), s.k_cl);
+  v(ParamSpec{"spokes_per_atom", "", "K_a of the union rule: each atom to its K_a nearest surface nodes (D-9)"}
+        .at_least(1),
+    s.spokes_per_atom);
+  v(ParamSpec{"duffing", "", "Duffing law of every inter-node spring (D-3, D-4)"}, s.duffing);
+  v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
+}
+
 /// Spokes by the union rule of D-9: (a) every surface node to its nearest atom (ties: lower atom);
 /// (b) every atom to its K nearest surface nodes; duplicates removed. Rows (surface node, atom),
 /// sorted by atom then node.

@@ -17,6 +17,7 @@ enum class Integrator {
 };
 Integrator parse_integrator(const std::string& text);
 std::string to_string(Integrator integrator);
+inline Integrator parse_enum(const std::string& text, Integrator*) { return parse_integrator(text); }
 
 struct StepSettings {
   double dt = 0.5;  // frame duration (ms)
@@ -32,6 +33,31 @@ struct StepSettings {
   int newton_iterations = 1;    // implicit: 1 = linearly implicit; > 1 = full Newton with line search
   int threads = 1;  // symplectic: threads of the step, 1..256 (kMaxThreads); see effective_threads
 };
+
+/// The declaration of StepSettings (core/params.hpp): the scene's "integrator" block, the Python
+/// properties and keywords of StepSettings, the table in docs/parameters.md.
+template <ParamOf<StepSettings> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"integrator", "", "symplectic_euler (§2.1) or implicit_euler (§2.3)"}.json_key("method"),
+    s.integrator);
+  v(ParamSpec{"dt", "ms", "frame duration"}.positive(), s.dt);
+  v(ParamSpec{"substep", "", "split a frame above dt_safe into equal substeps (§2.2); false: refuse it"},
+    s.substep);
+  v(ParamSpec{"safety", "", "dt_safe = safety * 2 / omega"}.positive().at_most(1), s.safety);
+  v(ParamSpec{"max_substeps", "", "cap on substeps per frame (counted in warnings when hit)"}.at_least(1),
+    s.max_substeps);
+  v(ParamSpec{"guard", "", "roll back and halve the step on NaN/Inf or |v| > v_max (§2.5)"}, s.guard);
+  v(ParamSpec{"v_max", "mm/ms", "speed above which the guard rolls back"}.positive(), s.v_max);
+  v(ParamSpec{"max_rollbacks", "", "halvings tried before the frame is reported failed"}.nonnegative(),
+    s.max_rollbacks);
+  v(ParamSpec{"cg_tolerance", "", "implicit: relative residual of the CG solve"}.positive(), s.cg_tolerance);
+  v(ParamSpec{"cg_max_iterations", "", "implicit: CG iterations per solve"}.at_least(1), s.cg_max_iterations);
+  v(ParamSpec{"newton_iterations", "", "implicit: 1 = linearly implicit; > 1 = Newton with line search"}
+        .at_least(1),
+    s.newton_iterations);
+  v(ParamSpec{"threads", "", "symplectic: threads of the step (see effective_threads)"}.at_least(1).at_most(256),
+    s.threads);
+}
 
 /// Validates settings (finite positive dt, safety in (0, 1], ...). Throws InvalidInput naming the field.
 /// With substep = false and the symplectic integrator, also rejects dt above the model's stable step at rest.

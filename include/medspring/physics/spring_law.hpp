@@ -5,6 +5,8 @@
 #include <limits>
 #include <string>
 
+#include "medspring/core/params.hpp"
+
 namespace medspring {
 
 /// How the cubic coefficient k' of eq. (5) is chosen for a spring of stiffness k and rest length L0 (D-3).
@@ -27,6 +29,17 @@ double duffing_coefficient(double k, double L0, const DuffingSettings& s);
 
 DuffingMode parse_duffing_mode(const std::string& text);
 std::string to_string(DuffingMode mode);
+inline DuffingMode parse_enum(const std::string& text, DuffingMode*) { return parse_duffing_mode(text); }
+
+/// The declaration of DuffingSettings (core/params.hpp): JSON object "duffing" of the model parameters.
+template <ParamOf<DuffingSettings> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"mode", "", "k' rule (D-3): linear, strain, absolute (the paper's k' = k / length^2) or scaled_strain"},
+    s.mode);
+  v(ParamSpec{"eta", "", "strain mode strength: k' = eta k / L0^2"}.positive(), s.eta);
+  v(ParamSpec{"length", "mm", "absolute mode Duffing length: k' = k / length^2"}.positive(), s.length);
+  v(ParamSpec{"soft", "", "soft spring (k' < 0, clamped beyond its peak, §1.7) instead of hard"}, s.soft);
+}
 
 /// Peak elongation of a soft spring, Delta* = sqrt(k / (3|k'|)); +inf for hard/linear springs.
 inline double soft_limit(double k, double kp) {

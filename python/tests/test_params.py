@@ -1,0 +1,95 @@
+"""Parameters declared once (core/params.hpp): every declared field of HybridSettings, StepSettings and
+DuffingSettings is a Python property and keyword argument, and the same name set from Python, through a
+scene file and back, keeps its value."""
+
+import json
+import math
+
+import pytest
+
+import medspring as ms
+
+m = ms._medspring
+
+
+def changed(spec, value):
+    """A valid value of the declared field different from `value`."""
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, list):
+        return [1, 3, 4]
+    if isinstance(value, int) and not hasattr(value, "name"):
+        up = value + 1
+        return up if up <= spec["hi"] else value - 1
+    if isinstance(value, float):
+        up = value * 1.25 + 0.125
+        ok = up < spec["hi"] if spec["hi_open"] else up <= spec["hi"]
+        return up if ok else value * 0.5
+    # an enum: another of its values
+    members = list(type(value).__members__.values())
+    return members[(members.index(value) + 1) % len(members)]
+
+
+def norm(value):
+    return str(value).replace("_", "").lower() if isinstance(value, str) else value
+
+
+def as_json(value):
+    return str(value).split(".")[-1] if hasattr(value, "name") and not isinstance(value, (bool, int)) else value
+
+
+@pytest.mark.parametrize("cls", [m.HybridSettings, m.StepSettings, m.DuffingSettings])
+def test_every_declared_field_is_a_keyword_and_property(cls):
+    specs = cls._params
+    assert len(specs) >= 4
+    default = cls()
+    for spec in specs:
+        name = spec["name"]
+        value = getattr(default, name)
+        if isinstance(value, m.DuffingSettings):
+            continue  # nested: its own fields are checked with DuffingSettings
+        new = changed(spec, value)
+        obj = cls(**{name: new})
+        assert getattr(obj, name) == new, name
+        assert getattr(cls(), name) == value, name  # the default is untouched
+        assert spec["doc"] in getattr(cls, name).__doc__
+    with pytest.raises(TypeError, match="unknown field"):
+        cls(no_such_field=1)
+
+
+def test_hybrid_and_step_fields_round_trip_through_a_scene_file():
+    hybrid, step = m.HybridSettings(), m.StepSettings()
+    params, integrator = {}, {}
+    for obj, out in ((hybrid, params), (step, integrator)):
+        for spec in type(obj)._params:
+            value = getattr(obj, spec["name"])
+            if isinstance(value, m.DuffingSettings):
+                duffing = {}
+                for d in m.DuffingSettings._params:
+                    new = changed(d, getattr(value, d["name"]))
+                    setattr(value, d["name"], new)  # nested by reference
+                    duffing[d["key"]] = as_json(new)
+                out[spec["key"]] = duffing
+                continue
+            new = changed(spec, value)
+            setattr(obj, spec["name"], new)
+            out[spec["key"]] = as_json(new)
+    doc = {"model": {"kind": "hybrid", "source": {"phantom": "kidney"}, "parameters": params},
+           "integrator": integrator, "duration": 10}
+    back = json.loads(m.scene_json(json.dumps(doc)))
+    got_params, got_integrator = back["model"]["parameters"], back["integrator"]
+    for spec in m.HybridSettings._params:
+        want = getattr(hybrid, spec["name"])
+        got = got_params[spec["key"]]
+        if isinstance(want, m.DuffingSettings):
+            for d in m.DuffingSettings._params:
+                w = as_json(getattr(want, d["name"]))
+                assert norm(got[d["key"]]) == norm(w), d["name"]
+        elif isinstance(want, float):
+            assert math.isclose(got, want, rel_tol=0, abs_tol=0), spec["name"]
+        else:
+            assert got == as_json(want), spec["name"]
+    for spec in m.StepSettings._params:
+        want = as_json(getattr(step, spec["name"]))
+        got = got_integrator[spec["key"]]
+        assert norm(got) == norm(want), spec["name"]

@@ -1,0 +1,185 @@
+// Parameters declared once (core/params.hpp): every declared field of every set round-trips through a
+// scene file, is range-checked with its JSON path, can be set from the command line, and the committed
+// docs/parameters.md is the generated one.
+#include "medspring/core/params.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "medspring/core/check.hpp"
+#include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/physics/integrators.hpp"
+#include "medspring/scene/parameter_docs.hpp"
+#include "medspring/scene/scene.hpp"
+
+namespace medspring {
+namespace {
+
+const char* kHybrid = R"({"model": {"kind": "hybrid", "source": {"phantom": "kidney"}}, "duration": 10})";
+
+/// Gives every field of p a valid value different from its current one (nested structs included).
+template <ParamStruct T>
+void perturb(T& p) {
+  for_each_field(p, [](const ParamSpec& s, auto& f) {
+    using F = std::remove_cvref_t<decltype(f)>;
+    if constexpr (ParamStruct<F>) {
+      perturb(f);
+    } else if constexpr (std::is_same_v<F, bool>) {
+      f = !f;
+    } else if constexpr (std::is_enum_v<F>) {
+      f = static_cast<F>(static_cast<int>(f) ^ 1);  // every declared enum has at least two values
+    } else if constexpr (std::is_integral_v<F>) {
+      f = range_error(s, f + 1).empty() ? f + 1 : f - 1;
+    } else if constexpr (std::is_arithmetic_v<F>) {
+      const F up = f * 1.25 + 0.125;
+      f = range_error(s, up).empty() ? up : f * 0.5;
+    } else {
+      f = {1, 3, 4};
+    }
+    EXPECT_EQ(range_error(s, f), "") << s.name;
+  });
+}
+
+/// Every field of a and b as "name=value" lines.
+template <ParamStruct T>
+std::string dump(const T& p) {
+  std::string out;
+  for (const ParamRow& r : param_rows(p)) out += r.name + "=" + r.default_value + "\n";
+  return out;
+}
+
+TEST(DeclaredParameters, EveryHybridAndStepFieldRoundTripsThroughASceneFile) {
+  Scene s = parse_scene(kHybrid, ".", "t.json");
+  const std::string defaults = dump(s.model.hybrid) + dump(s.step);
+  perturb(s.model.hybrid);
+  perturb(s.step);
+  const std::string changed = dump(s.model.hybrid) + dump(s.step);
+  // every line differs from the default (a field that perturb could not change would hide a round trip)
+  std::istringstream a(defaults), b(changed);
+  for (std::string la, lb; std::getline(a, la) && std::getline(b, lb);) EXPECT_NE(la, lb);
+  const Scene back = parse_scene(scene_to_json(s), ".", "t.json");
+  EXPECT_EQ(dump(back.model.hybrid) + dump(back.step), changed);
+}
+
+TEST(DeclaredParameters, EveryBoundedFieldRejectsAValueOutOfRangeNamingItsPath) {
+  int checked = 0;
+  const auto check = [&](const std::string& block, const ParamRow& r, const ParamSpec& s) {
+    if (!s.has_lo() || r.type == "node list") return;
+    const double bad = s.lo - 1;
+    std::string text = kHybrid;
+    const std::string value = r.type == "integer" ? cat(static_cast<long>(bad)) : cat(bad);
+    std::string key = r.name, obj = cat("{\"", key, "\": ", value, "}");
+    if (const auto dot = key.find('.'); dot != std::string::npos)
+      obj = cat("{\"", key.substr(0, dot), "\": {\"", key.substr(dot + 1), "\": ", value, "}}");
+    if (block == "integrator")
+      text.insert(text.size() - 1, cat(", \"integrator\": ", obj));
+    else
+      text.insert(text.find("}}") + 1, cat(", \"parameters\": ", obj));
+    try {
+      parse_scene(text, ".", "t.json");
+      ADD_FAILURE() << r.name << " = " << value << " accepted";
+    } catch (const InvalidInput& e) {
+      const std::string path = block == "integrator" ? "integrator." : "model.parameters.";
+      EXPECT_NE(std::string(e.what()).find(cat("t.json: ", path, r.name, ": must be")), std::string::npos)
+          << e.what();
+    }
+    ++checked;
+  };
+  const auto each = [&](const std::string& block, auto settings) {
+    for_each_field(settings, [&](const ParamSpec& s, const auto& f) {
+      using F = std::remove_cvref_t<decltype(f)>;
+      if constexpr (ParamStruct<F>) {
+        for_each_field(f, [&](const ParamSpec& s2, const auto& g) {
+          using G = std::remove_cvref_t<decltype(g)>;
+          if constexpr (std::is_arithmetic_v<G> && !std::is_same_v<G, bool>)
+            check(block, {cat(s.json_name(), ".", s2.json_name()), param_type_text<G>()}, s2);
+        });
+      } else if constexpr (std::is_arithmetic_v<F> && !std::is_same_v<F, bool>) {
+        check(block, {std::string(s.json_name()), param_type_text<F>()}, s);
+      }
+    });
+  };
+  each("model.parameters", HybridSettings{});
+  each("integrator", StepSettings{});
+  EXPECT_GE(checked, 20);
+}
+
+TEST(DeclaredParameters, UnknownKeysAndWrongTypesAreNamed) {
+  std::string text = kHybrid;
+  text.insert(text.find("}}") + 1, R"(, "parameters": {"k_spokes": 1})");
+  try {
+    parse_scene(text, ".", "t.json");
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("model.parameters.k_spokes: unknown key (expected one of: mass,"),
+              std::string::npos)
+        << e.what();
+  }
+  text = kHybrid;
+  text.insert(text.size() - 1, R"(, "integrator": {"substep": 1})");
+  try {
+    parse_scene(text, ".", "t.json");
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("t.json: integrator.substep: must be true or false"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(DeclaredParameters, CommandLineSettingsUseTheDeclarations) {
+  Scene s = parse_scene(kHybrid, ".", "t.json");
+  apply_scene_settings(s, "integrator.dt=0.25,model.parameters.k_spoke=0.08,model.parameters.duffing.mode=absolute,"
+                          "integrator.method=implicit_euler,model.parameters.spokes_per_atom=6");
+  EXPECT_EQ(s.step.dt, 0.25);
+  EXPECT_EQ(s.model.hybrid.k_spoke, 0.08);
+  EXPECT_EQ(s.model.hybrid.duffing.mode, DuffingMode::Absolute);
+  EXPECT_EQ(s.step.integrator, Integrator::ImplicitEuler);
+  EXPECT_EQ(s.model.hybrid.spokes_per_atom, 6);
+  const auto error = [&](const std::string& a) {
+    try {
+      apply_scene_settings(s, a);
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("integrator.safety=2"), "--set integrator.safety: must be in (0, 1] (got 2)");
+  EXPECT_EQ(error("model.parameters.spokes_per_atom=1.5"),
+            "--set model.parameters.spokes_per_atom: must be an integer (got '1.5')");
+  EXPECT_NE(error("integrator.dtt=1").find("unknown parameter 'dtt'"), std::string::npos);
+  EXPECT_NE(error("dt").find("expected PATH=VALUE"), std::string::npos);
+}
+
+TEST(DeclaredParameters, ValidationNamesTheField) {
+  StepSettings s;
+  s.threads = 0;
+  try {
+    validate_params(s, "step");
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_STREQ(e.what(), "step.threads: must be an integer in 1..256 (got 0)");
+  }
+  HybridSettings h;
+  h.fixed = {2, -1};
+  try {
+    validate_params(h, "hybrid");
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_STREQ(e.what(), "hybrid.fixed[1]: must be >= 0 (got -1)");
+  }
+}
+
+TEST(DeclaredParameters, CommittedDocsTableIsTheGeneratedOne) {
+  std::ifstream in(MEDSPRING_SOURCE_DIR "/docs/parameters.md", std::ios::binary);
+  ASSERT_TRUE(in) << "docs/parameters.md missing";
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_EQ(ss.str(), parameter_tables_markdown())
+      << "docs/parameters.md is stale: regenerate with  medspring info --params > docs/parameters.md";
+}
+
+}  // namespace
+}  // namespace medspring
