@@ -8,10 +8,10 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "medspring/scene/parameter_docs.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/parallel.hpp"
 #include "medspring/scene/build.hpp"
+#include "medspring/scene/parameter_docs.hpp"
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/checkpoint.hpp"
 #include "scene_support.hpp"

@@ -191,7 +191,8 @@ void bind_models(py::module_& m) {
                                 "Parameters of the hybrid kidney (§4, kidney column of §9).");
   hs.def_readwrite("surface_node", &HybridSettings::surface_node, "NodeParams of surface nodes.")
       .def_readwrite("atom_node", &HybridSettings::atom_node, "NodeParams of centerline atoms.")
-      .def_readwrite("nonlinear", &HybridSettings::nonlinear, "Every inter-node spring Duffing (D-4) (True).");
+      .def_readwrite("nonlinear", &HybridSettings::nonlinear,
+                     "Every inter-node spring Duffing (D-4) (True).");
   def_params(hs);  // mass, k_spoke, spokes_per_atom, ...: declared in models/hybrid_kidney.hpp
   settings_helpers(hs);
   py::class_<HybridStats>(m, "HybridStats", "Statistics of a hybrid model.")

@@ -33,8 +33,8 @@ std::string parameter_tables_markdown() {
       "and this page. The name is the JSON key; in Python the property of the same name (`integrator` "
       "for the key `method`). A nested name `duffing.eta` is the key `eta` of the object `duffing`.\n";
   for (const ParamSet& p : parameter_sets()) {
-    s += cat("\n## ", p.title, "\n\n`", p.struct_name, "`, declared in [", p.declared_in, "](../", p.declared_in,
-             "); in a scene: ", p.scene_path, ".\n\n");
+    s += cat("\n## ", p.title, "\n\n`", p.struct_name, "`, declared in [", p.declared_in, "](../",
+             p.declared_in, "); in a scene: ", p.scene_path, ".\n\n");
     s += params_markdown(p.rows);
   }
   return s;

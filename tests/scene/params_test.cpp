@@ -66,7 +66,9 @@ TEST(DeclaredParameters, EveryHybridAndStepFieldRoundTripsThroughASceneFile) {
 
 TEST(DeclaredParameters, EveryBoundedFieldRejectsAValueOutOfRangeNamingItsPath) {
   int checked = 0;
-  const auto check = [&](const std::string& block, const ParamRow& r, const ParamSpec& s) {
+  const auto check = [&](const std::string& block, const std::string& name, const std::string& type,
+                         const ParamSpec& s) {
+    const ParamRow r{name, type, "", "", "", ""};
     if (!s.has_lo() || r.type == "node list") return;
     const double bad = s.lo - 1;
     std::string text = kHybrid;
@@ -95,10 +97,10 @@ TEST(DeclaredParameters, EveryBoundedFieldRejectsAValueOutOfRangeNamingItsPath) 
         for_each_field(f, [&](const ParamSpec& s2, const auto& g) {
           using G = std::remove_cvref_t<decltype(g)>;
           if constexpr (std::is_arithmetic_v<G> && !std::is_same_v<G, bool>)
-            check(block, {cat(s.json_name(), ".", s2.json_name()), param_type_text<G>()}, s2);
+            check(block, cat(s.json_name(), ".", s2.json_name()), param_type_text<G>(), s2);
         });
       } else if constexpr (std::is_arithmetic_v<F> && !std::is_same_v<F, bool>) {
-        check(block, {std::string(s.json_name()), param_type_text<F>()}, s);
+        check(block, std::string(s.json_name()), param_type_text<F>(), s);
       }
     });
   };
@@ -124,15 +126,18 @@ TEST(DeclaredParameters, UnknownKeysAndWrongTypesAreNamed) {
     parse_scene(text, ".", "t.json");
     FAIL();
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("t.json: integrator.substep: must be true or false"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("t.json: integrator.substep: must be true or false"),
+              std::string::npos)
         << e.what();
   }
 }
 
 TEST(DeclaredParameters, CommandLineSettingsUseTheDeclarations) {
   Scene s = parse_scene(kHybrid, ".", "t.json");
-  apply_scene_settings(s, "integrator.dt=0.25,model.parameters.k_spoke=0.08,model.parameters.duffing.mode=absolute,"
-                          "integrator.method=implicit_euler,model.parameters.spokes_per_atom=6");
+  apply_scene_settings(
+      s,
+      "integrator.dt=0.25,model.parameters.k_spoke=0.08,model.parameters.duffing.mode=absolute,"
+      "integrator.method=implicit_euler,model.parameters.spokes_per_atom=6");
   EXPECT_EQ(s.step.dt, 0.25);
   EXPECT_EQ(s.model.hybrid.k_spoke, 0.08);
   EXPECT_EQ(s.model.hybrid.duffing.mode, DuffingMode::Absolute);

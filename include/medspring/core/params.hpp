@@ -77,7 +77,9 @@ struct NoOp {
 
 /// A struct with a for_each_field declaration.
 template <class T>
-concept ParamStruct = requires(T& t) { for_each_field(t, params_detail::NoOp{}); };
+concept ParamStruct = requires(T& t) {
+  for_each_field(t, params_detail::NoOp{});
+};
 
 template <class T>
 concept ParamEnum = std::is_enum_v<T> && requires(T e, const std::string& s) {
@@ -109,7 +111,8 @@ std::string range_error(const ParamSpec& s, T x) {
     constexpr bool integer = std::is_integral_v<T>;
     if (!std::isfinite(v)) return cat("must be finite (got ", x, ")");
     if (s.has_lo() && s.has_hi())
-      return cat(integer ? "must be an integer in " : "must be in ", range_text(s, integer), " (got ", x, ")");
+      return cat(integer ? "must be an integer in " : "must be in ", range_text(s, integer), " (got ", x,
+                 ")");
     return cat("must be ", range_text(s, integer), " (got ", x, ")");
   } else if constexpr (std::is_same_v<T, std::vector<Index>>) {
     for (std::size_t k = 0; k < x.size(); ++k)
@@ -159,12 +162,18 @@ std::string param_value_text(const F& f) {
 /// A field's type in words for tables and errors.
 template <class F>
 std::string param_type_text() {
-  if constexpr (std::is_same_v<F, bool>) return "bool";
-  else if constexpr (std::is_enum_v<F>) return "enum";
-  else if constexpr (std::is_integral_v<F>) return "integer";
-  else if constexpr (std::is_arithmetic_v<F>) return "number";
-  else if constexpr (std::is_same_v<F, std::vector<Index>>) return "node list";
-  else return "object";
+  if constexpr (std::is_same_v<F, bool>)
+    return "bool";
+  else if constexpr (std::is_enum_v<F>)
+    return "enum";
+  else if constexpr (std::is_integral_v<F>)
+    return "integer";
+  else if constexpr (std::is_arithmetic_v<F>)
+    return "number";
+  else if constexpr (std::is_same_v<F, std::vector<Index>>)
+    return "node list";
+  else
+    return "object";
 }
 
 /// One row of a parameter table: nested fields flattened as "duffing.eta".
@@ -223,7 +232,8 @@ void set_param(T& p, const std::string& name, const std::string& text) {
       found = true;
       F value{};
       if constexpr (std::is_same_v<F, bool>) {
-        if (text != "true" && text != "false") throw InvalidInput(cat(name, ": must be true or false (got '", text, "')"));
+        if (text != "true" && text != "false")
+          throw InvalidInput(cat(name, ": must be true or false (got '", text, "')"));
         value = text == "true";
       } else if constexpr (std::is_enum_v<F>) {
         try {

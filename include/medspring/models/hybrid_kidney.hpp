@@ -44,7 +44,8 @@ void for_each_field(S& s, V&& v) {
   v(ParamSpec{"k_surf", "N/mm", "surface springs (one per mesh edge)"}.positive(), s.k_surf);
   v(ParamSpec{"k_spoke", "N/mm", "spokes between surface nodes and atoms (D-9)"}.positive(), s.k_spoke);
   v(ParamSpec{"k_cl", "N/mm", "centerline springs between consecutive atoms"}.positive(), s.k_cl);
-  v(ParamSpec{"spokes_per_atom", "", "K_a of the union rule: each atom to its K_a nearest surface nodes (D-9)"}
+  v(ParamSpec{"spokes_per_atom", "",
+              "K_a of the union rule: each atom to its K_a nearest surface nodes (D-9)"}
         .at_least(1),
     s.spokes_per_atom);
   v(ParamSpec{"duffing", "", "Duffing law of every inter-node spring (D-3, D-4)"}, s.duffing);

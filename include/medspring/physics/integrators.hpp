@@ -17,7 +17,9 @@ enum class Integrator {
 };
 Integrator parse_integrator(const std::string& text);
 std::string to_string(Integrator integrator);
-inline Integrator parse_enum(const std::string& text, Integrator*) { return parse_integrator(text); }
+inline Integrator parse_enum(const std::string& text, Integrator*) {
+  return parse_integrator(text);
+}
 
 struct StepSettings {
   double dt = 0.5;  // frame duration (ms)
@@ -55,7 +57,8 @@ void for_each_field(S& s, V&& v) {
   v(ParamSpec{"newton_iterations", "", "implicit: 1 = linearly implicit; > 1 = Newton with line search"}
         .at_least(1),
     s.newton_iterations);
-  v(ParamSpec{"threads", "", "symplectic: threads of the step (see effective_threads)"}.at_least(1).at_most(256),
+  v(ParamSpec{"threads", "", "symplectic: threads of the step (see effective_threads)"}.at_least(1).at_most(
+        256),
     s.threads);
 }
 

@@ -29,12 +29,15 @@ double duffing_coefficient(double k, double L0, const DuffingSettings& s);
 
 DuffingMode parse_duffing_mode(const std::string& text);
 std::string to_string(DuffingMode mode);
-inline DuffingMode parse_enum(const std::string& text, DuffingMode*) { return parse_duffing_mode(text); }
+inline DuffingMode parse_enum(const std::string& text, DuffingMode*) {
+  return parse_duffing_mode(text);
+}
 
 /// The declaration of DuffingSettings (core/params.hpp): JSON object "duffing" of the model parameters.
 template <ParamOf<DuffingSettings> S, class V>
 void for_each_field(S& s, V&& v) {
-  v(ParamSpec{"mode", "", "k' rule (D-3): linear, strain, absolute (the paper's k' = k / length^2) or scaled_strain"},
+  v(ParamSpec{"mode", "",
+              "k' rule (D-3): linear, strain, absolute (the paper's k' = k / length^2) or scaled_strain"},
     s.mode);
   v(ParamSpec{"eta", "", "strain mode strength: k' = eta k / L0^2"}.positive(), s.eta);
   v(ParamSpec{"length", "mm", "absolute mode Duffing length: k' = k / length^2"}.positive(), s.length);
