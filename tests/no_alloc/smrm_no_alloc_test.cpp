@@ -1,69 +1,20 @@
 // "No allocation inside the update loop" (DESIGN.md) for the SMRM update: chain step, frames,
-// reconstruction and normals. Counts every malloc/calloc/realloc/aligned allocation of the process by
-// interposing glibc's allocator in this test executable (glibc only, not under a sanitizer, which
-// interposes the allocator itself).
+// reconstruction and normals, counted by the shared counter of tests/support/alloc_counter.hpp.
 #include <gtest/gtest.h>
 
+#include "alloc_counter.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/physics/integrators.hpp"
-
-#if defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define MEDSPRING_TEST_NO_INTERPOSE 1
-#endif
-#endif
-#if defined(__SANITIZE_ADDRESS__)
-#define MEDSPRING_TEST_NO_INTERPOSE 1
-#endif
-
-#if defined(__GLIBC__) && !defined(MEDSPRING_TEST_NO_INTERPOSE)
-#include <atomic>
-#include <cerrno>
-#include <cstddef>
-
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* __libc_memalign(std::size_t, std::size_t);
-}
-
-namespace {
-std::atomic<long> g_allocations{0};
-}
-
-extern "C" {
-void* malloc(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
-}
-void* calloc(std::size_t a, std::size_t b) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_calloc(a, b);
-}
-void* realloc(void* p, std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_realloc(p, n);
-}
-void* aligned_alloc(std::size_t a, std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_memalign(a, n);
-}
-int posix_memalign(void** p, std::size_t a, std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  *p = __libc_memalign(a, n);
-  return *p ? 0 : ENOMEM;
-}
-}
 
 namespace medspring {
 namespace {
 
 long allocations() {
-  return g_allocations.load(std::memory_order_relaxed);
+  return testing::heap_allocations();
 }
 
 TEST(SmrmAllocation, TheCounterSeesEigenAndStandardAllocations) {  // the check below can fail
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
   const long before = allocations();
   MatX3 big(1000, 3);
   std::vector<double> v(100);
@@ -71,6 +22,7 @@ TEST(SmrmAllocation, TheCounterSeesEigenAndStandardAllocations) {  // the check 
 }
 
 TEST(SmrmAllocation, UpdateDoesNotAllocate) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
   for (bool structured : {true, false}) {
     SCOPED_TRACE(structured ? "structured tube" : "generic binding");
     SmrmSettings settings;
@@ -106,4 +58,3 @@ TEST(SmrmAllocation, UpdateDoesNotAllocate) {
 
 }  // namespace
 }  // namespace medspring
-#endif

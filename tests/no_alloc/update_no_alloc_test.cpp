@@ -1,0 +1,149 @@
+// "No allocation in the update loop" (DESIGN.md, issue 22), proven for every model kind: 10^4 updates
+// of a Simulation with the local deformation on and a sphere tool in contact that moves to another
+// surface node every 100 updates (so the contact node, its local patch and the tool's contact set
+// change), after a warm-up that visits every contact site once. Counted by the replaced global
+// operator new and malloc family of tests/support/alloc_counter.hpp.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <memory>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "medspring/geometry/phantoms.hpp"
+#include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/medial/chain.hpp"
+#include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/smrm_tree.hpp"
+#include "medspring/models/smrm_vessel.hpp"
+#include "medspring/models/surface_body.hpp"
+#include "medspring/sim/tool_sim.hpp"
+
+namespace medspring {
+namespace {
+
+constexpr int kUpdates = 10000;  // counted updates
+constexpr int kHold = 100;       // updates per contact site
+constexpr double kRadius = 4.0;  // sphere tool, mm
+constexpr double kDepth = 0.6;   // how far the sphere starts inside the rest surface, mm
+
+struct Result {
+  long allocations = 0;
+  std::size_t distinct_patches = 0;  // local patches (by their first node) met while counting
+  double max_local = 0;              // largest |U| of the overlay while counting, mm
+  Index tool_contacts = 0;           // nodes in contact with the tool at the end
+  int failed_updates = 0;
+};
+
+/// Presses a sphere on each of `sites` (surface nodes) in turn, kHold updates each: kUpdates counted
+/// updates after a warm-up of two rounds over the sites.
+Result run(const BodyPtr& body, const std::vector<Index>& sites) {
+  SimulationSettings settings;
+  settings.local.enabled = true;
+  Simulation sim(body, settings);
+  ToolSimulation tools(sim, {.friction = 0.2});
+  const MatX3& X = body->rest_surface();
+  MatX3 N;
+  vertex_normals(X, body->faces(), N);
+  const auto pose_at = [&](Index node, double offset) {
+    Pose p;
+    p.position = X.row(node).transpose() + (kRadius + offset) * N.row(node).transpose();
+    return p;
+  };
+  const Index k = tools.add_tool(Tool::sphere(kRadius), pose_at(sites[0], 2.0));  // starts outside
+  Result r;
+  std::vector<Index> patches;
+  patches.reserve(4096);  // before counting
+  const auto one = [&](int i, bool counting) {
+    if (i % kHold == 0)
+      tools.set_pose(k, pose_at(sites[static_cast<std::size_t>(i / kHold) % sites.size()], -kDepth));
+    if (!tools.update().ok()) ++r.failed_updates;
+    if (!counting || sim.local_nodes().empty()) return;
+    const Index first = sim.local_nodes().front();
+    if (std::find(patches.begin(), patches.end(), first) == patches.end() &&
+        patches.size() < patches.capacity())
+      patches.push_back(first);
+    for (Index row = 0; row < sim.local_displacement().rows(); ++row)
+      r.max_local = std::max(r.max_local, sim.local_displacement().row(row).norm());
+  };
+  const int warm = static_cast<int>(sites.size()) * kHold * 2;
+  for (int i = 0; i < warm; ++i) one(i, false);
+  const long before = testing::heap_allocations();
+  for (int i = warm; i < warm + kUpdates; ++i) one(i, true);
+  r.allocations = testing::heap_allocations() - before;
+  r.distinct_patches = patches.size();
+  r.tool_contacts = tools.contact().state(k).contacts;
+  return r;
+}
+
+void expect_no_allocation(const char* kind, const BodyPtr& body, const std::vector<Index>& sites) {
+  SCOPED_TRACE(kind);
+  const Result r = run(body, sites);
+  EXPECT_EQ(r.allocations, 0) << kind << ": heap allocations in " << kUpdates << " updates after warm-up";
+  EXPECT_EQ(r.failed_updates, 0);
+  // the loop did what it claims: the tool touched, the overlay moved nodes, the contact moved
+  EXPECT_GT(r.tool_contacts, 0);
+  EXPECT_GT(r.max_local, 1e-4);
+  EXPECT_GE(r.distinct_patches, sites.size());
+}
+
+TEST(UpdateNoAllocation, TheCounterSeesOperatorNewAndEigen) {  // so that the tests below can fail
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  long before = testing::heap_allocations();
+  auto p = std::make_unique<int>(3);
+  EXPECT_GE(testing::heap_allocations() - before, 1);
+  before = testing::heap_allocations();
+  MatX3 m(100, 3);
+  m.setZero();
+  EXPECT_GE(testing::heap_allocations() - before, 1);
+}
+
+TEST(UpdateNoAllocation, HybridKidney) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  expect_no_allocation("hybrid", std::make_shared<HybridKidney>(hybrid_kidney_phantom()),
+                       {223, 40, 300, 120});
+}
+
+TEST(UpdateNoAllocation, SurfaceTube) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  SurfaceBodyParams p;
+  p.fixed = {};
+  for (Index s = 0; s < 30; ++s) {  // pin both end rings
+    p.fixed.push_back(s);
+    p.fixed.push_back(39 * 30 + s);
+  }
+  auto body = std::make_shared<SurfaceBody>(tube(40, 30), p, "tube", GridLayout{40, 30});
+  expect_no_allocation("surface", body, {20 * 30 + 7, 12 * 30 + 20, 28 * 30 + 3, 16 * 30 + 15});
+}
+
+TEST(UpdateNoAllocation, SmrmVessel) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  auto body = std::make_shared<SmrmVessel>(smrm_phantom(VesselPath::Helix, CrossSectionShape::NonPlanar));
+  const Index s = body->grid().valid() ? body->grid().spokes : 30;
+  expect_no_allocation("smrm", body, {20 * s + 7, 12 * s + 20, 28 * s + 3, 16 * s + 15});
+}
+
+TEST(UpdateNoAllocation, SmrmTree) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  // A Y: a trunk along x, two branches from its end.
+  const int n = 9;
+  MatX3 atoms(3 * n - 2, 3);
+  std::vector<Index> parent;
+  VecX radii = VecX::Constant(3 * n - 2, 3.0);
+  for (int i = 0; i < n; ++i) {
+    atoms.row(i) = Vec3(5.0 * i, 0, 0).transpose();
+    parent.push_back(i - 1);
+  }
+  for (int b = 0; b < 2; ++b)
+    for (int i = 1; i < n; ++i) {
+      const Index a = n + b * (n - 1) + (i - 1);
+      atoms.row(a) = Vec3(40.0 + 4.5 * i, (b ? -1 : 1) * 2.5 * i, 0).transpose();
+      parent.push_back(i == 1 ? n - 1 : a - 1);
+    }
+  auto body = std::make_shared<SmrmTree>(tree_from_parents(atoms, parent, radii));
+  const Index m = body->num_surface_nodes();
+  expect_no_allocation("smrm_tree", body, {m / 7, m / 3, m / 2, (5 * m) / 6});
+}
+
+}  // namespace
+}  // namespace medspring
