@@ -52,18 +52,50 @@ LocalDeformer LocalDeformer::mesh(Adjacency adj, MatX3 X0, const LocalDeformatio
   return d;
 }
 
-void LocalDeformer::select(Index contact) {
-  cached_ = false;
-  patch_ = structured_ ? structured_window_patch(rings_, spokes_, contact, settings_.patch, fixed_)
-                       : bfs_local_patch(adj_, X_, contact, settings_.patch, fixed_);
-  solver_.precompute(patch_, X_, settings_.solver);
-  cached_contact_ = contact;
-  cached_ = settings_.cache_local;
+std::size_t LocalDeformer::select(Index contact) {
+  if (settings_.cache_local)
+    for (std::size_t i = 0; i < cache_.size(); ++i)
+      if (cache_[i].contact == contact) {
+        cache_[i].used = ++clock_;
+        return i;
+      }
+  // a new factor (or every call without cache_local, the paper's path): a free slot or the least used
+  std::size_t slot = 0;
+  if (cache_.empty() || (settings_.cache_local && cache_.size() < kCachedPatches)) {
+    cache_.emplace_back();
+    slot = cache_.size() - 1;
+  } else if (settings_.cache_local) {
+    for (std::size_t i = 1; i < cache_.size(); ++i)
+      if (cache_[i].used < cache_[slot].used) slot = i;
+  }
+  Entry& e = cache_[slot];
+  e.contact = -1;  // until the factor is complete (select may throw)
+  e.patch = structured_ ? structured_window_patch(rings_, spokes_, contact, settings_.patch, fixed_)
+                        : bfs_local_patch(adj_, X_, contact, settings_.patch, fixed_);
+  e.solver.precompute(e.patch, X_, settings_.solver);
+  e.contact = settings_.cache_local ? contact : -1;
+  e.used = ++clock_;
+  return slot;
+}
+
+void LocalDeformer::prepare(Index contact) {
+  select(contact);  // without cache_local: still selected and factored once here, so that set-up errors
+                    // surface now
 }
 
 LocalSolveInfo LocalDeformer::compute(Index contact, const Vec3& F, MatX3& U) {
-  if (!cached_ || contact != cached_contact_) select(contact);  // §6.5 cache_local
-  return solver_.solve(F, U);
+  active_ = select(contact);  // §6.5 cache_local
+  return cache_[active_].solver.solve(F, U);
+}
+
+const LocalPatch& LocalDeformer::patch() const {
+  static const LocalPatch none;
+  return cache_.empty() ? none : cache_[active_].patch;
+}
+
+const LocalSolver& LocalDeformer::solver() const {
+  static const LocalSolver none;
+  return cache_.empty() ? none : cache_[active_].solver;
 }
 
 }  // namespace medspring

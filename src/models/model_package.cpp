@@ -6,6 +6,7 @@
 
 #include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/core/params_binary.hpp"
 
 namespace medspring {
 
@@ -203,17 +204,9 @@ std::string encode_model_package(const ModelPackage& p) {
     put_duffing(w, s.duffing);
     put_indices(w, s.fixed);
   } else if (p.kind == "hybrid") {
-    const HybridSettings& h = p.hybrid;
     put_points(w, p.atoms);
-    put_node(w, h.surface_node);
-    put_node(w, h.atom_node);
-    w.f64(h.k_surf);
-    w.f64(h.k_spoke);
-    w.f64(h.k_cl);
-    w.flag(h.nonlinear);
-    put_duffing(w, h.duffing);
-    w.i64(h.spokes_per_atom);
-    put_indices(w, h.fixed);
+    w.flag(p.hybrid.nonlinear);
+    put_params(w, p.hybrid);  // version 3: every declared field by name (hybrid_kidney.hpp)
   } else if (p.kind == "smrm") {
     put_points(w, p.atoms);
     put_doubles(w, p.atom_radius);
@@ -274,17 +267,27 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
   } else if (p.kind == "hybrid") {
     HybridSettings& h = p.hybrid;
     p.atoms = get_points(r, "atoms");
-    h.surface_node = get_node(r);
-    h.atom_node = get_node(r);
-    h.k_surf = r.f64();
-    h.k_spoke = r.f64();
-    h.k_cl = r.f64();
-    h.nonlinear = r.flag("nonlinear");
-    h.duffing = get_duffing(r);
-    const std::int64_t k = r.i64();
-    if (k < 0 || k > nv) r.fail(cat("spokes_per_atom: ", k, " out of range [0, ", nv, "]"));
-    h.spokes_per_atom = static_cast<Index>(k);
-    h.fixed = get_indices(r, "fixed", nv);
+    if (version >= 3) {
+      h.nonlinear = r.flag("nonlinear");
+      get_params(r, h, "hybrid settings");
+      if (h.spokes_per_atom < 0 || h.spokes_per_atom > nv)
+        r.fail(cat("spokes_per_atom: ", h.spokes_per_atom, " out of range [0, ", nv, "]"));
+      for (std::size_t k = 0; k < h.fixed.size(); ++k)
+        if (h.fixed[k] < 0 || h.fixed[k] >= nv)
+          r.fail(cat("fixed[", k, "]: index ", h.fixed[k], " out of range [0, ", nv, ")"));
+    } else {  // versions 1 and 2: the fields in a fixed order
+      h.surface_node = get_node(r);
+      h.atom_node = get_node(r);
+      h.k_surf = r.f64();
+      h.k_spoke = r.f64();
+      h.k_cl = r.f64();
+      h.nonlinear = r.flag("nonlinear");
+      h.duffing = get_duffing(r);
+      const std::int64_t k = r.i64();
+      if (k < 0 || k > nv) r.fail(cat("spokes_per_atom: ", k, " out of range [0, ", nv, "]"));
+      h.spokes_per_atom = static_cast<Index>(k);
+      h.fixed = get_indices(r, "fixed", nv);
+    }
   } else if (p.kind == "smrm") {
     p.atoms = get_points(r, "atoms");
     const Index na = static_cast<Index>(p.atoms.rows());

@@ -382,15 +382,8 @@ double SmrmTree::max_turning_change_deg(const MatX3& x, Workspace& ws, Index* at
 }
 
 void SmrmTree::map_to_surface(const State& state, MatX3& surface) const {
-  thread_local Workspace ws;
-  bool fits = ws.atoms.size() == branches_.size() && ws.vessel.size() == branches_.size();
-  for (std::size_t b = 0; fits && b < branches_.size(); ++b)  // another tree may have used this thread
-    fits = ws.atoms[b].rows() == static_cast<Index>(atoms_[b].size()) &&
-           ws.surface[b].rows() == branches_[b]->rest_surface().rows() &&
-           ws.vessel[b].frames.size() == branches_[b]->num_atoms() &&
-           ws.vessel[b].scratch.face_normals.rows() == branches_[b]->faces().rows();
-  if (!fits) ws = make_workspace();
-  map_to_surface(state.x, ws, surface);
+  const auto ws = workspaces_.acquire([this] { return make_workspace(); });
+  map_to_surface(state.x, *ws, surface);
 }
 
 Index SmrmTree::node_branch(Index node) const {

@@ -205,10 +205,8 @@ FrameReport SmrmVessel::map_to_surface(const MatX3& atoms, Workspace& ws, MatX3&
 }
 
 void SmrmVessel::map_to_surface(const State& state, MatX3& surface) const {
-  thread_local Workspace ws;
-  if (ws.frames.size() != num_atoms() || ws.scratch.face_normals.rows() != faces_.rows())
-    ws = make_workspace();
-  map_to_surface(state.x, ws, surface);
+  const auto ws = workspaces_.acquire([this] { return make_workspace(); });
+  map_to_surface(state.x, *ws, surface);
 }
 
 void SmrmVessel::surface_normals(const MatX3& surface, Workspace& ws, MatX3& normals) const {

@@ -37,20 +37,15 @@ void Simulation::set_settings(const SimulationSettings& s) {
 
 void Simulation::set_loads(std::vector<PointLoad> loads) {
   validate_loads(loads, body_->num_surface_nodes());
-  if (local_) {  // factor every contact patch now, so that update() never meets a set-up error
-    MatX3 U;
-    for (const PointLoad& L : loads) local_->compute(L.node, L.force, U);
-  }
+  if (local_)  // factor every contact patch now, so that update() never meets a set-up error
+    for (const PointLoad& L : loads) local_->prepare(L.node);
   loads_ = std::move(loads);
 }
 
 void Simulation::set_tool_force(Index node, const Vec3& F) {
   require_index(node, body_->num_surface_nodes(), "tool force: surface node");
   require(F.allFinite(), "tool force on node ", node, " must be finite");
-  if (local_ && node != tool_node_) {  // factor the new contact's patch now (update() never throws)
-    MatX3 U;
-    local_->compute(node, F, U);
-  }
+  if (local_ && node != tool_node_) local_->prepare(node);  // factored now: update() never throws
   tool_node_ = node;
   tool_force_ = F;
 }
@@ -58,10 +53,7 @@ void Simulation::set_tool_force(Index node, const Vec3& F) {
 void Simulation::set_surface_forces(const SurfaceForces* forces) {
   if (forces && local_ && forces->centre >= 0 && forces->total.allFinite()) {
     require_index(forces->centre, body_->num_surface_nodes(), "surface forces: centre node");
-    MatX3 U;
-    const LocalPatch& P = local_->patch();
-    if (P.contact_local < 0 || P.nodes[static_cast<std::size_t>(P.contact_local)] != forces->centre)
-      local_->compute(forces->centre, forces->total, U);  // factor the new centre's patch now
+    local_->prepare(forces->centre);  // a new centre's patch factored now, a cached one found
   }
   surface_forces_ = forces;
 }
@@ -131,9 +123,7 @@ void Simulation::refresh_surface() {
         limit_local_displacement(local_->patch(), U_, body_->spoke_length(contact), {});
       apply_local_overlay(local_->patch(), U_, surface_);
       local_active_ = true;
-    } else {
-      U_.resize(0, 3);
-    }
+    }  // else U_ keeps its storage for the next contact; local_displacement() reads empty
   }
   if (settings_.normals) vertex_normals(surface_, body_->faces(), normals_);
 }
@@ -141,6 +131,11 @@ void Simulation::refresh_surface() {
 const std::vector<Index>& Simulation::local_nodes() const {
   static const std::vector<Index> none;
   return local_ && local_active_ ? local_->patch().nodes : none;
+}
+
+const MatX3& Simulation::local_displacement() const {
+  static const MatX3 none(0, 3);
+  return local_ && local_active_ ? U_ : none;
 }
 
 void Simulation::reset() {

@@ -42,28 +42,42 @@ class LocalDeformer {
   /// contact costs one solve with no allocation (U already sized). Throws (InvalidInput, SolverError)
   /// only when a new patch is selected and factored: contact outside the mesh, singular patch, ...
   LocalSolveInfo compute(Index contact, const Vec3& F, MatX3& U);
+  /// Selects and factors the patch of `contact` (found in the cache with cache_local) without solving:
+  /// set-up points (a new load or tool node) call it so that the update loop finds the factor ready.
+  /// Throws like compute.
+  void prepare(Index contact);
 
   /// The patch of the last compute (empty before the first).
-  const LocalPatch& patch() const { return patch_; }
-  const LocalSolver& solver() const { return solver_; }
+  const LocalPatch& patch() const;
+  const LocalSolver& solver() const;
   const LocalDeformationSettings& settings() const { return settings_; }
-  /// Drops the cached factor (e.g. after changing the positions used by Linearized / AxisProjected).
-  void invalidate() { cached_ = false; }
+  /// Drops the cached factors (e.g. after changing the positions used by Linearized / AxisProjected).
+  void invalidate() { cache_.clear(); }
+
+  /// Factored patches kept with cache_local, the least recently used replaced: a contact that moves
+  /// among up to this many nodes (tool sliding, loads taking turns) costs one solve and no allocation.
+  static constexpr std::size_t kCachedPatches = 8;
 
  private:
-  LocalDeformer() = default;
-  void select(Index contact);
+  LocalDeformer() { cache_.reserve(kCachedPatches); }
+  /// The cache slot holding the factor of `contact`, selected and factored when missing.
+  std::size_t select(Index contact);
 
+  struct Entry {
+    Index contact = -1;  // -1: not a valid factor
+    LocalPatch patch;
+    LocalSolver solver;
+    std::uint64_t used = 0;  // last use, for least-recently-used replacement
+  };
   LocalDeformationSettings settings_;
   bool structured_ = false;
   Index rings_ = 0, spokes_ = 0;
   Adjacency adj_;
   MatX3 X_;
   std::vector<std::uint8_t> fixed_;
-  LocalPatch patch_;
-  LocalSolver solver_;
-  Index cached_contact_ = -1;
-  bool cached_ = false;  // the solver holds the factor of cached_contact_ (cache_local)
+  std::vector<Entry> cache_;  // at most kCachedPatches (one without cache_local)
+  std::size_t active_ = 0;    // the entry of the last compute
+  std::uint64_t clock_ = 0;
 };
 
 }  // namespace medspring

@@ -102,6 +102,7 @@ class SmrmTree final : public Body {
   double max_turning_change_deg(const MatX3& atoms, Workspace& ws, Index* atom = nullptr) const;
 
  private:
+  WorkspacePool<Workspace> workspaces_;  // of map_to_surface(State, ...), one per concurrent caller
   SmrmTreeSettings settings_;
   CenterlineTree tree_;
   std::vector<std::shared_ptr<const SmrmVessel>> branches_;

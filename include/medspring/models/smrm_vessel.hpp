@@ -22,6 +22,7 @@
 #include "medspring/medial/reconstruction.hpp"
 #include "medspring/medial/vessel_phantoms.hpp"
 #include "medspring/models/body.hpp"
+#include "medspring/models/workspace_pool.hpp"
 
 namespace medspring {
 
@@ -155,6 +156,7 @@ class SmrmVessel final : public Body {
   Index contact_node(Index atom, const Vec3& F) const;
 
  private:
+  WorkspacePool<Workspace> workspaces_;  // of map_to_surface(State, ...), one per concurrent caller
   std::string name_;
   SmrmSettings settings_;
   FrameReference ref_;

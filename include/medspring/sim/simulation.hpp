@@ -78,7 +78,7 @@ class Simulation {
   Vec3 applied_force() const;
   /// The local patch (global surface indices) and its displacement of the last update (empty if none).
   const std::vector<Index>& local_nodes() const;
-  const MatX3& local_displacement() const { return U_; }
+  const MatX3& local_displacement() const;
   const SimulationSettings& settings() const { return settings_; }
   void set_settings(const SimulationSettings& settings);
   /// Back to rest: x = x0, v = 0, t = 0 (loads kept).
