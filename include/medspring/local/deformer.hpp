@@ -55,8 +55,9 @@ class LocalDeformer {
   void invalidate() { cache_.clear(); }
 
   /// Factored patches kept with cache_local, the least recently used replaced: a contact that moves
-  /// among up to this many nodes (tool sliding, loads taking turns) costs one solve and no allocation.
-  static constexpr std::size_t kCachedPatches = 8;
+  /// among up to this many nodes (a tool's contact centre wandering as the tissue gives way, loads
+  /// taking turns) costs one solve and no allocation. A tube's 5 x 5 patch factor is ~50 kB.
+  static constexpr std::size_t kCachedPatches = 32;
 
  private:
   LocalDeformer() { cache_.reserve(kCachedPatches); }
