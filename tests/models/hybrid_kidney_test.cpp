@@ -114,5 +114,26 @@ TEST(HybridKidney, RejectsBadInput) {
   EXPECT_THROW(HybridKidney(m, kidney_phantom_atoms(42), st), InvalidInput);
 }
 
+TEST(HybridKidney, FixedAtomsStayAtRestWhileTheOthersMove) {  // fixed_atoms (CONTRIBUTING.md example)
+  HybridSettings settings;
+  settings.fixed_atoms = {42};
+  EXPECT_THROW(hybrid_kidney_phantom(settings), InvalidInput);  // 42 atoms: 0..41
+  settings.fixed_atoms = {0, 41};
+  const HybridKidney k = hybrid_kidney_phantom(settings);
+  State s = make_state(k.model());
+  const Vec3 F(0.0, 0.0, -1.0);
+  for (int i = 0; i < 200; ++i) {  // 100 ms under 1 N on the top node
+    s.f_ext.setZero();
+    k.transfer_force(223, F, s.f_ext);
+    step(k.model(), s, {.dt = 0.5});
+  }
+  const auto moved = [&](Index a) {
+    return (s.x.row(k.atom_dof(a)) - k.model().x0.row(k.atom_dof(a))).norm();
+  };
+  EXPECT_EQ(moved(0), 0.0);
+  EXPECT_EQ(moved(41), 0.0);
+  EXPECT_GT(moved(21), 1e-3);  // the middle atom is free and follows the load
+}
+
 }  // namespace
 }  // namespace medspring
