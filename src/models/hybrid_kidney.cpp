@@ -87,6 +87,10 @@ HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const
     require_index(st.fixed[q], ns, name, ": fixed[", q, "]");
     b.set_fixed(st.fixed[q]);
   }
+  for (std::size_t q = 0; q < st.fixed_atoms.size(); ++q) {
+    require_index(st.fixed_atoms[q], num_atoms_, name, ": fixed_atoms[", q, "]");
+    b.set_fixed(ns + st.fixed_atoms[q]);
+  }
   model_ = b.build();
   stats_.surface_nodes = ns;
   stats_.atoms = num_atoms_;

@@ -25,6 +25,7 @@ struct HybridSettings {
   DuffingSettings duffing{};                // Strain, eta = 1 (D-3)
   Index spokes_per_atom = 8;                // K_a of the union rule (D-9)
   std::vector<Index> fixed;                 // pinned surface nodes (default none)
+  std::vector<Index> fixed_atoms;           // pinned centerline atoms (default none)
 };
 
 /// The declaration of HybridSettings (core/params.hpp): the "parameters" of a hybrid model in a scene,
@@ -50,6 +51,8 @@ void for_each_field(S& s, V&& v) {
     s.spokes_per_atom);
   v(ParamSpec{"duffing", "", "Duffing law of every inter-node spring (D-3, D-4)"}, s.duffing);
   v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
+  v(ParamSpec{"fixed_atoms", "", "pinned centerline atoms (e.g. where the renal vessels hold the hilum)"},
+    s.fixed_atoms);
 }
 
 /// Spokes by the union rule of D-9: (a) every surface node to its nearest atom (ties: lower atom);
