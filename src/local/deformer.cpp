@@ -53,20 +53,24 @@ LocalDeformer LocalDeformer::mesh(Adjacency adj, MatX3 X0, const LocalDeformatio
 }
 
 std::size_t LocalDeformer::select(Index contact) {
-  if (settings_.cache_local)
+  if (settings_.cache_local && contact >= 0)
     for (std::size_t i = 0; i < cache_.size(); ++i)
       if (cache_[i].contact == contact) {
         cache_[i].used = ++clock_;
         return i;
       }
-  // a new factor (or every call without cache_local, the paper's path): a free slot or the least used
+  // a new factor (or every call without cache_local, the paper's path): an entry left invalid by a
+  // failed select, a free slot, or the least recently used
   std::size_t slot = 0;
-  if (cache_.empty() || (settings_.cache_local && cache_.size() < kCachedPatches)) {
+  while (slot < cache_.size() && cache_[slot].contact >= 0) ++slot;
+  if (slot == cache_.size() &&
+      (cache_.empty() || (settings_.cache_local && cache_.size() < kCachedPatches))) {
     cache_.emplace_back();
-    slot = cache_.size() - 1;
-  } else if (settings_.cache_local) {
-    for (std::size_t i = 1; i < cache_.size(); ++i)
-      if (cache_[i].used < cache_[slot].used) slot = i;
+  } else if (slot == cache_.size()) {
+    slot = 0;
+    if (settings_.cache_local)
+      for (std::size_t i = 1; i < cache_.size(); ++i)
+        if (cache_[i].used < cache_[slot].used) slot = i;
   }
   Entry& e = cache_[slot];
   e.contact = -1;  // until the factor is complete (select may throw)
