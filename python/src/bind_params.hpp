@@ -63,10 +63,16 @@ void def_params(py::class_<T, Extra...>& cls) {
       for_each_field(t, [&](const ParamSpec& s, auto& f) {
         using G = std::remove_cvref_t<decltype(f)>;
         if (s.name != name) return;
-        if constexpr (std::is_enum_v<G>)
+        if constexpr (std::is_enum_v<G>) {
           f = enum_arg<G>(v, name.c_str());
-        else
-          f = v.cast<G>();
+        } else {
+          try {
+            f = v.cast<G>();
+          } catch (const py::cast_error&) {  // as def_readwrite: a wrong type is a TypeError
+            throw py::type_error(
+                cat(name, ": expected ", param_type_text<G>(), "; got ", describe_object(v)));
+          }
+        }
       });
     };
     (void)sizeof(F);
