@@ -46,7 +46,7 @@ void def_params(py::class_<T, Extra...>& cls) {
     const std::string name(spec.name);
     docs.push_back(param_doc(spec, def));
     const char* doc = docs.back().c_str();
-    auto getter = [name](py::object self) {
+    auto get_field = [name](py::object self) {
       T& t = self.cast<T&>();
       py::object out;
       for_each_field(t, [&](const ParamSpec& s, auto& f) {
@@ -59,7 +59,7 @@ void def_params(py::class_<T, Extra...>& cls) {
       });
       return out;
     };
-    auto setter = [name](T& t, py::handle v) {
+    auto set_field = [name](T& t, py::handle v) {
       for_each_field(t, [&](const ParamSpec& s, auto& f) {
         using G = std::remove_cvref_t<decltype(f)>;
         if (s.name != name) return;
@@ -76,7 +76,7 @@ void def_params(py::class_<T, Extra...>& cls) {
       });
     };
     (void)sizeof(F);
-    cls.def_property(name.c_str(), getter, setter, doc);
+    cls.def_property(name.c_str(), get_field, set_field, doc);
   });
   cls.attr("_params") = py::tuple(specs);  // the declarations, in order (tests, tools)
 }
