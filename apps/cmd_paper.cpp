@@ -77,13 +77,15 @@ std::string accuracy_section(const std::optional<std::string>& given) {
     try {
       return accuracy_summary_markdown(json::parse(std::ifstream(file)), cat("`", file.string(), "`"));
     } catch (const json::exception& e) {
-      if (given) throw InvalidInput(cat("--accuracy: ", file.string(), ": not an accuracy.json (", e.what(), ")"));
-      return cat("## Accuracy against the FEM reference\n\nThe latest `medspring accuracy` run (", file.string(),
-                 ") could not be read (", e.what(), ").\n\n");
+      if (given)
+        throw InvalidInput(cat("--accuracy: ", file.string(), ": not an accuracy.json (", e.what(), ")"));
+      return cat("## Accuracy against the FEM reference\n\nThe latest `medspring accuracy` run (",
+                 file.string(), ") could not be read (", e.what(), ").\n\n");
     }
   }
   if (given) throw InvalidInput(cat("--accuracy: ", file.string(), ": no such file"));
-  return cat("## Accuracy against the FEM reference\n\nNo `medspring accuracy` run was found (", file.string(),
+  return cat("## Accuracy against the FEM reference\n\nNo `medspring accuracy` run was found (",
+             file.string(),
              "); run `medspring accuracy --out DIR` (CalculiX, ~15 min) and the next report "
              "summarises it here.\n\n");
 }
@@ -112,10 +114,11 @@ int cmd_paper(const Args& args) {
   const char* py_env = std::getenv("MEDSPRING_PYTHON");
   o.python = py_env && *py_env ? py_env : "/usr/bin/python3";
   if (const auto xvfb = which("xvfb-run"))
-    o.display_prefix = paper::shell_quote(xvfb->string()) + " -a -s " +
-                       paper::shell_quote("-screen 0 1280x960x24") + " ";
+    o.display_prefix =
+        paper::shell_quote(xvfb->string()) + " -a -s " + paper::shell_quote("-screen 0 1280x960x24") + " ";
   else if (!std::getenv("DISPLAY"))
-    throw InvalidInput("rendering the figures needs xvfb-run (Debian: apt-get install xvfb xauth) or a DISPLAY");
+    throw InvalidInput(
+        "rendering the figures needs xvfb-run (Debian: apt-get install xvfb xauth) or a DISPLAY");
   {
     const fs::path log = fs::temp_directory_path() / cat("medspring-paper-check-", getpid(), ".log");
     try {

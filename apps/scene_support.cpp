@@ -324,7 +324,8 @@ json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& pro
     os.precision(9);
     os << "force_N,contact_mm,max_disp_mm\n";
     x.static_curve = static_response(b, o.curve_points);
-    for (const StaticPoint& p : x.static_curve) os << p.force << "," << p.contact_mm << "," << p.max_mm << "\n";
+    for (const StaticPoint& p : x.static_curve)
+      os << p.force << "," << p.contact_mm << "," << p.max_mm << "\n";
     write_text(dir / "static_curve.csv", os.str());
   }
   write_text(dir / "scene.json", scene_to_json(b.scene) + "\n");

@@ -19,8 +19,8 @@ struct TableCase {
   BenchCase bench;    // name contains the model ("tube_1200" / "smrm_1200" / "kidney"), "local"
   std::string model;  // "MS" (hybrid mass-spring on the vessel), "SMRM", "kidney MS"
   bool nonlinear = true;
-  std::string local;  // "off", "no_cache" (paper-like: select, assemble, factor, solve every update),
-                      // "cache" (factor kept per contact node)
+  std::string local;         // "off", "no_cache" (paper-like: select, assemble, factor, solve every update),
+                             // "cache" (factor kept per contact node)
   paper::TimingCase timing;  // the case as the paper module defines it
 };
 

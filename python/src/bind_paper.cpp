@@ -64,8 +64,9 @@ void bind_paper(py::module_& m) {
   m.attr("paper_scripts_dir") = std::string(MEDSPRING_PYTHON_PAPER_SCRIPTS_DIR);
   m.def(
       "_paper_run",
-      [](const fs::path& out, bool quick, const fs::path& scenes, const fs::path& data, bool tree, bool timing,
-         bool report, const std::string& python, const fs::path& scripts, const std::string& accuracy_markdown) {
+      [](const fs::path& out, bool quick, const fs::path& scenes, const fs::path& data, bool tree,
+         bool timing, bool report, const std::string& python, const fs::path& scripts,
+         const std::string& accuracy_markdown) {
         std::error_code ec;
         if (fs::exists(out, ec) && !(fs::is_directory(out, ec) && fs::is_empty(out, ec)))
           throw InvalidInput(cat("out: ", out.string(), " exists and is not an empty folder"));
@@ -86,9 +87,9 @@ void bind_paper(py::module_& m) {
         py::gil_scoped_release release;
         return paper::run_study(o, host);
       },
-      py::arg("out"), py::arg("quick"), py::arg("scenes"), py::arg("data"), py::arg("tree"), py::arg("timing"),
-      py::arg("report"), py::arg("python"), py::arg("scripts"), py::arg("accuracy_markdown"),
-      "The paper's study (use medspring.paper.run): results.json's text.");
+      py::arg("out"), py::arg("quick"), py::arg("scenes"), py::arg("data"), py::arg("tree"),
+      py::arg("timing"), py::arg("report"), py::arg("python"), py::arg("scripts"),
+      py::arg("accuracy_markdown"), "The paper's study (use medspring.paper.run): results.json's text.");
 }
 
 }  // namespace medspring::python

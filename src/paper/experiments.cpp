@@ -1,7 +1,7 @@
 // The experiment set of the study and the vessel tree's scenes (paper/study.hpp).
+#include "internal.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/spring_law.hpp"
-#include "internal.hpp"
 
 namespace medspring::paper {
 

@@ -5,8 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
-#include "medspring/core/check.hpp"
 #include "internal.hpp"
+#include "medspring/core/check.hpp"
 
 namespace medspring::paper::detail {
 
@@ -85,8 +85,9 @@ void make_figures(const StudyOptions& o, const fs::path& root, const std::string
                                        grazing, k.axis, range, true)));
     jobs.push_back(render_job(k, 505, fig / "fig9_C.png", "Fig. 9 C - 5 ms after release", what, oblique,
                               k.axis, range, false));
-    jobs.push_back(close_up(render_job(k, 1000, fig / "fig9_D.png", "Fig. 9 D - 500 ms after release, close-up",
-                                       what, grazing, k.axis, range, false)));
+    jobs.push_back(
+        close_up(render_job(k, 1000, fig / "fig9_D.png", "Fig. 9 D - 500 ms after release, close-up", what,
+                            grazing, k.axis, range, false)));
   }
   {
     const std::string vw = primary == "real" ? "aorta (VMR 0159)" : "vessel phantom";
@@ -97,10 +98,11 @@ void make_figures(const StudyOptions& o, const fs::path& root, const std::string
       const Vec3 view = perpendicular(v.tangent, n);
       const Vec3 oblique = (view - 0.8 * n + 0.3 * v.tangent).normalized();
       const double range = v.summary["max_disp_peak_mm"].get<double>();
-      jobs.push_back(render_job(v, kHold, fig / (a + ".png"), "Fig. 10 " + a.substr(6) + " - " + what, vw, view,
-                                -n, range, true));
-      jobs.push_back(render_job(v, kHold, fig / (b + ".png"), "Fig. 10 " + b.substr(6) + " - " + what + ", oblique",
-                                vw, oblique, -n, range, true));
+      jobs.push_back(render_job(v, kHold, fig / (a + ".png"), "Fig. 10 " + a.substr(6) + " - " + what, vw,
+                                view, -n, range, true));
+      jobs.push_back(render_job(v, kHold, fig / (b + ".png"),
+                                "Fig. 10 " + b.substr(6) + " - " + what + ", oblique", vw, oblique, -n, range,
+                                true));
     };
     vessel_pair("vessel_light_nonlinear", "fig10_A", "fig10_B", "light force 0.05 N");
     vessel_pair("vessel_strong_nonlinear", "fig10_C", "fig10_D", "strong force 0.5 N");
@@ -108,8 +110,9 @@ void make_figures(const StudyOptions& o, const fs::path& root, const std::string
     const Vec3 n = v.dir_force;
     const Vec3 view = perpendicular(v.tangent, n);
     const double zoom = std::max(1.0, v.size / (8.0 * std::max(v.radius, 1e-3)));  // the vessel's width fills
-    json e = render_job(v, kHold, fig / "fig10_E.png", "Fig. 10 E - light force 0.05 N + local deformation", vw,
-                        (view - 0.5 * n).normalized(), -n, v.summary["max_disp_peak_mm"].get<double>(), true);
+    json e =
+        render_job(v, kHold, fig / "fig10_E.png", "Fig. 10 E - light force 0.05 N + local deformation", vw,
+                   (view - 0.5 * n).normalized(), -n, v.summary["max_disp_peak_mm"].get<double>(), true);
     e["focus"] = vec(v.contact);
     e["zoom"] = std::max(1.0, 0.5 * zoom);
     jobs.push_back(e);
@@ -130,18 +133,19 @@ void make_figures(const StudyOptions& o, const fs::path& root, const std::string
     const SceneRun& v = *it;
     const Vec3 n = v.dir_force;
     const Vec3 view = (perpendicular(v.tangent, n) - 0.5 * n).normalized();
-    json job = render_job(v, kHold, fig / ("tree_" + site + ".png"),
-                          "Vessel tree - strong force 0.5 N on the " + std::string(site == "arch" ? "arch" : "branch"),
-                          primary == "real" ? "VMR 0159 aorta with its branches" : "vessel tree phantom", view, -n,
-                          v.summary["max_disp_peak_mm"].get<double>(), true);
+    json job = render_job(
+        v, kHold, fig / ("tree_" + site + ".png"),
+        "Vessel tree - strong force 0.5 N on the " + std::string(site == "arch" ? "arch" : "branch"),
+        primary == "real" ? "VMR 0159 aorta with its branches" : "vessel tree phantom", view, -n,
+        v.summary["max_disp_peak_mm"].get<double>(), true);
     job.erase("atoms_vtp");  // the run's atom file is one polyline in atom order, not the tree's branches
     jobs.push_back(job);
   }
   const fs::path jobs_file = root / "data" / "render_jobs.json";
   write_text(jobs_file, json{{"width", 1000}, {"height", 750}, {"jobs", jobs}}.dump(2));
   run_logged("rendering (VTK under xvfb-run)",
-             o.display_prefix + shell_quote(o.python) + " " + shell_quote((o.scripts_dir / "render.py").string()) +
-                 " " + shell_quote(jobs_file.string()),
+             o.display_prefix + shell_quote(o.python) + " " +
+                 shell_quote((o.scripts_dir / "render.py").string()) + " " + shell_quote(jobs_file.string()),
              root / "logs" / "render.log");
 
   json plot_spec = {{"out_dir", fig.string()},
@@ -161,8 +165,10 @@ void make_figures(const StudyOptions& o, const fs::path& root, const std::string
   plot_spec["tables"] = {
       {"cases", cases},
       {"paper",
-       {{"MS", {{"linear", 1000 * ms.linear}, {"nonlinear", 1000 * ms.nonlinear}, {"local", 1000 * ms.local}}},
-        {"SMRM", {{"linear", 1000 * sm.linear}, {"nonlinear", 1000 * sm.nonlinear}, {"local", 1000 * sm.local}}}}}};
+       {{"MS",
+         {{"linear", 1000 * ms.linear}, {"nonlinear", 1000 * ms.nonlinear}, {"local", 1000 * ms.local}}},
+        {"SMRM",
+         {{"linear", 1000 * sm.linear}, {"nonlinear", 1000 * sm.nonlinear}, {"local", 1000 * sm.local}}}}}};
   const fs::path plots_file = root / "data" / "plots.json";
   write_text(plots_file, plot_spec.dump(2));
   run_logged("plots (matplotlib)",

@@ -5,8 +5,8 @@
 #include <ctime>
 #include <fstream>
 
-#include "medspring/core/check.hpp"
 #include "internal.hpp"
+#include "medspring/core/check.hpp"
 
 namespace medspring::paper {
 

@@ -4,10 +4,10 @@
 #include <chrono>
 #include <cmath>
 
+#include "internal.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/physics/spring_law.hpp"
-#include "internal.hpp"
 
 namespace medspring::paper {
 
@@ -18,7 +18,9 @@ json parameters_json(const SceneRun& kidney, const SceneRun& vessel) {
   const Scene& vs = vessel.scene;
   const HybridSettings& h = ks.model.hybrid;
   const SmrmSettings& v = vs.model.smrm;
-  auto node = [](const NodeParams& p) { return json{{"mass_g", p.mass}, {"beta", p.beta}, {"k_r", p.return_k}}; };
+  auto node = [](const NodeParams& p) {
+    return json{{"mass_g", p.mass}, {"beta", p.beta}, {"k_r", p.return_k}};
+  };
   return {{"kidney",
            {{"surface_node", node(h.surface_node)},
             {"atom_node", node(h.atom_node)},
@@ -65,7 +67,8 @@ std::string run_study(const StudyOptions& o, StudyHost& host) {
   bool real = !o.quick;
   if (real) {
     std::error_code ec;
-    if (!fs::exists(data / "kidney_left_hubmap_vhm.obj", ec) || !fs::exists(data / "vmr-0159-aorta-centerline.vtp", ec)) {
+    if (!fs::exists(data / "kidney_left_hubmap_vhm.obj", ec) ||
+        !fs::exists(data / "vmr-0159-aorta-centerline.vtp", ec)) {
       real = false;
       notes.push_back(cat("The real anatomy was not found in ", data.string(),
                           " (set MEDSPRING_DATA): the figures use the phantoms."));
@@ -189,24 +192,22 @@ std::string run_study(const StudyOptions& o, StudyHost& host) {
     tables_out["tree"] = tree;
     write_text(root / "tables.json", tables_out.dump(2) + "\n");
   }
-  const json results = {
-      {"meta",
-       {{"command", o.command},
-        {"quick", o.quick},
-        {"date", now_utc()},
-        {"machine", cpu_name()},
-        {"seconds", seconds},
-        {"primary", primary},
-        {"sets", sets},
-        {"figures", o.figures},
-        {"notes", notes}}},
-      {"runs", runs_json},
-      {"tree", tree},
-      {"tables", tables},
-      {"parameters",
-       parameters_json(find_run(runs, primary, "kidney_1.0N_nonlinear"),
-                       find_run(runs, primary, "vessel_light_nonlinear"))},
-      {"accuracy_markdown", o.accuracy_markdown}};
+  const json results = {{"meta",
+                         {{"command", o.command},
+                          {"quick", o.quick},
+                          {"date", now_utc()},
+                          {"machine", cpu_name()},
+                          {"seconds", seconds},
+                          {"primary", primary},
+                          {"sets", sets},
+                          {"figures", o.figures},
+                          {"notes", notes}}},
+                        {"runs", runs_json},
+                        {"tree", tree},
+                        {"tables", tables},
+                        {"parameters", parameters_json(find_run(runs, primary, "kidney_1.0N_nonlinear"),
+                                                       find_run(runs, primary, "vessel_light_nonlinear"))},
+                        {"accuracy_markdown", o.accuracy_markdown}};
   const std::string text = results.dump(2) + "\n";
   write_text(root / "results.json", text);
   if (o.report) render_report(root / "results.json", root / "report.md", o);

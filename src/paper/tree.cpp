@@ -5,8 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
-#include "medspring/core/check.hpp"
 #include "internal.hpp"
+#include "medspring/core/check.hpp"
 
 namespace medspring::paper::detail {
 
@@ -40,8 +40,9 @@ json run_tree(const StudyOptions& o, StudyHost& host, const std::string& primary
   host.begin(cat("vessel tree (", primary, ")"));
   // The sites: "arch" = the middle atom of the longest root-to-leaf path (the aorta itself; on VMR 0159
   // its arch), "branch" = the middle atom of the longest leaf branch off that path.
-  const BuiltScene probe = build_scene(
-      parse_scene(tree_scene_json("probe", file, unit, 0, 0, 0.05, every), root, "tree scene"), host.loader());
+  const BuiltScene probe =
+      build_scene(parse_scene(tree_scene_json("probe", file, unit, 0, 0, 0.05, every), root, "tree scene"),
+                  host.loader());
   const auto& tree = dynamic_cast<const SmrmTree&>(*probe.body);
   const Index nb = tree.num_branches();
   std::vector<double> path_len(static_cast<std::size_t>(nb), 0.0);
@@ -92,7 +93,8 @@ json run_tree(const StudyOptions& o, StudyHost& host, const std::string& primary
       {"rest_max_rho_kappa", rest_check.max_rho_kappa},
       {"rest_rho_kappa_violations", rest_check.violations},
       {"arch",
-       {{"branch", arch_branch}, {"atom", tree.branch_atoms(arch_branch)[static_cast<std::size_t>(arch_local)]}}},
+       {{"branch", arch_branch},
+        {"atom", tree.branch_atoms(arch_branch)[static_cast<std::size_t>(arch_local)]}}},
       {"branch", {{"branch", side}, {"atom", tree.branch_atoms(side)[static_cast<std::size_t>(side_local)]}}},
       {"runs", json::array()}};
   struct Site {
@@ -113,8 +115,9 @@ json run_tree(const StudyOptions& o, StudyHost& host, const std::string& primary
              false,
              cat(strength, " ", sig(f), " N on the ", site.label)};
       r.set = primary;
-      r.scene = parse_scene(tree_scene_json(r.e.file, file, unit, site.node, tree.node_atom(site.node), f, every),
-                            root, "tree scene");
+      r.scene =
+          parse_scene(tree_scene_json(r.e.file, file, unit, site.node, tree.node_atom(site.node), f, every),
+                      root, "tree scene");
       const BuiltScene built = build_scene(r.scene, host.loader());
       r.rel = cat("scenes/", r.set, "/", r.e.file);
       r.dir = root / r.rel;

@@ -158,9 +158,10 @@ struct Builder {
     auto h = std::make_shared<HybridKidney>(surface, atoms, scene.model.hybrid, name, mask);
     const HybridStats st = h->stats();
     if (st.visibility_filtered)
-      out.notes.push_back(cat("spokes: visibility filter (D-9) on the organ's voxels: ", st.visibility.rejected,
-                              " candidates leaving the organ rejected, ", st.visibility.fallbacks,
-                              " surface nodes without a visible atom kept on their nearest"));
+      out.notes.push_back(
+          cat("spokes: visibility filter (D-9) on the organ's voxels: ", st.visibility.rejected,
+              " candidates leaving the organ rejected, ", st.visibility.fallbacks,
+              " surface nodes without a visible atom kept on their nearest"));
     out.notes.push_back(cat("hybrid: ", st.surface_nodes, " surface nodes + ", st.atoms, " atoms, ",
                             st.surface_springs, " surface springs, ", st.centerline_springs,
                             " centerline springs, ", st.spokes, " spokes (", st.min_spokes_per_atom, "-",

@@ -58,18 +58,18 @@ class StudyHost {
 };
 
 struct StudyOptions {
-  std::filesystem::path out_dir;     // written into (created); the caller stages and commits it
-  bool quick = false;                // phantoms only, fewer frames and timed updates
-  std::filesystem::path scenes_dir;  // the bundled scenes (real ones here, phantoms in phantom/)
-  std::filesystem::path data_dir;    // the real anatomy (empty: scene_data_dir())
-  bool tree = true;                  // the vessel tree runs (issue 17)
-  bool timing = true;                // Tables I and II
-  bool figures = true;               // render key frames and plots (python3 with VTK and matplotlib)
-  bool report = true;                // render report.md from the results (python3 with Jinja2)
-  std::filesystem::path scripts_dir; // scripts/paper (render.py, plots.py, report.py)
+  std::filesystem::path out_dir;      // written into (created); the caller stages and commits it
+  bool quick = false;                 // phantoms only, fewer frames and timed updates
+  std::filesystem::path scenes_dir;   // the bundled scenes (real ones here, phantoms in phantom/)
+  std::filesystem::path data_dir;     // the real anatomy (empty: scene_data_dir())
+  bool tree = true;                   // the vessel tree runs (issue 17)
+  bool timing = true;                 // Tables I and II
+  bool figures = true;                // render key frames and plots (python3 with VTK and matplotlib)
+  bool report = true;                 // render report.md from the results (python3 with Jinja2)
+  std::filesystem::path scripts_dir;  // scripts/paper (render.py, plots.py, report.py)
   std::string python = "/usr/bin/python3";
-  std::string display_prefix;        // e.g. "xvfb-run -a -s '...' " before the rendering command
-  std::string accuracy_markdown;     // the accuracy section of the report (apps/accuracy_summary)
+  std::string display_prefix;               // e.g. "xvfb-run -a -s '...' " before the rendering command
+  std::string accuracy_markdown;            // the accuracy section of the report (apps/accuracy_summary)
   std::string command = "medspring paper";  // how the study was started, for the report
 };
 
