@@ -152,3 +152,25 @@ def test_findings_are_a_function_of_the_results_alone(results):
     # the same results give the same text (no clock, no machine state read while rendering)
     assert REPORT.render(results) == REPORT.render(copy.deepcopy(results))
     assert not math.isnan(REPORT.findings(results)["vessel_law_diff"])
+
+
+ms = pytest.importorskip("medspring")
+
+
+@pytest.mark.skipif(not getattr(ms._medspring, "has_paper", False), reason="built without the paper layer")
+def test_the_same_study_runs_from_python(tmp_path, results):
+    out = tmp_path / "paper"
+    got = ms.paper.run(out, quick=True, tree=False, timing=False)
+    assert json.loads((out / "results.json").read_text()) == got
+    assert (out / "report.md").read_text() == ms.paper.render_report(got)
+    assert got["meta"]["primary"] == "phantom" and got["tables"] is None and got["tree"] is None
+    assert len(got["runs"]) == 14
+    # the same runs as `medspring paper --quick` (the fixture): the engine is deterministic
+    for mine in got["runs"]:
+        theirs = run(results, mine["file"], literal=mine["literal"])
+        for key in ("contact_hold_mm", "atom_hold_mm", "return_ms", "updates", "substeps"):
+            assert mine["summary"][key] == pytest.approx(theirs["summary"][key], rel=1e-12), (mine["file"], key)
+    f = ms.paper.findings(got)
+    assert f["kidney_back"] and not f["kidney_nonlinear_softer"]
+    with pytest.raises(ms.InvalidInput, match="not an empty folder"):
+        ms.paper.run(out, quick=True, tree=False, timing=False)
