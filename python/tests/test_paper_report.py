@@ -123,7 +123,7 @@ def test_the_literal_constants_paragraph_follows_the_values(results):
     lit["facts"]["substeps_per_update"] = 4 * run(altered, "kidney_1.0N_nonlinear")["facts"]["substeps_per_update"]
     lit["summary"]["return_ms"] = run(altered, "kidney_1.0N_nonlinear")["summary"]["return_ms"] + 50
     text = REPORT.render(altered)
-    assert "need more sub-steps under the held force" in text
+    assert "The literal constants need more sub-steps under the held force" in text
     assert "The return to rest takes longer with the literal constants" in text
 
 
