@@ -17,6 +17,7 @@
 #include "medspring/io/mesh_io.hpp"
 #include "medspring/io/temp_folders.hpp"
 #include "medspring/io/volume_io.hpp"
+#include "medspring/paper/run_summary.hpp"
 #ifdef MEDSPRING_HAVE_MESHING
 #include "medspring/meshing/balloon.hpp"
 #include "medspring/meshing/isosurface.hpp"
@@ -227,25 +228,10 @@ std::string safe_name(const std::string& s) {
   return out.empty() ? "scene" : out;
 }
 
-json num(double x) {
-  return std::isfinite(x) ? json(x) : json(nullptr);
-}
-
 }  // namespace
 
 json describe_built(const BuiltScene& b) {
-  const Model& m = b.body->model();
-  return {{"kind", b.body->kind()},
-          {"name", m.name},
-          {"surface_nodes", b.body->num_surface_nodes()},
-          {"triangles", b.body->faces().rows()},
-          {"masses", m.num_nodes()},
-          {"springs", m.num_springs()},
-          {"atoms", b.atoms_rest.rows()},
-          {"dt_ms", b.settings.step.dt},
-          {"dt_safe_rest_ms", b.dt_safe_rest},
-          {"build_seconds", b.build_seconds},
-          {"notes", b.notes}};
+  return json::parse(paper::describe_built_json(b));
 }
 
 json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& progress,
@@ -332,67 +318,23 @@ json run_scene_to_folder(const BuiltScene& b, const fs::path& dir, Progress& pro
     }
     write_text(dir / "trace.csv", os.str());
   }
-  json curve = json::array();
+  paper::SummaryExtras x;
   if (o.static_curve && !b.loads.empty()) {
     std::ostringstream os;
     os.precision(9);
     os << "force_N,contact_mm,max_disp_mm\n";
-    for (const StaticPoint& p : static_response(b, o.curve_points)) {
+    x.static_curve = static_response(b, o.curve_points);
+    for (const StaticPoint& p : x.static_curve)
       os << p.force << "," << p.contact_mm << "," << p.max_mm << "\n";
-      curve.push_back({p.force, p.contact_mm});
-    }
     write_text(dir / "static_curve.csv", os.str());
   }
   write_text(dir / "scene.json", scene_to_json(b.scene) + "\n");
-
-  const RunSummary& s = r.summary;
-  json loads = json::array();
-  for (const PointLoad& L : b.loads)
-    loads.push_back({{"node", L.node},
-                     {"force_N", {L.force.x(), L.force.y(), L.force.z()}},
-                     {"magnitude_N", L.force.norm()},
-                     {"t_release_ms", num(L.t_release)}});
-  json atoms_rest = json::array();
-  for (Index a = 0; a < A; ++a)
-    atoms_rest.push_back({b.atoms_rest(a, 0), b.atoms_rest(a, 1), b.atoms_rest(a, 2)});
-  json summary = {{"scene", b.scene.name},
-                  {"scene_file", b.scene.file.string()},
-                  {"description", b.scene.description},
-                  {"model", describe_built(b)},
-                  {"loads", loads},
-                  {"trace_nodes", b.trace_nodes},
-                  {"trace_atoms", b.trace_atoms},
-                  {"atoms_rest", atoms_rest},
-                  {"duration_ms", b.scene.duration},
-                  {"updates", s.updates},
-                  {"run_seconds", s.wall_seconds},
-                  {"median_update_us", s.median_update_us},
-                  {"mean_update_us", s.mean_update_us},
-                  {"substeps", s.substeps},
-                  {"warnings", s.warnings},
-                  {"contact_peak_mm", s.contact_peak_mm},
-                  {"contact_hold_mm", s.contact_hold_mm},
-                  {"atom_hold_mm", s.atom_hold_mm},
-                  {"local_hold_mm", s.local_hold_mm},
-                  {"max_disp_peak_mm", s.max_disp_peak_mm},
-                  {"final_max_disp_mm", s.final_max_disp_mm},
-                  {"release_ms", num(s.release_time)},
-                  {"return_ms", num(s.return_ms)},
-                  {"return_tolerance_mm", s.return_tolerance},
-                  {"max_rho_kappa", s.max_rho_kappa},
-                  {"rho_kappa_violations", s.rho_kappa_violations},
-                  {"rho_kappa_updates", s.rho_kappa_updates},
-                  {"max_turning_change_deg", s.max_turning_change_deg},
-                  {"max_turning_atom", s.max_turning_atom},
-                  {"hold_turning_change_deg", s.hold_turning_change_deg},
-                  {"pvd", series.empty() ? json(nullptr) : json(name + ".pvd")},
-                  {"atoms_pvd", atom_series.empty() ? json(nullptr) : json(name + "_atoms.pvd")},
-                  {"frames", frames},
-                  {"first_update", r.first_update},
-                  {"resumed_from_ms", o.resume ? json(o.resume->state.t) : json(nullptr)},
-                  {"stopped", r.stopped},
-                  {"checkpoint", o.checkpoint.empty() ? json(nullptr) : json(o.checkpoint.string())},
-                  {"static_curve", curve}};
+  x.frames_json = frames.dump();
+  if (!series.empty()) x.pvd = name + ".pvd";
+  if (!atom_series.empty()) x.atoms_pvd = name + "_atoms.pvd";
+  if (!o.checkpoint.empty()) x.checkpoint = o.checkpoint.string();
+  if (o.resume) x.resumed_from_ms = o.resume->state.t;
+  const json summary = json::parse(paper::run_summary_json(b, r, x));
   write_text(dir / "summary.json", summary.dump(2) + "\n");
   return summary;
 }

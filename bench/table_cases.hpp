@@ -1,5 +1,6 @@
-// The timing cases of the paper's Tables I and II (ALGORITHMS.md §7.3, D-18), shared by `medspring bench`
-// (through all_cases) and `medspring paper`. One update = loads -> step (substeps as the stability rule
+// The timing cases of the paper's Tables I and II (ALGORITHMS.md §7.3, D-18) as benchmark cases: the
+// paper module's cases (include/medspring/paper/timing.hpp), run by `medspring bench` (through
+// all_cases) and timed by `medspring paper`. One update = loads -> step (substeps as the stability rule
 // asks; 1 at these sizes) -> map to the surface (SMRM: frames + reconstruction of 1200 nodes) -> local
 // overlay if enabled -> vertex normals, through Simulation::update(). The force is held constant at the
 // strong value (vessel 0.5 N, kidney 1.0 N) so that the cubic terms are active.
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "cases.hpp"
+#include "medspring/paper/timing.hpp"
 
 namespace medspring::bench {
 
@@ -17,16 +19,13 @@ struct TableCase {
   BenchCase bench;    // name contains the model ("tube_1200" / "smrm_1200" / "kidney"), "local"
   std::string model;  // "MS" (hybrid mass-spring on the vessel), "SMRM", "kidney MS"
   bool nonlinear = true;
-  std::string local;  // "off", "no_cache" (paper-like: select, assemble, factor, solve every update),
-                      // "cache" (factor kept per contact node)
+  std::string local;         // "off", "no_cache" (paper-like: select, assemble, factor, solve every update),
+                             // "cache" (factor kept per contact node)
+  paper::TimingCase timing;  // the case as the paper module defines it
 };
 
 /// Facts about the model of a table case, measured by building it and running a few updates.
-struct TableCaseInfo {
-  long masses = 0, springs = 0, surface_nodes = 0;
-  double dt_safe_rest_ms = 0.0;      // stable step at rest (§2.2)
-  double substeps_per_update = 0.0;  // substeps taken per update under the held force
-};
+using TableCaseInfo = paper::TimingCaseInfo;
 
 /// The cases of Tables I and II: MS and SMRM on the same 40 x 30 vessel (linear, nonlinear, nonlinear
 /// with local deformation without and with the cached factor), and the kidney hybrid (458 + 42).

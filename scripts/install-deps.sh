@@ -11,6 +11,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-matplotlib
   xvfb xauth                         # offscreen rendering of the report figures (VTK under Xvfb)
+  python3-jinja2                     # medspring paper: report.md rendered from results.json (scripts/paper/report.py)
   python3-distributed python3-dask python3-zarr python3-pandas python3-tqdm python3-xarray  # medspring study (Dask)
   python3-pip python3-venv python3-setuptools python3-wheel dpkg-dev make  # package tests: wheel, venv, .deb, pkg-config consumer
   calculix-ccx tetgen                # fem: the FEM reference (medspring accuracy / calibrate, fem tests)

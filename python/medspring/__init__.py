@@ -145,3 +145,7 @@ if getattr(_medspring, "has_scene", False):
     from .scenes import run_scene, scene_document  # noqa: E402,F401
 
     __all__ += ["run_scene", "scene_document"]
+
+# The paper's study as a library (medspring.paper.run, docs/paper.md).
+if getattr(_medspring, "has_paper", False):
+    from . import paper  # noqa: E402,F401

@@ -215,6 +215,14 @@ class SceneRunner {
   std::map<std::string, BuiltScene> models_;
 };
 
+}  // namespace
+
+std::unique_ptr<SceneLoader> make_file_loader() {
+  return std::make_unique<FileLoader>();
+}
+
+namespace {
+
 py::dict summary_dict(const RunSummary& s) {
   py::dict d;
   d["updates"] = s.updates;

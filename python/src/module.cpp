@@ -66,6 +66,9 @@ void bind_scene(py::module_& m);  // bind_scene.cpp
 #ifdef MEDSPRING_PYTHON_WITH_FEM
 void bind_fem(py::module_& m);  // bind_fem.cpp
 #endif
+#ifdef MEDSPRING_PYTHON_WITH_PAPER
+void bind_paper(py::module_& m);  // bind_paper.cpp
+#endif
 }  // namespace medspring::python
 
 PYBIND11_MODULE(_medspring, m) {
@@ -99,5 +102,11 @@ PYBIND11_MODULE(_medspring, m) {
   m.attr("has_fem") = true;
 #else
   m.attr("has_fem") = false;
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_PAPER
+  bind_paper(m);
+  m.attr("has_paper") = true;
+#else
+  m.attr("has_paper") = false;
 #endif
 }

@@ -88,7 +88,8 @@ KidneyBuild build_kidney_model(const KidneyBuildSettings& st) {
           balloon.report.hausdorff_mm, " mm); use more nodes (--nodes)");
 
   // The hybrid model (§4, D-9, §9).
-  auto model = std::make_shared<const HybridKidney>(balloon.mesh, out.skeleton.atoms, st.model, "kidney");
+  auto model =
+      std::make_shared<const HybridKidney>(balloon.mesh, out.skeleton.atoms, st.model, "kidney", &out.mask);
 
   // Summary.
   const SurfaceMesh& surface = balloon.mesh;

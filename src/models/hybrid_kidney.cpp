@@ -1,6 +1,7 @@
 #include "medspring/models/hybrid_kidney.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "medspring/core/check.hpp"
@@ -9,35 +10,87 @@
 
 namespace medspring {
 
-MatX2i union_spokes(const MatX3& S, const MatX3& A, Index K) {
+bool segment_inside_mask(const MaskVolume& mask, const Vec3& p, const Vec3& q) {
+  const double h = std::max(1e-6, mask.spacing.minCoeff());
+  const double tolerance = mask.spacing.maxCoeff();  // one voxel
+  const Index n = std::max<Index>(1, static_cast<Index>(std::ceil((q - p).norm() / h)));
+  for (Index s = 0; s <= n; ++s) {
+    const Vec3 v = mask.to_index(p + (q - p) * (static_cast<double>(s) / static_cast<double>(n)));
+    const Index ci = static_cast<Index>(std::lround(v.x())), cj = static_cast<Index>(std::lround(v.y())),
+                ck = static_cast<Index>(std::lround(v.z()));
+    if (mask.inside(ci, cj, ck) && mask.at(ci, cj, ck) != 0) continue;
+    // the distance to the nearest object voxel (its box), searched two voxels around
+    bool near = false;
+    for (Index k = ck - 2; k <= ck + 2 && !near; ++k)
+      for (Index j = cj - 2; j <= cj + 2 && !near; ++j)
+        for (Index i = ci - 2; i <= ci + 2 && !near; ++i) {
+          if (!mask.inside(i, j, k) || mask.at(i, j, k) == 0) continue;
+          const Vec3 c(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
+          Vec3 d;
+          for (int a = 0; a < 3; ++a) d[a] = std::max(0.0, std::abs(v[a] - c[a]) - 0.5) * mask.spacing[a];
+          near = d.norm() <= tolerance;
+        }
+    if (!near) return false;
+  }
+  return true;
+}
+
+MatX2i union_spokes(const MatX3& S, const MatX3& A, Index K, const MaskVolume* mask,
+                    SpokeVisibility* visibility) {
   const Index ns = static_cast<Index>(S.rows()), na = static_cast<Index>(A.rows());
   require(na >= 1, "spokes: no atoms");
   require(ns >= 1, "spokes: no surface nodes");
   require(K >= 0, "spokes: spokes per atom must be >= 0 (got ", K, ")");
+  if (mask)
+    require(mask->dims[0] > 0 && mask->dims[1] > 0 && mask->dims[2] > 0 && mask->data.size() == mask->size(),
+            "spokes: the visibility mask is empty or its data does not match its dimensions");
+  SpokeVisibility vis;
+  auto visible = [&](Index node, Index atom) {
+    if (!mask) return true;
+    const bool ok = segment_inside_mask(*mask, S.row(node).transpose(), A.row(atom).transpose());
+    if (!ok) ++vis.rejected;
+    return ok;
+  };
   std::vector<std::pair<Index, Index>> pairs;  // (atom, node)
-  // (a) every surface node to its nearest atom; ties -> lower atom index (strict <)
+  // (a) every surface node to its nearest (visible) atom; ties -> lower atom index
+  std::vector<Index> aorder(static_cast<std::size_t>(na));
+  std::vector<double> adist(static_cast<std::size_t>(na));
   for (Index i = 0; i < ns; ++i) {
-    Index best = 0;
-    double bd = (S.row(i) - A.row(0)).squaredNorm();
-    for (Index a = 1; a < na; ++a) {
-      const double d = (S.row(i) - A.row(a)).squaredNorm();
-      if (d < bd) {
-        bd = d;
+    for (Index a = 0; a < na; ++a) adist[a] = (S.row(i) - A.row(a)).squaredNorm();
+    std::iota(aorder.begin(), aorder.end(), 0);
+    std::stable_sort(aorder.begin(), aorder.end(), [&](Index x, Index y) { return adist[x] < adist[y]; });
+    Index best = -1;
+    for (Index a : aorder)
+      if (visible(i, a)) {
         best = a;
+        break;
       }
+    if (best < 0) {
+      best = aorder.front();
+      ++vis.fallbacks;
     }
     pairs.emplace_back(best, i);
   }
-  // (b) every atom to its K nearest surface nodes (ties -> lower node index)
+  // (b) every atom to its K nearest (visible) surface nodes (ties -> lower node index)
   std::vector<Index> order(static_cast<std::size_t>(ns));
   std::vector<double> dist(static_cast<std::size_t>(ns));
   const Index kk = std::min(K, ns);
   for (Index a = 0; a < na; ++a) {
     for (Index i = 0; i < ns; ++i) dist[i] = (S.row(i) - A.row(a)).squaredNorm();
     std::iota(order.begin(), order.end(), 0);
-    std::partial_sort(order.begin(), order.begin() + kk, order.end(),
-                      [&](Index x, Index y) { return dist[x] < dist[y] || (dist[x] == dist[y] && x < y); });
-    for (Index q = 0; q < kk; ++q) pairs.emplace_back(a, order[q]);
+    auto closer = [&](Index x, Index y) { return dist[x] < dist[y] || (dist[x] == dist[y] && x < y); };
+    if (!mask) {
+      std::partial_sort(order.begin(), order.begin() + kk, order.end(), closer);
+      for (Index q = 0; q < kk; ++q) pairs.emplace_back(a, order[q]);
+      continue;
+    }
+    std::sort(order.begin(), order.end(), closer);
+    Index taken = 0;
+    for (Index q = 0; q < ns && taken < kk; ++q)
+      if (visible(order[q], a)) {
+        pairs.emplace_back(a, order[q]);
+        ++taken;
+      }
   }
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
@@ -46,11 +99,12 @@ MatX2i union_spokes(const MatX3& S, const MatX3& A, Index K) {
     out(static_cast<Index>(r), 0) = pairs[r].second;
     out(static_cast<Index>(r), 1) = pairs[r].first;
   }
+  if (visibility) *visibility = vis;
   return out;
 }
 
 HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const HybridSettings& st,
-                           std::string name)
+                           std::string name, const MaskVolume* mask)
     : F_(surface.F), rest_surface_(surface.V), settings_(st) {
   require_valid_mesh(surface, name, {.closed = false, .manifold = true});
   require(atoms.rows() >= 2, name, ": a hybrid model needs at least 2 centerline atoms (got ", atoms.rows(),
@@ -69,7 +123,9 @@ HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const
   for (Index i = 0; i < ns; ++i) b.add_node(surface.V.row(i).transpose(), st.surface_node);
   for (Index a = 0; a < num_atoms_; ++a) b.add_node(atoms.row(a).transpose(), st.atom_node);
   const MatX2i E = unique_edges(surface.F);
-  spokes_ = union_spokes(surface.V, atoms, st.spokes_per_atom);
+  const MaskVolume* filter = st.visibility_filter ? mask : nullptr;
+  spokes_ = union_spokes(surface.V, atoms, st.spokes_per_atom, filter, &stats_.visibility);
+  stats_.visibility_filtered = filter != nullptr;
   b.reserve_springs(static_cast<Index>(E.rows() + spokes_.rows()) + num_atoms_);
   for (Index s = 0; s < E.rows(); ++s) b.add_spring(E(s, 0), E(s, 1), st.k_surf, duff);  // §4.3 surface
   for (Index a = 0; a + 1 < num_atoms_; ++a) b.add_spring(ns + a, ns + a + 1, st.k_cl, duff);  // centerline

@@ -145,6 +145,12 @@ ModelPackage package_of(const Body& body, const std::string& name, const std::st
   if (const auto* s = dynamic_cast<const SurfaceBody*>(&body)) {
     p.surface_params = s->params();
   } else if (const auto* h = dynamic_cast<const HybridKidney*>(&body)) {
+    // The package rebuilds the spokes by the union rule, without the organ's voxels (D-9).
+    if (h->stats().visibility.rejected > 0)
+      throw InvalidInput(cat("package_of: the spokes of '", body.model().name,
+                             "' passed the visibility filter (", h->stats().visibility.rejected,
+                             " rejected), which a model package cannot rebuild without the organ's voxels; "
+                             "build it with HybridSettings::visibility_filter off to package it"));
     p.atoms = h->model().x0.bottomRows(h->num_atoms());
     p.hybrid = h->settings();
   } else if (const auto* v = dynamic_cast<const SmrmVessel*>(&body)) {

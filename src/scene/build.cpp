@@ -153,9 +153,15 @@ struct Builder {
     return std::make_shared<SurfaceBody>(mesh, scene.model.surface, name, grid);
   }
 
-  BodyPtr hybrid_body(const SurfaceMesh& surface, const MatX3& atoms, const std::string& name) {
-    auto h = std::make_shared<HybridKidney>(surface, atoms, scene.model.hybrid, name);
+  BodyPtr hybrid_body(const SurfaceMesh& surface, const MatX3& atoms, const std::string& name,
+                      const MaskVolume* mask = nullptr) {
+    auto h = std::make_shared<HybridKidney>(surface, atoms, scene.model.hybrid, name, mask);
     const HybridStats st = h->stats();
+    if (st.visibility_filtered)
+      out.notes.push_back(
+          cat("spokes: visibility filter (D-9) on the organ's voxels: ", st.visibility.rejected,
+              " candidates leaving the organ rejected, ", st.visibility.fallbacks,
+              " surface nodes without a visible atom kept on their nearest"));
     out.notes.push_back(cat("hybrid: ", st.surface_nodes, " surface nodes + ", st.atoms, " atoms, ",
                             st.surface_springs, " surface springs, ", st.centerline_springs,
                             " centerline springs, ", st.spokes, " spokes (", st.min_spokes_per_atom, "-",
@@ -211,7 +217,7 @@ struct Builder {
         const MeshCenterline mc = centerline_from_mesh(organ, sk);
         if (m.kind == ModelKind::Hybrid) {
           const MatX3 atoms = skeleton_atoms(mc.skeleton);
-          return hybrid_body(maybe_balloon(organ), atoms, name);
+          return hybrid_body(maybe_balloon(organ), atoms, name, &mc.mask);
         }
         skeleton_atoms(mc.skeleton);
         return smrm_body(smrm_from_marched_spokes(mc.skeleton.centerline(), organ, m.smrm));
@@ -229,7 +235,7 @@ struct Builder {
         out.notes.push_back(cat("isosurface: ", organ.num_vertices(), " vertices"));
         if (m.kind == ModelKind::Surface) return surface_body(maybe_balloon(organ), name);
         const MatX3 atoms = skeleton_atoms(extract_centerline(mask, sk));
-        return hybrid_body(maybe_balloon(organ), atoms, name);
+        return hybrid_body(maybe_balloon(organ), atoms, name, &mask);
       }
       case ModelSource::Type::Centerline: {
         if (s.all_branches) {

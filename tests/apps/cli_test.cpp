@@ -377,6 +377,18 @@ TEST(CliPaper, QuickRunMakesTheReportFiguresAndTablesOnThePhantoms) {
   }
   EXPECT_TRUE(
       fs::exists(out / "scenes" / "phantom" / "kidney_1.0N_nonlinear" / "phantom_kidney_1.0N_nonlinear.pvd"));
+  // Issue 22: the report is rendered from results.json; the paper-literal set (Duffing `Absolute`) runs
+  // beside the default and the report compares them; the D-9 visibility filter is reported.
+  const nlohmann::json res = nlohmann::json::parse(slurp(out / "results.json"));
+  EXPECT_EQ(res["runs"].size(), 14u);
+  int literal = 0;
+  for (const auto& x : res["runs"]) literal += x["literal"].get<bool>() ? 1 : 0;
+  EXPECT_EQ(literal, 2);
+  EXPECT_TRUE(fs::exists(out / "scenes" / "phantom" / "kidney_1.0N_nonlinear_literal" / "summary.json"));
+  for (const char* part : {"## The paper's literal constants next to the unit-consistent default",
+                           "On the kidney (1.0 N nonlinear) ",
+                           "**Spokes and the visibility filter (ALGORITHMS.md D-9, §4.2).**"})
+    EXPECT_NE(report.find(part), std::string::npos) << part;
   // a second run into the same folder is refused without --force and leaves the report as it was
   const Result again = medspring("paper --quick --out " + quote(out.string()));
   EXPECT_NE(again.rc, 0);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/geometry/volume.hpp"
 #include "medspring/models/body.hpp"
 
 namespace medspring {
@@ -24,6 +25,7 @@ struct HybridSettings {
   bool nonlinear = true;                    // D-4: every inter-node spring Duffing (else all linear)
   DuffingSettings duffing{};                // Strain, eta = 1 (D-3)
   Index spokes_per_atom = 8;                // K_a of the union rule (D-9)
+  bool visibility_filter = true;            // D-9: reject spokes leaving the organ, when a mask is given
   std::vector<Index> fixed;                 // pinned surface nodes (default none)
   std::vector<Index> fixed_atoms;           // pinned centerline atoms (default none)
 };
@@ -50,28 +52,48 @@ void for_each_field(S& s, V&& v) {
         .at_least(1),
     s.spokes_per_atom);
   v(ParamSpec{"duffing", "", "Duffing law of every inter-node spring (D-3, D-4)"}, s.duffing);
+  v(ParamSpec{"visibility_filter", "",
+              "D-9: reject spokes whose segment leaves the organ (needs a segmentation mask)"},
+    s.visibility_filter);
   v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
   v(ParamSpec{"fixed_atoms", "", "pinned centerline atoms (e.g. where the renal vessels hold the hilum)"},
     s.fixed_atoms);
 }
+/// What the visibility filter of D-9 did (all zero without a mask).
+struct SpokeVisibility {
+  Index rejected = 0;   // candidates skipped because their segment leaves the organ
+  Index fallbacks = 0;  // surface nodes with no visible atom, linked to their nearest atom anyway
+};
 
 /// Spokes by the union rule of D-9: (a) every surface node to its nearest atom (ties: lower atom);
 /// (b) every atom to its K nearest surface nodes; duplicates removed. Rows (surface node, atom),
-/// sorted by atom then node.
-MatX2i union_spokes(const MatX3& surface, const MatX3& atoms, Index spokes_per_atom);
+/// sorted by atom then node. With a `mask` (the organ's voxels, same frame as the points), the
+/// visibility filter of D-9 applies: a candidate whose segment leaves the organ is rejected and the next
+/// nearest taken (a node that sees no atom keeps its nearest one, counted in `visibility->fallbacks`).
+MatX2i union_spokes(const MatX3& surface, const MatX3& atoms, Index spokes_per_atom,
+                    const MaskVolume* mask = nullptr, SpokeVisibility* visibility = nullptr);
+
+/// D-9's test of one spoke: the segment p-q sampled every min(voxel spacing) mm; true when no sample lies
+/// outside the mask by more than one voxel (its distance to the nearest object voxel's box > the largest
+/// voxel spacing).
+bool segment_inside_mask(const MaskVolume& mask, const Vec3& p, const Vec3& q);
 
 /// Statistics of a hybrid model for build summaries and tests.
 struct HybridStats {
   Index surface_nodes = 0, atoms = 0, surface_springs = 0, centerline_springs = 0, spokes = 0;
   Index min_spokes_per_atom = 0, max_spokes_per_atom = 0;
   Index surface_nodes_without_spoke = 0;
+  bool visibility_filtered = false;  // D-9's filter ran (a mask was given and the setting is on)
+  SpokeVisibility visibility;
 };
 
 class HybridKidney final : public Body {
  public:
-  /// surface: closed organ surface (mm); atoms: #A x 3 centerline atoms (mm) in order along the skeleton.
+  /// surface: closed organ surface (mm); atoms: #A x 3 centerline atoms (mm) in order along the skeleton;
+  /// mask: the organ's voxels when known (the skeleton's mask): spokes then pass D-9's visibility filter
+  /// unless settings.visibility_filter is off.
   HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const HybridSettings& settings = {},
-               std::string name = "kidney");
+               std::string name = "kidney", const MaskVolume* mask = nullptr);
 
   std::string kind() const override { return "hybrid"; }
   const Model& model() const override { return model_; }
