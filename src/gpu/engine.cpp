@@ -207,6 +207,7 @@ struct Engine::Impl {
   virtual void request_positions() = 0;
   virtual bool poll_positions(int b, MatX3& out) = 0;
   virtual std::size_t device_bytes() const = 0;
+  virtual double time_substeps(int count, int repeats) = 0;
 };
 
 namespace {
@@ -597,6 +598,70 @@ struct Backend final : Engine::Impl {
     for (Index q = 0; q < 3 * n; ++q) out.data()[q] = static_cast<double>(src[q]);
     seen[static_cast<std::size_t>(b)] = snap_seq[best];
     return true;
+  }
+
+  double time_substeps(int count, int repeats) override {
+    count += count & 1;
+    require(count >= 2 && repeats >= 1, "gpu::Engine::time_substeps: count >= 2 and repeats >= 1");
+    const StepSettings& s = settings;
+    double hs = std::numeric_limits<double>::infinity();
+    for (const Model* m : models) hs = std::min(hs, dt_safe(*m, stiffening, s.safety));
+    const long subs = s.dt > hs * (1.0 + 1e-12) ? static_cast<long>(std::ceil(s.dt / hs)) : 1;
+    const double h = s.dt / static_cast<double>(subs);
+    ensure_capacity(1);
+    row_scratch.assign(3 * static_cast<std::size_t>(rows), 0.0);
+    for (int b = 0; b < B; ++b) {
+      const auto ub = static_cast<std::size_t>(b);
+      load_rows(loads[ub], slots[ub], t, row_scratch.data());
+      for (std::size_t q = 0; q < row_scratch.size(); ++q)
+        rows_host.p[ub * row_scratch.size() + q] = static_cast<R>(row_scratch[q]);
+    }
+    check(cudaMemcpyAsync(rows_dev.p, rows_host.p, row_count(1) * sizeof(R), cudaMemcpyHostToDevice, stream),
+          "uploading the load table");
+    check(cudaMemcpyAsync(scalars_dev.p, scalars_host_init.p, sizeof(detail::FrameScalars), cudaMemcpyHostToDevice,
+                          stream),
+          "resetting the frame scalars");
+    cudaGraph_t g = nullptr;
+    check(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal), "capturing a CUDA graph");
+    for (int kk = 0; kk < count; ++kk) {
+      detail::SubstepArgs<R> A = args(cur, kk, static_cast<R>(h), false);
+      A.loads = rows_dev.p;  // the same loads for every substep
+      A.substep = 0;         // no guard skipping between substeps
+      A.guard = false;
+      const cudaError_t e = detail::launch_substep(A, options.block, stream);
+      if (e != cudaSuccess) {
+        cudaStreamEndCapture(stream, &g);
+        if (g) cudaGraphDestroy(g);
+        check(e, "launching the substep kernel");
+      }
+    }
+    check(cudaStreamEndCapture(stream, &g), "capturing a CUDA graph");
+    cudaGraphExec_t exec = nullptr;
+    const cudaError_t ie = cudaGraphInstantiate(&exec, g, 0);
+    cudaGraphDestroy(g);
+    check(ie, "instantiating a CUDA graph");
+    cudaEvent_t e0, e1;
+    check(cudaEventCreate(&e0), "creating an event");
+    check(cudaEventCreate(&e1), "creating an event");
+    std::vector<float> ms;
+    for (int r = 0; r < repeats + 1; ++r) {  // the first replay warms up
+      cudaEventRecord(e0, stream);
+      cudaGraphLaunch(exec, stream);
+      cudaEventRecord(e1, stream);
+      const cudaError_t e = cudaEventSynchronize(e1);
+      if (e != cudaSuccess) {
+        cudaGraphExecDestroy(exec);
+        check(e, "timing the substep kernel");
+      }
+      float v = 0;
+      cudaEventElapsedTime(&v, e0, e1);
+      if (r > 0) ms.push_back(v);
+    }
+    cudaEventDestroy(e0);
+    cudaEventDestroy(e1);
+    cudaGraphExecDestroy(exec);
+    std::sort(ms.begin(), ms.end());
+    return 1e3 * static_cast<double>(ms[ms.size() / 2]) / count;
   }
 
   std::size_t device_bytes() const override {
