@@ -38,8 +38,8 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
     } catch (...) {
       used = 0;
     }
-    require(used == text.size() && v >= 0, "bench --gpu: ", what, ": expected a non-negative integer (got '", text,
-            "')");
+    require(used == text.size() && v >= 0, "bench --gpu: ", what, ": expected a non-negative integer (got '",
+            text, "')");
     return v;
   };
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -236,11 +236,12 @@ double torch_step(const Model& m, const std::vector<PointLoad>& loads, double h,
     std::ofstream meta(dir / "meta.json");
     meta.precision(17);
     meta << "{\"nodes\": " << m.num_nodes() << ", \"load_node\": " << loads[0].node << ", \"load\": ["
-         << loads[0].force[0] << ", " << loads[0].force[1] << ", " << loads[0].force[2] << "], \"h\": " << h << "}\n";
+         << loads[0].force[0] << ", " << loads[0].force[1] << ", " << loads[0].force[2] << "], \"h\": " << h
+         << "}\n";
     std::ofstream(dir / "torch_step.py") << kTorchScript;
   }
-  const std::string out =
-      run_capture(cat("'", python(), "' '", (dir / "torch_step.py").string(), "' '", dir.string(), "' ", precision));
+  const std::string out = run_capture(
+      cat("'", python(), "' '", (dir / "torch_step.py").string(), "' '", dir.string(), "' ", precision));
   const auto p = out.find("\"substep_us\": ");
   if (p == std::string::npos) {
     why = "the PyTorch step failed (see its output above)";
@@ -253,11 +254,12 @@ double torch_step(const Model& m, const std::vector<PointLoad>& loads, double h,
 
 int run_gpu_bench(const GpuBenchOptions& o) {
   const gpu::DeviceInfo dev = gpu::require_device(o.device);  // throws: no silent fallback
-  std::cout << "GPU: " << dev.name << " (compute " << dev.major << "." << dev.minor << ", " << dev.multiprocessors
-            << " SMs, " << dev.memory_bytes / (1u << 20) << " MiB; driver " << dev.driver_version << ", runtime "
-            << dev.runtime_version << ")\n";
+  std::cout << "GPU: " << dev.name << " (compute " << dev.major << "." << dev.minor << ", "
+            << dev.multiprocessors << " SMs, " << dev.memory_bytes / (1u << 20) << " MiB; driver "
+            << dev.driver_version << ", runtime " << dev.runtime_version << ")\n";
   const double copy_gbs = gpu::measured_copy_bandwidth(std::size_t(1) << 30, 20, o.device);
-  std::cout << "measured device-to-device copy bandwidth: " << copy_gbs << " GB/s (read + write, 1 GiB, median of 20)\n";
+  std::cout << "measured device-to-device copy bandwidth: " << copy_gbs
+            << " GB/s (read + write, 1 GiB, median of 20)\n";
   bool torch_ok = false;
   std::string torch_why = "disabled (--no-torch)";
   if (o.torch) {
@@ -272,8 +274,9 @@ int run_gpu_bench(const GpuBenchOptions& o) {
   std::ostringstream js;
   js.precision(10);
   js << "{\n  \"device\": {\"name\": \"" << json_escape(dev.name) << "\", \"compute\": \"" << dev.major << "."
-     << dev.minor << "\", \"multiprocessors\": " << dev.multiprocessors << ", \"memory_bytes\": " << dev.memory_bytes
-     << ", \"driver\": " << dev.driver_version << ", \"runtime\": " << dev.runtime_version << "},\n"
+     << dev.minor << "\", \"multiprocessors\": " << dev.multiprocessors
+     << ", \"memory_bytes\": " << dev.memory_bytes << ", \"driver\": " << dev.driver_version
+     << ", \"runtime\": " << dev.runtime_version << "},\n"
      << "  \"copy_bandwidth_gbs\": " << copy_gbs << ",\n  \"torch\": " << (torch_ok ? "true" : "false")
      << ",\n  \"tubes\": [";
   std::printf("\n%-10s %-5s %12s %12s %10s %8s %12s %12s\n", "tube", "prec", "substep_us", "frame_us", "GB/s",
@@ -316,8 +319,9 @@ int run_gpu_bench(const GpuBenchOptions& o) {
                   torch_us > 0 ? cat(torch_us).c_str() : "-", cpu_sub_us > 0 ? cat(cpu_sub_us).c_str() : "-");
       std::fflush(stdout);
       const std::string key = gpu::to_string(p);
-      js << (first ? "\n" : ",\n") << "    {\"name\": \"" << size_name(m.num_nodes()) << "\", \"nodes\": " << m.num_nodes()
-         << ", \"springs\": " << m.num_springs() << ", \"precision\": \"" << key << "\", \"build_s\": " << build_s
+      js << (first ? "\n" : ",\n") << "    {\"name\": \"" << size_name(m.num_nodes())
+         << "\", \"nodes\": " << m.num_nodes() << ", \"springs\": " << m.num_springs()
+         << ", \"precision\": \"" << key << "\", \"build_s\": " << build_s
          << ", \"substeps_per_frame\": " << subs << ", \"gpu_" << key << "_substep_us\": " << substep_us
          << ", \"gpu_frame_us\": " << frame_us << ", \"device_bytes\": " << e.device_bytes()
          << ", \"bandwidth_gbs\": " << gbs << ", \"fraction_of_copy\": " << gbs / copy_gbs;
@@ -349,23 +353,24 @@ int run_gpu_bench(const GpuBenchOptions& o) {
       for (int f = 0; f < 10; ++f) e.step();
       const double substep_us = e.time_substeps(100, 10);
       const double rate = o.batch / (substep_us * 1e-6);
-      std::printf("batch: %d hybrid kidneys (%d nodes each) %s: %.2f µs per substep, %.3g model-substeps/s\n", o.batch,
-                  static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(), substep_us, rate);
-      js << (bfirst ? "\n" : ",\n") << "    {\"models\": " << o.batch << ", \"nodes_per_model\": " << km.num_nodes()
-         << ", \"precision\": \"" << gpu::to_string(p) << "\", \"substep_us\": " << substep_us
-         << ", \"model_substeps_per_s\": " << rate << "}";
+      std::printf("batch: %d hybrid kidneys (%d nodes each) %s: %.2f µs per substep, %.3g model-substeps/s\n",
+                  o.batch, static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(), substep_us, rate);
+      js << (bfirst ? "\n" : ",\n") << "    {\"models\": " << o.batch
+         << ", \"nodes_per_model\": " << km.num_nodes() << ", \"precision\": \"" << gpu::to_string(p)
+         << "\", \"substep_us\": " << substep_us << ", \"model_substeps_per_s\": " << rate << "}";
       bfirst = false;
     }
     js << "\n  ]";
   }
   js << "\n}\n";
   if (!o.out.empty()) {
-    const fs::path json = work / "gpu_bench.json", script = work / "gpu_bench_plot.py", png = work / "gpu_bench.png";
+    const fs::path json = work / "gpu_bench.json", script = work / "gpu_bench_plot.py",
+                   png = work / "gpu_bench.png";
     std::ofstream(json) << js.str();
     std::ofstream(script) << kPlotScript;
     std::cout << "wrote " << json.string() << "\n";
-    if (std::system(cat("'", python(), "' '", script.string(), "' '", json.string(), "' '", png.string(), "'").c_str()) ==
-        0)
+    if (std::system(cat("'", python(), "' '", script.string(), "' '", json.string(), "' '", png.string(), "'")
+                        .c_str()) == 0)
       std::cout << "wrote " << png.string() << "\n";
     else
       std::cout << "no plot (matplotlib not importable by " << python() << ")\n";

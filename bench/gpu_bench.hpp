@@ -10,7 +10,7 @@ namespace medspring::bench {
 
 struct GpuBenchOptions {
   std::vector<long> sizes{1200, 120000, 1000000, 16000000};  // tube nodes (rings x spokes chosen per size)
-  int batch = 2048;             // hybrid kidney phantoms in the batch case (0: skip)
+  int batch = 2048;              // hybrid kidney phantoms in the batch case (0: skip)
   long cpu_max_nodes = 1000000;  // the CPU engine runs up to this size
   bool torch = true;             // the PyTorch step when `import torch` works and sees the GPU
   std::string out;               // folder for gpu_bench.json and gpu_bench.png ("" = none)

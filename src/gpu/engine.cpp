@@ -618,8 +618,8 @@ struct Backend final : Engine::Impl {
     }
     check(cudaMemcpyAsync(rows_dev.p, rows_host.p, row_count(1) * sizeof(R), cudaMemcpyHostToDevice, stream),
           "uploading the load table");
-    check(cudaMemcpyAsync(scalars_dev.p, scalars_host_init.p, sizeof(detail::FrameScalars), cudaMemcpyHostToDevice,
-                          stream),
+    check(cudaMemcpyAsync(scalars_dev.p, scalars_host_init.p, sizeof(detail::FrameScalars),
+                          cudaMemcpyHostToDevice, stream),
           "resetting the frame scalars");
     cudaGraph_t g = nullptr;
     check(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal), "capturing a CUDA graph");

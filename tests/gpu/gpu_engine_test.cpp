@@ -25,10 +25,10 @@ bool have_device(std::string* why) {
   }
 }
 
-#define REQUIRE_GPU()                                  \
-  do {                                                 \
-    std::string why_;                                  \
-    if (!have_device(&why_)) GTEST_SKIP() << why_;     \
+#define REQUIRE_GPU()                              \
+  do {                                             \
+    std::string why_;                              \
+    if (!have_device(&why_)) GTEST_SKIP() << why_; \
   } while (0)
 
 Model tube_model(Index rings, Index spokes, bool soft = false) {
@@ -58,8 +58,8 @@ double rel(const MatX3& a, const MatX3& b) {
 
 // Steps the CPU engine and the GPU engine side by side; returns the largest relative difference of
 // positions and velocities seen at the checks (every `every` frames and at the end).
-double agreement(const Model& m, const std::vector<PointLoad>& loads, int frames, gpu::Precision p, int every = 100,
-                 bool graphs = true) {
+double agreement(const Model& m, const std::vector<PointLoad>& loads, int frames, gpu::Precision p,
+                 int every = 100, bool graphs = true) {
   StepSettings s;
   State st = make_state(m, s);
   gpu::Options o;
@@ -196,7 +196,8 @@ TEST(GpuEngine, BatchOfKidneysEachFollowsItsOwnCpuRun) {
     for (int b = 0; b < B; ++b) {
       const StepStatus st = step(m, cpu[static_cast<std::size_t>(b)], s, &loads[static_cast<std::size_t>(b)]);
       if (subs < 0) subs = st.substeps;
-      ASSERT_EQ(st.substeps, subs) << "frame " << f << ": the CPU runs took different substeps; the batch takes "
+      ASSERT_EQ(st.substeps, subs) << "frame " << f
+                                   << ": the CPU runs took different substeps; the batch takes "
                                    << "the largest, so the comparison would not apply";
     }
     EXPECT_EQ(e.step().substeps, subs);

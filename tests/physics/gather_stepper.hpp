@@ -56,15 +56,17 @@ struct GatherStepper {
       for (int a = 0; a < nodes.nodes; ++a) {
         int code;
         if (m.has_soft_springs)
-          code = stiff ? hd::node_substep<true, true>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
-                                                       x.data(), v.data(), xo.data(), vo.data(), st)
-                       : hd::node_substep<true, false>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
-                                                        x.data(), v.data(), xo.data(), vo.data(), st);
+          code = stiff
+                     ? hd::node_substep<true, true>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                    x.data(), v.data(), xo.data(), vo.data(), st)
+                     : hd::node_substep<true, false>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                     x.data(), v.data(), xo.data(), vo.data(), st);
         else
-          code = stiff ? hd::node_substep<false, true>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
-                                                        x.data(), v.data(), xo.data(), vo.data(), st)
-                       : hd::node_substep<false, false>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
-                                                         x.data(), v.data(), xo.data(), vo.data(), st);
+          code =
+              stiff ? hd::node_substep<false, true>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                    x.data(), v.data(), xo.data(), vo.data(), st)
+                    : hd::node_substep<false, false>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                     x.data(), v.data(), xo.data(), vo.data(), st);
         failures += code != hd::kNodeOk;
       }
       if (stiff) stiffening = static_cast<double>(st);
