@@ -754,5 +754,8 @@ const Warnings& Engine::warnings() const {
 std::size_t Engine::device_bytes() const {
   return impl_->device_bytes();
 }
+double Engine::time_substeps(int count, int repeats) {
+  return impl_->time_substeps(count, repeats);
+}
 
 }  // namespace medspring::gpu

@@ -75,7 +75,7 @@ double agreement(const Model& m, const std::vector<PointLoad>& loads, int frames
     EXPECT_EQ(a.substeps, b.substeps) << "frame " << f;
     if (f % every == 0 || f == frames) {
       worst = std::max({worst, rel(e.positions(0), st.x), rel(e.velocities(0), st.v)});
-      if (HasFailure()) break;
+      if (::testing::Test::HasFailure()) break;
     }
   }
   EXPECT_EQ(e.substeps(), st.substeps);
