@@ -413,7 +413,7 @@ struct Backend final : Engine::Impl {
     A.soft = soft;
     A.stiff = stiff;
     A.guard = settings.guard;
-    A.stiff_bits = stiff_dev.p + kk;
+    A.stiff_bits = stiff ? stiff_dev.p + kk : stiff_dev.p;
     A.scalars = scalars_dev.p;
     return A;
   }
@@ -679,6 +679,8 @@ struct Backend final : Engine::Impl {
 Engine::Engine(const std::vector<const Model*>& models, const StepSettings& settings,
                const Options& options) {
   require(!models.empty(), "gpu::Engine: no model given");
+  require(models.size() <= 65535, "gpu::Engine: a batch holds at most 65535 models (got ", models.size(),
+          "); split it into several engines");
   for (std::size_t b = 0; b < models.size(); ++b) {
     require(models[b] != nullptr, "gpu::Engine: model ", b, " is null");
     require(models[b]->finalized, models[b]->name,
