@@ -73,9 +73,10 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
 #ifndef MEDSPRING_HAS_CUDA
 
 int run_gpu_bench(const GpuBenchOptions&) {
-  std::cerr << "error: bench --gpu: this build has no CUDA backend (configure with a CUDA compiler, "
-               "-DMEDSPRING_CUDA=ON; see docs/gpu.md). Nothing was measured; `medspring bench` times the CPU "
-               "engine.\n";
+  std::cerr
+      << "error: bench --gpu: this build has no CUDA backend, so no GPU can be used (configure with a "
+         "CUDA compiler, -DMEDSPRING_CUDA=ON; see docs/gpu.md). Nothing was measured; `medspring bench` "
+         "times the CPU engine.\n";
   return 2;
 }
 

@@ -1,11 +1,14 @@
 # MEDSPRING_CUDA: the CUDA backend (src/gpu, docs/gpu.md). AUTO (default) builds it when a CUDA compiler
 # is found by check_language(CUDA) (nvcc on PATH, $CUDACXX, or /usr/local/cuda/bin/nvcc); ON requires
-# one; OFF never builds it. Sets MEDSPRING_HAS_CUDA. Kernels are built for CMAKE_CUDA_ARCHITECTURES
+# one; OFF never builds it. AUTO is off in sanitizer/fuzz builds. Sets MEDSPRING_HAS_CUDA. Kernels are built for CMAKE_CUDA_ARCHITECTURES
 # (default 90: H100/H200).
 set(MEDSPRING_CUDA AUTO CACHE STRING "Build the CUDA backend (src/gpu): AUTO, ON or OFF")
 set_property(CACHE MEDSPRING_CUDA PROPERTY STRINGS AUTO ON OFF)
 set(MEDSPRING_HAS_CUDA OFF)
-if(NOT MEDSPRING_CUDA STREQUAL "OFF" AND NOT EMSCRIPTEN)
+# AUTO stays off in sanitizer and fuzz builds: nvcc's objects and the CUDA runtime are not instrumented.
+if(MEDSPRING_CUDA STREQUAL "AUTO" AND (MEDSPRING_SANITIZE OR MEDSPRING_FUZZ))
+  message(STATUS "MedSpring: CUDA backend OFF (AUTO in a sanitizer/fuzz build)")
+elseif(NOT MEDSPRING_CUDA STREQUAL "OFF" AND NOT EMSCRIPTEN)
   if(NOT CMAKE_CUDA_COMPILER AND NOT DEFINED ENV{CUDACXX} AND EXISTS /usr/local/cuda/bin/nvcc)
     find_program(_medspring_nvcc nvcc)
     if(NOT _medspring_nvcc)

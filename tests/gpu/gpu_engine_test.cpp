@@ -248,7 +248,7 @@ TEST(GpuEngine, GuardRollsBackAndDropsFramesLikeTheCpu) {
 
 TEST(GpuEngine, OutOfDeviceMemoryIsAClearError) {
   REQUIRE_GPU();
-  const Model m = tube_model(400, 250);  // 100k nodes, ~1 MB of spring parameters per model and array
+  const Model m = tube_model(400, 250);       // 100k nodes, ~1 MB of spring parameters per model and array
   std::vector<const Model*> many(60000, &m);  // ~0.3 TB of spring parameters
   try {
     gpu::Engine e(many, StepSettings{});
