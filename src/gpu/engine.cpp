@@ -294,8 +294,9 @@ struct Backend final : Engine::Impl {
       const Model& m = *ms[static_cast<std::size_t>(b)];
       if (b > 0) require_same_topology(m0, m, b);
       soft = soft || m.has_soft_springs;
-      const SpringTableArrays<R> T = b == 0 ? SpringTableArrays<R>{} : make_spring_table<R>(m);
-      const SpringTableArrays<R>& Tb = b == 0 ? T0 : T;
+      const bool same = b > 0 && &m == &m0;  // a batch of one model: its arrays once
+      const SpringTableArrays<R> T = b == 0 || same ? SpringTableArrays<R>{} : make_spring_table<R>(m);
+      const SpringTableArrays<R>& Tb = b == 0 || same ? T0 : T;
       const auto ub = static_cast<std::size_t>(b);
       L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
       k.upload(Tb.k.data(), entries, ub * entries, "uploading the spring table");

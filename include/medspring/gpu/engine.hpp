@@ -65,7 +65,8 @@ struct Options {
 /// stiffnesses, rest positions and loads may differ per model) stepped together, one launch per
 /// substep. Every model takes the substeps the stiffest one needs (equal to each model's own count in
 /// the usual case: then each trajectory is the one the CPU engine computes, to rounding). A model with
-/// bending terms, or models of different topology, are refused (GpuError).
+/// bending terms, or models of different topology, are refused (GpuError). The models must outlive the
+/// engine (it keeps pointers for the stable-step rule).
 class Engine {
  public:
   Engine(const std::vector<const Model*>& models, const StepSettings& settings, const Options& options = {});
