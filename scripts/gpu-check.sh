@@ -14,6 +14,8 @@
 #                                     none; runs the physics tests, the `gpu`-labelled tests, and
 #                                     medspring_gpu_bench (= medspring bench --gpu) into $OUT/gpu-bench.
 #   scripts/gpu-check.sh              compile, then full when nvidia-smi sees a GPU.
+# GPU_CHECK_USE_DEPS=1 takes Eigen/GoogleTest from DEPS even where the system has them;
+# GPU_CHECK_CONFIGURE_ONLY=1 stops `full` after configuring (both: to try the GPU machine's path here).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${OUT:-$root/build-gpu-check}
@@ -49,9 +51,10 @@ full() {
   local deps=${1:-$root/shared/gpu-deps}
   local build=$out/build prefix=$out/deps
   local args=(-DMEDSPRING_WITH_VTK=OFF -DMEDSPRING_WITH_CGAL=OFF -DMEDSPRING_BUILD_PYTHON=OFF
-    -DMEDSPRING_BUILD_BENCH=OFF -DMEDSPRING_SKIP_LAYERS="scene;fem" -DMEDSPRING_CUDA=ON -DMEDSPRING_NATIVE=OFF
+    -DMEDSPRING_BUILD_BENCH=OFF -DMEDSPRING_SKIP_LAYERS="scene;fem" -DMEDSPRING_CUDA=ON
     -DCMAKE_CUDA_COMPILER="$nvcc")
-  if [ ! -d /usr/include/eigen3 ] && [ ! -d /usr/local/include/eigen3 ]; then
+  # GPU_CHECK_USE_DEPS=1 uses DEPS even where the system has Eigen/GoogleTest (to try this path anywhere).
+  if [ -n "${GPU_CHECK_USE_DEPS:-}" ] || { [ ! -d /usr/include/eigen3 ] && [ ! -d /usr/local/include/eigen3 ]; }; then
     [ -d "$deps/eigen3" ] || { echo "gpu-check: no Eigen here and none in $deps (run 'stage' where Eigen is)" >&2; exit 2; }
     # Eigen is header-only: a minimal Eigen3Config.cmake pointing at the copied headers.
     mkdir -p "$prefix/eigen-cmake"
@@ -66,7 +69,7 @@ EOF
     printf 'set(PACKAGE_VERSION 3.4.0)\nset(PACKAGE_VERSION_COMPATIBLE TRUE)\n' > "$prefix/eigen-cmake/Eigen3ConfigVersion.cmake"
     args+=(-DEigen3_DIR="$prefix/eigen-cmake")
   fi
-  if ! ls /usr/lib/*/cmake/GTest/GTestConfig.cmake /usr/local/lib/cmake/GTest/GTestConfig.cmake >/dev/null 2>&1; then
+  if [ -n "${GPU_CHECK_USE_DEPS:-}" ] || ! ls /usr/lib/*/cmake/GTest/GTestConfig.cmake /usr/local/lib/cmake/GTest/GTestConfig.cmake >/dev/null 2>&1; then
     [ -d "$deps/googletest" ] || { echo "gpu-check: no GoogleTest here and none in $deps" >&2; exit 2; }
     cmake -S "$deps/googletest" -B "$out/gtest-build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DCMAKE_INSTALL_PREFIX="$prefix/gtest" -DBUILD_GMOCK=OFF > "$out/gtest.log"
@@ -74,6 +77,8 @@ EOF
     args+=(-DGTest_DIR="$(dirname "$(find "$prefix/gtest" -name GTestConfig.cmake | head -1)")")
   fi
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${args[@]}" > "$out/configure.log"
+  grep -E "MedSpring: CUDA|Eigen|GTest" "$out/configure.log" || true
+  [ -z "${GPU_CHECK_CONFIGURE_ONLY:-}" ] || return 0
   cmake --build "$build" --target gpu_tests physics_tests medspring_gpu_bench
   ctest --test-dir "$build" -R 'HdKernels|SpringTable' --output-on-failure
   ctest --test-dir "$build" -L gpu --output-on-failure --timeout 1800
