@@ -13,8 +13,11 @@ std::vector<bench::BenchCase> builder_bench_cases(const std::string& filter);
 
 // bench_compare.cpp: --compare and --scaling.
 int cmd_bench_compare(const Args& args);
+// cmd_bench_gpu.cpp: --gpu.
+int cmd_bench_gpu(const Args& args);
 
 int cmd_bench(const Args& args) {
+  if (args.flag("gpu")) return cmd_bench_gpu(args);
   if (args.flag("compare") || args.flag("scaling")) return cmd_bench_compare(args);
   args.require_known({"json", "quick", "filter", "samples"});
   const bool quick = args.flag("quick");

@@ -35,6 +35,8 @@ double seconds_since(clock_type::time_point t0) {
   return std::chrono::duration<double>(clock_type::now() - t0).count();
 }
 
+}  // namespace
+
 std::string size_name(long nodes) {
   if (nodes >= 1000000 && nodes % 1000000 == 0) return cat("tube_", nodes / 1000000, "M");
   if (nodes >= 1000) return cat("tube_", std::round(static_cast<double>(nodes) / 100.0) / 10.0, "k");
@@ -51,6 +53,8 @@ Model tube_model(const TubeSize& size) {
   }
   return make_surface_model(mesh, p, size_name(size.nodes()));
 }
+
+namespace {
 
 TubeData tube_data(const Model& m, const TubeSize& size) {
   TubeData d;

@@ -9,6 +9,7 @@
 
 #include "cases.hpp"
 #include "medspring/core/types.hpp"
+#include "medspring/physics/model.hpp"
 
 namespace medspring::bench {
 
@@ -20,6 +21,11 @@ struct TubeSize {
   Index rings = 40, spokes = 30;
   long nodes() const { return static_cast<long>(rings) * spokes; }
 };
+
+/// "tube_1.2k", "tube_1M", ...
+std::string size_name(long nodes);
+/// The comparison tube as a MedSpring model (also the GPU benchmark's, gpu_bench.cpp).
+Model tube_model(const TubeSize& size);
 
 /// The tube as plain arrays (what the plain loop and Bullet are built from).
 struct TubeData {

@@ -103,7 +103,8 @@ enum class Substep { Ok, TooFast, NonFinite };
 // 1 / (m + h d) per node for the substep h (cached while h stays the same).
 void refresh_step_coefficients(const Model& m, State& st, double h) {
   if (st.step_coef_h != h) {
-    for (Index a = 0; a < m.num_nodes(); ++a) st.step_coef[a] = 1.0 / (m.mass[a] + h * m.damping[a]);
+    for (Index a = 0; a < m.num_nodes(); ++a)
+      st.step_coef[a] = hd::step_coefficient(m.mass[a], m.damping[a], h);
     st.step_coef_h = h;
   }
 }
@@ -136,23 +137,18 @@ Substep symplectic_range(const Model& m, State& st, double h, double vmax2, cons
   double* V = st.v.data();
   for (Index k = 0; k < nf; ++k) {
     const Index a = fr[k], q = 3 * a;
-    const double mass = Mv[a], c = C[a];
-    const double vx = (mass * V[q] + h * G[q]) * c;
-    const double vy = (mass * V[q + 1] + h * G[q + 1]) * c;
-    const double vz = (mass * V[q + 2] + h * G[q + 2]) * c;
+    double vn[3];
+    const double v2 = hd::symplectic_velocity(Mv[a], C[a], h, V + q, G + q, vn);
     if constexpr (Guard) {
-      const double v2 = vx * vx + vy * vy + vz * vz;
-      if (!(v2 <= vmax2)) {  // also catches NaN
+      if (!hd::velocity_ok(v2, vmax2)) {  // also catches NaN
         undo_symplectic(m, st, h, fr, k);
         return std::isfinite(v2) ? Substep::TooFast : Substep::NonFinite;
       }
     }
-    V[q] = vx;
-    V[q + 1] = vy;
-    V[q + 2] = vz;
-    X[q] += h * vx;
-    X[q + 1] += h * vy;
-    X[q + 2] += h * vz;
+    V[q] = vn[0];
+    V[q + 1] = vn[1];
+    V[q + 2] = vn[2];
+    hd::symplectic_position(h, X + q, vn, X + q);
   }
   return Substep::Ok;
 }

@@ -4,17 +4,12 @@
 #include <cmath>
 
 #include "medspring/core/check.hpp"
+#include "medspring/physics/kernels.hpp"
 
 namespace medspring {
 
 double PointLoad::scale(double t) const {
-  if (t < t_on) return 0.0;
-  double s = t_ramp > 0 ? std::min((t - t_on) / t_ramp, 1.0) : 1.0;
-  if (t >= t_release) {
-    if (!ramp_down || t_ramp <= 0) return 0.0;
-    s = std::min(s, std::max(0.0, 1.0 - (t - t_release) / t_ramp));
-  }
-  return s;
+  return hd::load_scale(t, t_on, t_ramp, t_release, ramp_down);
 }
 
 void validate_loads(const std::vector<PointLoad>& loads, Index n) {

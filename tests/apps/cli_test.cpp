@@ -289,6 +289,21 @@ TEST(CliBench, TableCasesAreReportedByBench) {
                                       "table_smrm_1200_nonlinear_local_cache"}));
 }
 
+// bench --gpu never falls back to the CPU: without a GPU (or without the CUDA backend) it exits non-zero
+// naming why (docs/gpu.md). On a GPU machine the smallest run succeeds instead.
+TEST(CliBench, GpuWithoutADeviceFailsClearly) {
+  const Result r = medspring("bench --gpu --sizes 1200 --batch 0 --cpu-max 0 --no-torch");
+  if (r.rc == 0) {
+    EXPECT_NE(r.out.find("GPU:"), std::string::npos) << r.out;  // the card is named
+    return;
+  }
+  EXPECT_NE(r.err.find("GPU"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("CPU engine"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("tube_1.2k"), std::string::npos) << r.out;  // nothing was timed
+  EXPECT_NE(medspring("bench --gpu --sizes 5").rc, 0);
+  EXPECT_NE(medspring("bench --gpu --bogus 1").rc, 0);
+}
+
 TEST(CliThreads, BadThreadCountsFailWithOneLine) {
   const fs::path dir = testing::temp_dir("cli-threads");
   write(dir / "small.json", kSmallScene);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "medspring/core/params.hpp"
+#include "medspring/physics/kernels.hpp"
 
 namespace medspring {
 
@@ -52,17 +53,12 @@ inline double soft_limit(double k, double kp) {
 /// Scalar tension phi(Delta) = k Delta + k' Delta^3 (eq. 5), with the soft-spring clamp of §1.7:
 /// for |Delta| > Delta* (k' < 0) phi = sign(Delta) phi(Delta*).
 inline double spring_tension(double k, double kp, double delta) {
-  if (kp < 0) {
-    const double ds = soft_limit(k, kp);
-    if (std::abs(delta) > ds) return std::copysign(k * ds + kp * ds * ds * ds, delta);
-  }
-  return delta * (k + kp * delta * delta);
+  return hd::spring_tension(k, kp, delta);  // written once for the CPU and the GPU (kernels.hpp)
 }
 
 /// d phi / d Delta = k + 3 k' Delta^2 (0 beyond the soft-spring peak).
 inline double spring_tension_derivative(double k, double kp, double delta) {
-  if (kp < 0 && std::abs(delta) > soft_limit(k, kp)) return 0.0;
-  return k + 3.0 * kp * delta * delta;
+  return hd::spring_tension_derivative(k, kp, delta);
 }
 
 /// Potential energy V(Delta) = k Delta^2 / 2 + k' Delta^4 / 4 (continued linearly in phi beyond the

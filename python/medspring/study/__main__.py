@@ -1,4 +1,4 @@
-"""`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]`:
+"""`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes] [--device cpu]`:
 runs a parameter study (docs/studies.md). Errors are one line on stderr with exit code 2."""
 
 from __future__ import annotations
@@ -28,7 +28,15 @@ def main(argv=None) -> int:
     p.add_argument("--scaling", type=int, metavar="RUNS", default=0,
                    help="also time RUNS runs on 1..N local workers (N = --workers or every core) for the report")
     p.add_argument("--max-batches", type=int, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--device", choices=["cpu", "cuda"], default="cpu",
+                   help="where the runs step: cpu (default); cuda is refused for now (docs/gpu.md)")
     a = p.parse_args(argv)
+    if a.device == "cuda":
+        # No silent fallback: the CUDA backend (gpu::Engine, docs/gpu.md) has no Python binding yet, so
+        # the runner cannot batch a study's runs on the GPU.
+        print("medspring study: --device cuda: the study runner cannot step on the GPU yet (the CUDA backend "
+              "is C++ only, docs/gpu.md); run it on the CPU engine with --device cpu", file=sys.stderr)
+        return 2
     if a.workers is not None and a.workers < 0:
         print("medspring study: --workers: must be >= 0", file=sys.stderr)
         return 2

@@ -1,0 +1,19 @@
+// `medspring bench --gpu` (bench/gpu_bench.cpp, docs/gpu.md).
+#include "commands.hpp"
+#include "gpu_bench.hpp"
+
+namespace medspring::cli {
+
+int cmd_bench_gpu(const Args& args) {
+  args.require_known({"gpu", "sizes", "batch", "cpu-max", "no-torch", "out", "device"});
+  std::vector<std::string> a;
+  for (const char* name : {"sizes", "batch", "cpu-max", "out", "device"})
+    if (const auto v = args.get(name)) {
+      a.push_back(std::string("--") + name);
+      a.push_back(*v);
+    }
+  if (args.flag("no-torch")) a.emplace_back("--no-torch");
+  return bench::run_gpu_bench(bench::parse_gpu_bench_args(a));
+}
+
+}  // namespace medspring::cli

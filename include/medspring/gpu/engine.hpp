@@ -1,0 +1,126 @@
+// The CUDA backend (docs/gpu.md): spring networks stepped on an NVIDIA GPU with the CPU engine's physics
+// (physics/kernels.hpp), its substep rule and its guard. Built only with MEDSPRING_CUDA (library
+// MedSpring::gpu); `medspring::gpu::built()` and the apps tell a build without it.
+//
+//   gpu::Engine e({&model}, {.dt = 0.5});            // fp64, state on the device, x = x0
+//   e.set_loads(0, {{.node = 223, .force = {0, 0, -1}}});
+//   for (int f = 0; f < 1000; ++f) e.step();         // one frame each, substeps as step()
+//   MatX3 x = e.positions(0);                        // synchronous copy back
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "medspring/core/error.hpp"
+#include "medspring/physics/integrators.hpp"
+#include "medspring/physics/loads.hpp"
+#include "medspring/physics/model.hpp"
+#include "medspring/physics/state.hpp"
+
+namespace medspring::gpu {
+
+/// A GPU-side failure: no device, a driver older than the runtime, out of device memory, a model
+/// feature the GPU path lacks. what() names the cause and the CPU alternative.
+class GpuError : public Error {
+ public:
+  using Error::Error;
+};
+
+enum class Precision { Double, Float };
+Precision parse_precision(const std::string& text);  // "fp64" | "double" | "fp32" | "float"
+std::string to_string(Precision p);
+
+struct DeviceInfo {
+  int index = 0;
+  std::string name;  // e.g. "NVIDIA H100 80GB HBM3"
+  int major = 0, minor = 0;
+  int multiprocessors = 0;
+  std::size_t memory_bytes = 0;
+  int driver_version = 0, runtime_version = 0;  // e.g. 13000
+};
+
+/// True when this build has the CUDA backend (MEDSPRING_CUDA). Always callable.
+bool built();
+
+/// The device `index`, or GpuError: a build without CUDA, no device / no driver, a driver older than the
+/// runtime, a device below compute capability 9.0 (the kernels are built for sm_90).
+DeviceInfo require_device(int index = 0);
+
+/// GpuError naming the feature and the CPU alternative when a model of this kind (Body::kind(): "surface",
+/// "hybrid" run; "smrm", "tree" do not) or these options cannot run on the GPU path.
+void require_supported(const std::string& body_kind, bool local_overlay = false, bool tools = false);
+
+struct Options {
+  Precision precision = Precision::Double;
+  int device = 0;
+  /// Replay each frame as a CUDA graph (memset, load upload, substep kernels, readback of the frame's
+  /// scalars): removes the launch gaps of small models. Captured once per substep count.
+  bool graphs = true;
+  int block = 256;  // threads per block of the substep kernel
+};
+
+/// B spring networks of the same topology (same nodes and spring ends; masses, damping, return springs,
+/// stiffnesses, rest positions and loads may differ per model) stepped together, one launch per
+/// substep. Every model takes the substeps the stiffest one needs (equal to each model's own count in
+/// the usual case: then each trajectory is the one the CPU engine computes, to rounding). A model with
+/// bending terms, or models of different topology, are refused (GpuError). The models must outlive the
+/// engine (it keeps pointers for the stable-step rule).
+class Engine {
+ public:
+  Engine(const std::vector<const Model*>& models, const StepSettings& settings, const Options& options = {});
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  int batch() const;
+  Index nodes() const;
+  const DeviceInfo& device() const;
+  Precision precision() const;
+
+  /// Loads of model b, held until changed; evaluated at the start of every substep as step() does.
+  void set_loads(int b, const std::vector<PointLoad>& loads);
+  /// Positions and velocities of model b from a CPU state (time and stiffening taken from model 0's).
+  void upload(int b, const State& state);
+
+  /// One frame of settings.dt for every model: the CPU engine's substep rule (from the stiffening of the
+  /// previous frame), guard and rollbacks. Waits for the frame's scalars (a few bytes).
+  StepStatus step();
+
+  /// Synchronous copies of model b's positions / velocities.
+  MatX3 positions(int b) const;
+  MatX3 velocities(int b) const;
+
+  /// Asynchronous readback of every model's positions into pinned, double-buffered host memory:
+  /// request_positions() enqueues a copy of the current positions after the work issued so far;
+  /// poll_positions(b, out) copies the newest finished snapshot of model b into out and returns true
+  /// if one finished since the last poll (never blocks the GPU or waits for it).
+  void request_positions();
+  bool poll_positions(int b, MatX3& out);
+
+  double time() const;        // ms
+  double stiffening() const;  // max kappa/k of the batch at the last stiffening evaluation
+  std::uint64_t frames() const;
+  std::uint64_t substeps() const;
+  const Warnings& warnings() const;
+  /// Device bytes of the model and state arrays (the payload of one substep is about this much).
+  std::size_t device_bytes() const;
+
+  /// Benchmark aid: median device time (µs) of one substep over `repeats` replays (events around each)
+  /// of a CUDA graph of `count` substeps of dt / (the current substep count), without host work, the
+  /// stiffening or the guard's readback; loads as at the current time. Advances every model's state by
+  /// count x repeats substeps (count is rounded up to even) but not the clock.
+  double time_substeps(int count = 100, int repeats = 20);
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Device-to-device copy bandwidth (GB/s, bytes read + written per second), median of `repeats`
+/// copies of `bytes`: the ceiling a memory-bound kernel is compared with.
+double measured_copy_bandwidth(std::size_t bytes = std::size_t(1) << 30, int repeats = 20, int device = 0);
+
+}  // namespace medspring::gpu

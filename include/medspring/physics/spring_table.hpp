@@ -1,0 +1,60 @@
+// A model's springs and nodes as flat arrays for a node-parallel gather (no atomics): the layout the
+// CUDA backend copies to the device (src/gpu, docs/gpu.md), and that a CPU loop can run through the
+// same hd:: functions (physics/kernels.hpp) to check them against the engine's step.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "medspring/physics/kernels.hpp"
+#include "medspring/physics/loads.hpp"
+#include "medspring/physics/model.hpp"
+
+namespace medspring {
+
+/// hd::SpringTable's arrays (sliced ELL, slices of hd::kSlice nodes; see kernels.hpp).
+template <class R>
+struct SpringTableArrays {
+  int nodes = 0;
+  std::vector<int> slice_begin, slice_width, other;
+  std::vector<R> L0, k, kp, ik;
+  std::size_t entries() const { return other.size(); }
+  hd::SpringTable<R> view() const {
+    return {nodes,     slice_begin.data(), slice_width.data(), other.data(),
+            L0.data(), k.data(),           kp.data(),          ik.data()};
+  }
+};
+
+/// The sliced ELL table of a finalized model: each node's springs in increasing spring index (the order
+/// of the CPU's serial spring pass). Throws InvalidInput for a model with bending terms (not a spring
+/// network: the gather has no three-node terms).
+template <class R>
+SpringTableArrays<R> make_spring_table(const Model& model);
+
+/// hd::NodeArrays' arrays. load_slot is -1 everywhere until set_load_slots.
+template <class R>
+struct NodeArrayData {
+  int nodes = 0;
+  std::vector<R> x0, mass, damping, kr;
+  std::vector<unsigned char> fixed;
+  std::vector<int> load_slot;
+  hd::NodeArrays<R> view() const {
+    return {nodes, x0.data(), mass.data(), damping.data(), kr.data(), fixed.data(), load_slot.data()};
+  }
+};
+template <class R>
+NodeArrayData<R> make_node_arrays(const Model& model);
+
+/// The distinct loaded nodes of a load list, in order of first appearance: node -> row of the load table.
+struct LoadSlots {
+  std::vector<int> nodes;  // row r is node nodes[r]
+  std::vector<int> slot;   // (model nodes) row of the node, -1 = unloaded
+};
+/// Validates the loads against n nodes (validate_loads) and assigns rows.
+LoadSlots make_load_slots(const std::vector<PointLoad>& loads, Index n);
+
+/// The load table at time t: row r = sum of the loads on node nodes[r] (accumulate_loads' arithmetic,
+/// in load order): rows has 3 x slots.nodes.size() entries.
+void load_rows(const std::vector<PointLoad>& loads, const LoadSlots& slots, double t, double* rows);
+
+}  // namespace medspring

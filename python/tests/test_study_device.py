@@ -1,0 +1,22 @@
+"""`medspring study --device cuda`: refused in one line naming the CPU alternative (docs/gpu.md), with
+nothing written; no silent fallback to the CPU."""
+
+import pytest
+
+study_main = pytest.importorskip("medspring.study.__main__")
+
+
+def test_device_cuda_is_refused_naming_the_cpu_alternative(tmp_path, capsys):
+    out = tmp_path / "out"
+    rc = study_main.main(["does-not-matter.json", "--out", str(out), "--device", "cuda"])
+    assert rc == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "--device cuda" in err and "--device cpu" in err
+    assert not out.exists()
+
+
+def test_unknown_device_is_an_argument_error():
+    with pytest.raises(SystemExit) as e:
+        study_main.main(["s.json", "--out", "o", "--device", "tpu"])
+    assert e.value.code == 2

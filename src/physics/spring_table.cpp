@@ -1,0 +1,122 @@
+#include "medspring/physics/spring_table.hpp"
+
+#include <algorithm>
+
+#include "medspring/core/check.hpp"
+
+namespace medspring {
+
+template <class R>
+SpringTableArrays<R> make_spring_table(const Model& m) {
+  require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
+  require(m.bending.size() == 0, m.name, ": the spring table has no bending terms (", m.bending.size(),
+          " in the model); step it with the CPU engine");
+  const Index n = m.num_nodes(), ns = m.num_springs();
+  std::vector<int> degree(static_cast<std::size_t>(n), 0);
+  for (Index s = 0; s < ns; ++s) {
+    ++degree[static_cast<std::size_t>(m.springs.i[static_cast<std::size_t>(s)])];
+    ++degree[static_cast<std::size_t>(m.springs.j[static_cast<std::size_t>(s)])];
+  }
+  SpringTableArrays<R> T;
+  T.nodes = n;
+  const Index slices = (n + hd::kSlice - 1) / hd::kSlice;
+  T.slice_begin.resize(static_cast<std::size_t>(slices));
+  T.slice_width.resize(static_cast<std::size_t>(slices));
+  long long total = 0;
+  for (Index sl = 0; sl < slices; ++sl) {
+    int w = 0;
+    for (Index a = sl * hd::kSlice; a < std::min<Index>(n, (sl + 1) * hd::kSlice); ++a)
+      w = std::max(w, degree[static_cast<std::size_t>(a)]);
+    T.slice_begin[static_cast<std::size_t>(sl)] = static_cast<int>(total);
+    T.slice_width[static_cast<std::size_t>(sl)] = w;
+    total += static_cast<long long>(w) * hd::kSlice;
+  }
+  require(total < (1ll << 31), m.name, ": spring table of ", total, " entries exceeds 2^31");
+  const auto E = static_cast<std::size_t>(total);
+  T.other.assign(E, 0);
+  T.L0.assign(E, R(0));
+  T.k.assign(E, R(0));
+  T.kp.assign(E, R(0));
+  T.ik.assign(E, R(0));
+  // Padding entries point at their own node (zero length: skipped). Rows past n point at node n - 1.
+  for (Index sl = 0; sl < slices; ++sl)
+    for (int lane = 0; lane < hd::kSlice; ++lane) {
+      const Index a = std::min<Index>(sl * hd::kSlice + lane, n - 1);
+      for (int j = 0; j < T.slice_width[static_cast<std::size_t>(sl)]; ++j)
+        T.other[static_cast<std::size_t>(T.slice_begin[static_cast<std::size_t>(sl)] + j * hd::kSlice +
+                                         lane)] = a;
+    }
+  std::vector<int> fill(static_cast<std::size_t>(n), 0);
+  auto put = [&](Index a, Index b, Index s) {
+    const Index sl = a / hd::kSlice;
+    const auto e =
+        static_cast<std::size_t>(T.slice_begin[static_cast<std::size_t>(sl)] +
+                                 fill[static_cast<std::size_t>(a)]++ * hd::kSlice + (a - sl * hd::kSlice));
+    const auto us = static_cast<std::size_t>(s);
+    T.other[e] = b;
+    T.L0[e] = static_cast<R>(m.springs.L0[us]);
+    T.k[e] = static_cast<R>(m.springs.k[us]);
+    T.kp[e] = static_cast<R>(m.springs.kp[us]);
+    T.ik[e] = static_cast<R>(m.inv_k[s]);
+  };
+  for (Index s = 0; s < ns; ++s) {  // increasing s: each node's entries in spring order
+    const Index a = m.springs.i[static_cast<std::size_t>(s)], b = m.springs.j[static_cast<std::size_t>(s)];
+    put(a, b, s);
+    put(b, a, s);
+  }
+  return T;
+}
+
+template <class R>
+NodeArrayData<R> make_node_arrays(const Model& m) {
+  require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
+  const Index n = m.num_nodes();
+  NodeArrayData<R> N;
+  N.nodes = n;
+  N.x0.resize(static_cast<std::size_t>(3 * n));
+  for (Index q = 0; q < 3 * n; ++q) N.x0[static_cast<std::size_t>(q)] = static_cast<R>(m.x0.data()[q]);
+  auto conv = [n](const VecX& v) {
+    std::vector<R> out(static_cast<std::size_t>(n));
+    for (Index a = 0; a < n; ++a) out[static_cast<std::size_t>(a)] = static_cast<R>(v[a]);
+    return out;
+  };
+  N.mass = conv(m.mass);
+  N.damping = conv(m.damping);
+  N.kr = conv(m.kr);
+  N.fixed.assign(m.fixed.begin(), m.fixed.end());
+  N.load_slot.assign(static_cast<std::size_t>(n), -1);
+  return N;
+}
+
+template SpringTableArrays<double> make_spring_table<double>(const Model&);
+template SpringTableArrays<float> make_spring_table<float>(const Model&);
+template NodeArrayData<double> make_node_arrays<double>(const Model&);
+template NodeArrayData<float> make_node_arrays<float>(const Model&);
+
+LoadSlots make_load_slots(const std::vector<PointLoad>& loads, Index n) {
+  validate_loads(loads, n);
+  LoadSlots S;
+  S.slot.assign(static_cast<std::size_t>(n), -1);
+  for (const PointLoad& L : loads) {
+    int& s = S.slot[static_cast<std::size_t>(L.node)];
+    if (s < 0) {
+      s = static_cast<int>(S.nodes.size());
+      S.nodes.push_back(L.node);
+    }
+  }
+  return S;
+}
+
+void load_rows(const std::vector<PointLoad>& loads, const LoadSlots& slots, double t, double* rows) {
+  std::fill(rows, rows + 3 * slots.nodes.size(), 0.0);
+  for (const PointLoad& L : loads) {
+    const double s = L.scale(t);
+    if (s == 0.0) continue;
+    double* r = rows + 3 * slots.slot[static_cast<std::size_t>(L.node)];
+    r[0] += s * L.force[0];
+    r[1] += s * L.force[1];
+    r[2] += s * L.force[2];
+  }
+}
+
+}  // namespace medspring

@@ -1,0 +1,262 @@
+// The CUDA backend against the CPU engine (docs/gpu.md). Tests that need a device skip without one; the
+// error tests run everywhere the backend is built. Not yet run on a GPU in the session that wrote them.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <thread>
+
+#include "medspring/geometry/phantoms.hpp"
+#include "medspring/gpu/engine.hpp"
+#include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/physics/integrators.hpp"
+
+namespace medspring {
+namespace {
+
+bool have_device(std::string* why) {
+  try {
+    gpu::require_device();
+    return true;
+  } catch (const gpu::GpuError& e) {
+    if (why) *why = e.what();
+    return false;
+  }
+}
+
+#define REQUIRE_GPU()                              \
+  do {                                             \
+    std::string why_;                              \
+    if (!have_device(&why_)) GTEST_SKIP() << why_; \
+  } while (0)
+
+Model tube_model(Index rings, Index spokes, bool soft = false) {
+  SurfaceBodyParams p;
+  p.duffing.soft = soft;
+  for (Index j = 0; j < spokes; ++j) {
+    p.fixed.push_back(j);
+    p.fixed.push_back((rings - 1) * spokes + j);
+  }
+  const double radius = std::max(3.0, 2.5 * static_cast<double>(spokes) / (2.0 * 3.141592653589793));
+  return make_surface_model(tube(rings, spokes, 2.5, radius), p, "tube");
+}
+
+std::vector<PointLoad> press(Index node, Vec3 F, double release = 2500.0) {
+  PointLoad L;
+  L.node = node;
+  L.force = F;
+  L.t_ramp = 10.0;
+  L.t_release = release;
+  return {L};
+}
+
+double rel(const MatX3& a, const MatX3& b) {
+  const double scale = std::max(1.0, b.cwiseAbs().maxCoeff());
+  return (a - b).cwiseAbs().maxCoeff() / scale;
+}
+
+// Steps the CPU engine and the GPU engine side by side; returns the largest relative difference of
+// positions and velocities seen at the checks (every `every` frames and at the end).
+double agreement(const Model& m, const std::vector<PointLoad>& loads, int frames, gpu::Precision p,
+                 int every = 100, bool graphs = true) {
+  StepSettings s;
+  State st = make_state(m, s);
+  gpu::Options o;
+  o.precision = p;
+  o.graphs = graphs;
+  gpu::Engine e({&m}, s, o);
+  e.set_loads(0, loads);
+  double worst = 0;
+  for (int f = 1; f <= frames; ++f) {
+    const StepStatus a = step(m, st, s, &loads);
+    const StepStatus b = e.step();
+    EXPECT_EQ(static_cast<int>(a.code), static_cast<int>(b.code)) << "frame " << f;
+    EXPECT_EQ(a.substeps, b.substeps) << "frame " << f;
+    if (f % every == 0 || f == frames) {
+      worst = std::max({worst, rel(e.positions(0), st.x), rel(e.velocities(0), st.v)});
+      if (::testing::Test::HasFailure()) break;
+    }
+  }
+  EXPECT_EQ(e.substeps(), st.substeps);
+  EXPECT_DOUBLE_EQ(e.time(), st.t);
+  return worst;
+}
+
+// --- errors (run without a device too) ---------------------------------------------------------------
+
+TEST(GpuErrors, NoDeviceIsAClearErrorNamingTheCpuEngine) {
+  std::string why;
+  if (have_device(&why)) GTEST_SKIP() << "a device is present";
+  EXPECT_NE(why.find("GPU"), std::string::npos) << why;
+  EXPECT_NE(why.find("CPU engine"), std::string::npos) << why;
+  const Model m = tube_model(6, 8);
+  EXPECT_THROW(gpu::Engine({&m}, StepSettings{}), gpu::GpuError);
+}
+
+TEST(GpuErrors, FeaturesTheGpuPathLacksNameTheCpuAlternative) {
+  for (const char* kind : {"smrm", "tree"}) {
+    try {
+      gpu::require_supported(kind);
+      ADD_FAILURE() << kind << " accepted";
+    } catch (const gpu::GpuError& e) {
+      EXPECT_NE(std::string(e.what()).find("CPU engine"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(kind), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(gpu::require_supported("hybrid"));
+  EXPECT_NO_THROW(gpu::require_supported("surface"));
+  EXPECT_THROW(gpu::require_supported("surface", true, false), gpu::GpuError);  // local deformation overlay
+  EXPECT_THROW(gpu::require_supported("surface", false, true), gpu::GpuError);  // tools
+}
+
+TEST(GpuErrors, BendingTermsAndTheImplicitIntegratorAreRefusedBeforeAnyDeviceWork) {
+  ModelBuilder b("bent");
+  for (int i = 0; i < 3; ++i) b.add_node(Vec3(2.5 * i, 0, 0), 0.3, 0.15, 0.02, i == 0);
+  b.add_spring(0, 1, 0.05, 0.0, 2.5);
+  b.add_spring(1, 2, 0.05, 0.0, 2.5);
+  b.add_bending(0, 1, 2, 0.01);
+  const Model bent = b.build();
+  EXPECT_THROW(gpu::Engine({&bent}, StepSettings{}), gpu::GpuError);
+  const Model m = tube_model(6, 8);
+  StepSettings implicit;
+  implicit.integrator = Integrator::ImplicitEuler;
+  EXPECT_THROW(gpu::Engine({&m}, implicit), gpu::GpuError);
+  EXPECT_EQ(gpu::parse_precision("fp32"), gpu::Precision::Float);
+  EXPECT_THROW(gpu::parse_precision("fp16"), InvalidInput);
+}
+
+// --- CPU agreement (need a device) -------------------------------------------------------------------
+
+TEST(GpuEngine, HybridKidneyFp64AgreesWithTheCpuOver10kSteps) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();  // 458 surface nodes + 42 atoms, spokes as springs
+  EXPECT_LE(agreement(kidney.model(), press(223, Vec3(0, 0, -1.0)), 10000, gpu::Precision::Double), 1e-12);
+}
+
+TEST(GpuEngine, LargeTubeFp64AgreesWithTheCpuOver10kSteps) {
+  REQUIRE_GPU();
+  const Model m = tube_model(400, 300);  // 120k nodes
+  EXPECT_LE(agreement(m, press(200 * 300, Vec3(0, 0, -0.5)), 10000, gpu::Precision::Double, 1000), 1e-12);
+}
+
+TEST(GpuEngine, MillionNodeTubeFp64AgreesWithTheCpu) {
+  REQUIRE_GPU();
+  const Model m = tube_model(1000, 1000);
+  EXPECT_LE(agreement(m, press(500 * 1000, Vec3(0, 0, -0.5)), 100, gpu::Precision::Double, 50), 1e-12);
+}
+
+TEST(GpuEngine, SoftSpringTubeFp64AgreesWithTheCpu) {
+  REQUIRE_GPU();
+  const Model m = tube_model(40, 30, true);
+  EXPECT_LE(agreement(m, press(20 * 30, Vec3(0.2, 0, -0.6), 400), 2000, gpu::Precision::Double), 1e-12);
+}
+
+// fp32: stated tolerance 2e-5 of the model's largest coordinate (the CPU-side fp32 gather, physics_tests
+// HdKernels.Fp32GatherFollowsTheFp64Engine, stays within it on the small tube).
+TEST(GpuEngine, HybridKidneyFp32WithinTheStatedTolerance) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  EXPECT_LE(agreement(kidney.model(), press(223, Vec3(0, 0, -1.0)), 1000, gpu::Precision::Float), 2e-5);
+}
+
+TEST(GpuEngine, GraphsAndDirectLaunchesGiveIdenticalStates) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const auto loads = press(100, Vec3(0.5, 0, -0.5));
+  StepSettings s;
+  gpu::Options with, without;
+  without.graphs = false;
+  gpu::Engine a({&kidney.model()}, s, with), b({&kidney.model()}, s, without);
+  a.set_loads(0, loads);
+  b.set_loads(0, loads);
+  for (int f = 0; f < 300; ++f) {
+    a.step();
+    b.step();
+  }
+  EXPECT_EQ(rel(a.positions(0), b.positions(0)), 0.0);
+  EXPECT_EQ(rel(a.velocities(0), b.velocities(0)), 0.0);
+}
+
+TEST(GpuEngine, BatchOfKidneysEachFollowsItsOwnCpuRun) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  const int B = 3;
+  StepSettings s;
+  gpu::Engine e({&m, &m, &m}, s);
+  std::vector<State> cpu(B, make_state(m, s));
+  std::vector<std::vector<PointLoad>> loads;
+  for (int b = 0; b < B; ++b) {
+    loads.push_back(press(50 + 100 * b, Vec3(0, 0.1 * b, -0.2 - 0.2 * b)));
+    e.set_loads(b, loads.back());
+  }
+  for (int f = 0; f < 500; ++f) {
+    int subs = -1;
+    for (int b = 0; b < B; ++b) {
+      const StepStatus st = step(m, cpu[static_cast<std::size_t>(b)], s, &loads[static_cast<std::size_t>(b)]);
+      if (subs < 0) subs = st.substeps;
+      ASSERT_EQ(st.substeps, subs) << "frame " << f
+                                   << ": the CPU runs took different substeps; the batch takes "
+                                   << "the largest, so the comparison would not apply";
+    }
+    EXPECT_EQ(e.step().substeps, subs);
+  }
+  for (int b = 0; b < B; ++b) EXPECT_LE(rel(e.positions(b), cpu[static_cast<std::size_t>(b)].x), 1e-12) << b;
+}
+
+TEST(GpuEngine, AsyncReadbackDeliversTheRequestedPositions) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  gpu::Engine e({&kidney.model()}, StepSettings{});
+  e.set_loads(0, press(223, Vec3(0, 0, -1.0)));
+  for (int f = 0; f < 50; ++f) e.step();
+  const MatX3 expected = e.positions(0);
+  e.request_positions();
+  MatX3 got;
+  bool ok = false;
+  for (int i = 0; i < 2000 && !ok; ++i) {
+    ok = e.poll_positions(0, got);
+    if (!ok) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(rel(got, expected), 0.0);
+  EXPECT_FALSE(e.poll_positions(0, got));  // nothing new since
+}
+
+TEST(GpuEngine, GuardRollsBackAndDropsFramesLikeTheCpu) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  const auto loads = press(223, Vec3(0, 0, -2000.0), 1e9);  // far beyond v_max within a frame
+  StepSettings s;
+  State st = make_state(m, s);
+  gpu::Engine e({&m}, s);
+  e.set_loads(0, loads);
+  for (int f = 0; f < 30; ++f) {
+    const StepStatus a = step(m, st, s, &loads);
+    const StepStatus b = e.step();
+    ASSERT_EQ(static_cast<int>(a.code), static_cast<int>(b.code)) << "frame " << f;
+  }
+  EXPECT_GT(st.warnings.rollbacks, 0u);
+  EXPECT_EQ(e.warnings().rollbacks, st.warnings.rollbacks);
+  EXPECT_EQ(e.warnings().failed, st.warnings.failed);
+  // The CPU undoes a failed substep arithmetically (x - h v), the GPU keeps the previous buffer: equal to
+  // rounding, not bit for bit.
+  EXPECT_LE(rel(e.positions(0), st.x), 1e-9);
+}
+
+TEST(GpuEngine, OutOfDeviceMemoryIsAClearError) {
+  REQUIRE_GPU();
+  const Model m = tube_model(400, 250);       // 100k nodes, ~1 MB of spring parameters per model and array
+  std::vector<const Model*> many(60000, &m);  // ~0.3 TB of spring parameters
+  try {
+    gpu::Engine e(many, StepSettings{});
+    ADD_FAILURE() << "a batch of 60000 models of 100k nodes fitted on the device";
+  } catch (const gpu::GpuError& err) {
+    EXPECT_NE(std::string(err.what()).find("out of device memory"), std::string::npos) << err.what();
+  }
+}
+
+}  // namespace
+}  // namespace medspring

@@ -1,0 +1,93 @@
+// A CPU stepper that runs the GPU path's arithmetic: the spring table (sliced ELL gather, no scatter)
+// and hd::node_substep from physics/kernels.hpp, with step()'s substep rule (no rollbacks). Used to
+// check on the CPU that the functions the CUDA kernels run give the engine's results (docs/gpu.md).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "medspring/physics/integrators.hpp"
+#include "medspring/physics/spring_table.hpp"
+#include "medspring/physics/stability.hpp"
+
+namespace medspring::testing {
+
+template <class R>
+struct GatherStepper {
+  const Model& m;
+  SpringTableArrays<R> T;
+  NodeArrayData<R> N;
+  std::vector<PointLoad> loads;
+  LoadSlots slots;
+  std::vector<R> x, v, xo, vo, rows;
+  std::vector<double> rows_d;
+  double t = 0, stiffening = 1;
+  long substeps = 0;
+  int failures = 0;
+
+  explicit GatherStepper(const Model& model, std::vector<PointLoad> L = {})
+      : m(model), T(make_spring_table<R>(model)), N(make_node_arrays<R>(model)), loads(std::move(L)) {
+    slots = make_load_slots(loads, m.num_nodes());
+    N.load_slot = slots.slot;
+    x = N.x0;
+    v.assign(x.size(), R(0));
+    xo = x;
+    vo = v;
+    rows.assign(3 * std::max<std::size_t>(1, slots.nodes.size()), R(0));
+    rows_d.assign(rows.size(), 0.0);
+  }
+
+  void frame(const StepSettings& s) {
+    const double hs = dt_safe(m, stiffening, s.safety);
+    long subs = 1;
+    if (s.dt > hs * (1.0 + 1e-12))
+      subs = static_cast<long>(std::min<double>(std::ceil(s.dt / hs), s.max_substeps));
+    const double h = s.dt / static_cast<double>(subs);
+    const double t0 = t;
+    const auto nodes = N.view();
+    const auto table = T.view();
+    for (long k = 0; k < subs; ++k) {
+      load_rows(loads, slots, t, rows_d.data());
+      for (std::size_t q = 0; q < rows.size(); ++q) rows[q] = static_cast<R>(rows_d[q]);
+      const bool stiff = k == subs - 1;
+      R st = R(1);
+      for (int a = 0; a < nodes.nodes; ++a) {
+        int code;
+        if (m.has_soft_springs)
+          code = stiff
+                     ? hd::node_substep<true, true>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                    x.data(), v.data(), xo.data(), vo.data(), st)
+                     : hd::node_substep<true, false>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                     x.data(), v.data(), xo.data(), vo.data(), st);
+        else
+          code =
+              stiff ? hd::node_substep<false, true>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                    x.data(), v.data(), xo.data(), vo.data(), st)
+                    : hd::node_substep<false, false>(nodes, table, a, static_cast<R>(h), R(1e30), rows.data(),
+                                                     x.data(), v.data(), xo.data(), vo.data(), st);
+        failures += code != hd::kNodeOk;
+      }
+      if (stiff) stiffening = static_cast<double>(st);
+      std::swap(x, xo);
+      std::swap(v, vo);
+      t += h;
+      ++substeps;
+    }
+    t = t0 + s.dt;
+  }
+};
+
+/// max |a - b| / max(1, max |b|) over the entries.
+template <class R>
+double relative_difference(const std::vector<R>& a, const MatX3& b) {
+  double d = 0, s = 1;
+  for (Index q = 0; q < b.size(); ++q) {
+    d = std::max(d, std::abs(static_cast<double>(a[static_cast<std::size_t>(q)]) - b.data()[q]));
+    s = std::max(s, std::abs(b.data()[q]));
+  }
+  return d / s;
+}
+
+}  // namespace medspring::testing

@@ -1,0 +1,172 @@
+// The GPU path's arithmetic on the CPU: the spring table gather and hd::node_substep (the code the CUDA
+// kernels run, physics/kernels.hpp) against the engine's own step() (docs/gpu.md).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "gather_stepper.hpp"
+#include "medspring/core/error.hpp"
+#include "medspring/geometry/phantoms.hpp"
+#include "medspring/physics/integrators.hpp"
+#include "medspring/physics/spring_table.hpp"
+
+namespace medspring {
+namespace {
+
+using testing::GatherStepper;
+using testing::relative_difference;
+
+Model small_tube(bool soft) {
+  SurfaceBodyParams p;
+  p.duffing.soft = soft;
+  const Index rings = 12, spokes = 10;
+  for (Index j = 0; j < spokes; ++j) {
+    p.fixed.push_back(j);
+    p.fixed.push_back((rings - 1) * spokes + j);
+  }
+  return make_surface_model(tube(rings, spokes, 2.5, 4.0), p, soft ? "soft_tube" : "tube");
+}
+
+// A soft spring pulled past its peak (§1.7): node 1 is held by its return spring.
+Model soft_pair() {
+  ModelBuilder b("soft_pair");
+  b.add_node(Vec3(0, 0, 0), 0.3, 0.15, 0.02, true);
+  b.add_node(Vec3(10, 0, 0), 0.3, 0.15, 0.02);
+  b.add_spring(0, 1, 0.05, -0.05 / 100.0, 10.0);
+  return b.build();
+}
+
+std::vector<PointLoad> press(Index node, Vec3 F) {
+  PointLoad L;
+  L.node = node;
+  L.force = F;
+  L.t_on = 1.0;
+  L.t_ramp = 10.0;
+  L.t_release = 60.0;
+  PointLoad L2 = L;  // a second load on the same node: summed in load order
+  L2.force = 0.25 * F;
+  L2.t_ramp = 0.0;
+  return {L, L2};
+}
+
+// Runs step() and the gather stepper side by side; returns the largest relative difference seen.
+template <class R>
+double compare(const Model& m, const std::vector<PointLoad>& loads, int frames, double dt = 0.5) {
+  StepSettings s;
+  s.dt = dt;
+  State st = make_state(m, s);
+  GatherStepper<R> g(m, loads);
+  double worst = 0, peak = 0;
+  for (int f = 0; f < frames; ++f) {
+    const StepStatus status = step(m, st, s, &loads);
+    EXPECT_EQ(status.code, StepCode::Ok) << "frame " << f;
+    g.frame(s);
+    worst = std::max({worst, relative_difference(g.x, st.x), relative_difference(g.v, st.v)});
+    peak = std::max(peak, (st.x - m.x0).cwiseAbs().maxCoeff());
+    EXPECT_NEAR(g.stiffening, st.stiffening, (sizeof(R) == 8 ? 1e-9 : 1e-4) * st.stiffening) << "frame " << f;
+  }
+  EXPECT_GT(peak, 0.05);  // the load moved the model (mm): not a trivial match
+  EXPECT_EQ(g.substeps, static_cast<long>(st.substeps));
+  ::testing::Test::RecordProperty(
+      sizeof(R) == 8 ? "max_relative_difference_fp64" : "max_relative_difference_fp32",
+      (std::ostringstream() << std::scientific << worst).str());
+  EXPECT_EQ(g.failures, 0);
+  EXPECT_TRUE(st.x.allFinite());
+  return worst;
+}
+
+TEST(SpringTable, EntriesPerNodeInSpringOrderPaddedWithSelf) {
+  const Model m = small_tube(false);
+  const SpringTableArrays<double> T = make_spring_table<double>(m);
+  const auto view = T.view();
+  std::vector<int> degree(static_cast<std::size_t>(m.num_nodes()), 0);
+  for (Index s = 0; s < m.num_springs(); ++s) {
+    ++degree[static_cast<std::size_t>(m.springs.i[static_cast<std::size_t>(s)])];
+    ++degree[static_cast<std::size_t>(m.springs.j[static_cast<std::size_t>(s)])];
+  }
+  for (Index a = 0; a < m.num_nodes(); ++a) {
+    const int sl = a / hd::kSlice;
+    int e = view.slice_begin[sl] + a % hd::kSlice;
+    int real = 0;
+    for (int j = 0; j < view.slice_width[sl]; ++j, e += hd::kSlice) {
+      if (view.other[e] == a) {
+        EXPECT_EQ(view.k[e], 0.0);
+        continue;
+      }
+      ++real;
+      EXPECT_GT(view.L0[e], 0.0);
+    }
+    EXPECT_EQ(real, degree[static_cast<std::size_t>(a)]) << "node " << a;
+  }
+}
+
+TEST(SpringTable, RefusesBendingTerms) {
+  ModelBuilder b("bent");
+  for (int i = 0; i < 3; ++i) b.add_node(Vec3(2.5 * i, 0, 0), 0.3, 0.15, 0.02, i == 0);
+  b.add_spring(0, 1, 0.05, 0.0, 2.5);
+  b.add_spring(1, 2, 0.05, 0.0, 2.5);
+  b.add_bending(0, 1, 2, 0.01);
+  const Model m = b.build();
+  EXPECT_THROW(make_spring_table<double>(m), InvalidInput);
+}
+
+TEST(HdKernels, LoadScaleIsPointLoadScale) {
+  PointLoad L;
+  L.t_on = 2;
+  L.t_ramp = 4;
+  L.t_release = 9;
+  for (bool down : {false, true}) {
+    L.ramp_down = down;
+    for (double t = 0; t < 16; t += 0.37)
+      EXPECT_EQ(hd::load_scale(t, L.t_on, L.t_ramp, L.t_release, L.ramp_down), L.scale(t)) << t;
+  }
+}
+
+TEST(HdKernels, SoftLawClampsBeyondThePeak) {
+  const double k = 0.05, kp = -0.05 / 100.0;
+  const double peak = std::sqrt(k / (3 * -kp));
+  const double phi_peak = k * peak + kp * peak * peak * peak;
+  EXPECT_DOUBLE_EQ(hd::spring_tension(k, kp, 2 * peak), phi_peak);
+  EXPECT_DOUBLE_EQ(hd::spring_tension(k, kp, -2 * peak), -phi_peak);
+  EXPECT_EQ(hd::spring_tension_derivative(k, kp, 2 * peak), 0.0);
+  EXPECT_NEAR(hd::spring_tension(k, kp, 0.5 * peak), k * 0.5 * peak + kp * std::pow(0.5 * peak, 3), 1e-15);
+}
+
+// The gather adds each node's spring terms in spring order, starting from its return spring and load:
+// the serial spring pass's order. Expected: equal up to the compiler's FMA contraction choices (the CPU
+// build contracts with -march=native), far below the 1e-12 the GPU agreement tests ask for.
+TEST(HdKernels, GatherStepEqualsEngineStepHardTube) {
+  const Model m = small_tube(false);
+  EXPECT_LE(compare<double>(m, press(55, Vec3(0, 0, -0.8)), 300), 1e-13);
+}
+
+TEST(HdKernels, GatherStepEqualsEngineStepSoftTube) {
+  const Model m = small_tube(true);
+  ASSERT_TRUE(m.has_soft_springs);
+  EXPECT_LE(compare<double>(m, press(65, Vec3(0.3, 0, -0.6)), 300), 1e-13);
+}
+
+TEST(HdKernels, GatherStepEqualsEngineStepSoftSpringPastItsPeak) {
+  const Model m = soft_pair();
+  PointLoad L;
+  L.node = 1;
+  L.force = Vec3(0.5, 0, 0);  // the spring carries at most ~0.19 N
+  L.t_ramp = 5;
+  EXPECT_LE(compare<double>(m, {L}, 400), 1e-13);
+  StepSettings s;
+  State st = make_state(m, s);
+  const std::vector<PointLoad> loads{L};
+  for (int f = 0; f < 400; ++f) step(m, st, s, &loads);
+  EXPECT_GT(st.x(1, 0) - 10.0, std::sqrt(0.05 / (3 * 0.05 / 100.0)));  // beyond the peak: clamped law used
+}
+
+// fp32 (the GPU's option): the same trajectory to a stated tolerance, 2e-5 of the largest coordinate.
+TEST(HdKernels, Fp32GatherFollowsTheFp64Engine) {
+  const Model m = small_tube(false);
+  EXPECT_LE(compare<float>(m, press(55, Vec3(0, 0, -0.8)), 200), 2e-5);
+}
+
+}  // namespace
+}  // namespace medspring
