@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "accuracy_summary.hpp"
 #include "commands.hpp"
@@ -17,8 +18,10 @@
 #include "medspring/core/check.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/validation.hpp"
+#include "medspring/fem/volumetric.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
@@ -36,21 +39,45 @@ struct Organ {
   std::string name;
   SurfaceMesh surface;
   MatX3 atoms;
+  // volumetric kind (issue 23): the TetGen mesh of the surface (made once) and the material it gets
+  mutable std::shared_ptr<const VolumetricMesh> vmesh;
+  mutable double E_kPa = 10, nu = 0.45;
+  mutable Index target_nodes = 2000;
 };
 
-// A model kind of the tables: "surface" or "hybrid", linear or Duffing, with or without the local overlay.
+const VolumetricMesh& volumetric_mesh_of(const Organ& o) {
+  if (!o.vmesh)
+    o.vmesh = std::make_shared<const VolumetricMesh>(fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes}));
+  return *o.vmesh;
+}
+
+// A model kind of the tables: "surface", "hybrid" or "volumetric", linear or Duffing, with or without the
+// local overlay.
 struct Kind {
-  std::string base;  // surface | hybrid
+  std::string base;  // surface | hybrid | volumetric
   bool nonlinear = false;
   bool local = false;
   std::string label() const {
     return base + (local ? " + local" : "") + (nonlinear ? " (Duffing)" : " (linear)");
   }
-  Index families() const { return (base == "surface" ? 2 : 4) + (local ? 1 : 0); }  // + k_loc
+  Index families() const {
+    return (base == "surface" || base == "volumetric" ? 2 : 4) + (local ? 1 : 0);  // + k_loc
+  }
 };
 
 // Stiffness families: surface (k, k_r); hybrid (k_surf, k_spoke, k_cl, k_r); multipliers m scale them.
+// Volumetric: (springs, volume terms) from E and nu (docs/volumetric.md); no return springs (supports).
 BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& support, const VecX& m) {
+  if (k.base == "volumetric") {
+    VolumetricSettings s;
+    s.E_kPa = o.E_kPa;
+    s.nu = o.nu;
+    s.spring_scale = m(0);
+    s.volume_scale = m(1);
+    if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
+    s.fixed = support;
+    return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
+  }
   if (k.base == "surface") {
     SurfaceBodyParams p;
     p.k *= m(0);
@@ -130,9 +157,28 @@ struct Settings {
   fem::Material material;
   double radius = 8.0;
   bool quick = false;
+  std::vector<std::string> kinds;  // --kinds: the bases to run (empty: all)
+  Index volumetric_nodes = 2000;   // --nodes
   int level = 1;
   bool quiet = false;
 };
+
+// --kinds surface,hybrid,volumetric (default all) and --nodes N (volumetric node count, default 2000).
+void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
+  if (auto k = args.get("kinds")) {
+    std::stringstream ss(*k);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      require(item == "surface" || item == "hybrid" || item == "volumetric", cmd, ": --kinds: unknown kind '", item,
+              "' (expected surface, hybrid, volumetric)");
+      st.kinds.push_back(item);
+    }
+    require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
+  }
+  const long long nodes = args.integer("nodes", 2000);
+  require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
+  st.volumetric_nodes = static_cast<Index>(nodes);
+}
 
 void note(const Settings& s, const std::string& line) {
   if (!s.quiet) std::cerr << line << std::endl;
@@ -226,9 +272,23 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   json rows = json::array();
   if (kinds.empty()) {
     for (bool nl : {false, true})
-      for (const char* b : {"surface", "hybrid"}) kinds.push_back({b, nl, false});
+      for (const char* b : {"surface", "hybrid", "volumetric"}) kinds.push_back({b, nl, false});
     kinds.push_back({"hybrid", true, true});
     kinds.push_back({"hybrid", false, true});
+  }
+  if (!st.kinds.empty())
+    std::erase_if(kinds, [&](const Kind& k) {
+      return std::find(st.kinds.begin(), st.kinds.end(), k.base) == st.kinds.end();
+    });
+  o.E_kPa = st.material.E * 1e3;
+  o.nu = st.material.nu;
+  o.target_nodes = st.volumetric_nodes;
+  if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
+    const VolumetricMesh& vm = volumetric_mesh_of(o);
+    out["volumetric"] = {{"nodes", vm.X.rows()},
+                         {"surface_nodes", vm.surface_nodes},
+                         {"tetrahedra", vm.T.rows()},
+                         {"target_nodes", st.volumetric_nodes}};
   }
   // The displacement of kind k with its families scaled by m (+ local: the last multiplier scales k_loc).
   auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {
@@ -304,7 +364,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
 
 Organ phantom_organ() {
   const HybridKidney hk = hybrid_kidney_phantom();
-  return {"kidney phantom", {hk.rest_surface(), hk.faces()}, kidney_phantom_atoms()};
+  Organ o;
+  o.name = "kidney phantom";
+  o.surface = {hk.rest_surface(), hk.faces()};
+  o.atoms = kidney_phantom_atoms();
+  return o;
 }
 
 std::optional<Organ> real_kidney(const fs::path& scenes, FileLoader& loader, std::string& why) {
@@ -312,7 +376,11 @@ std::optional<Organ> real_kidney(const fs::path& scenes, FileLoader& loader, std
   try {
     const Scene scene = load_scene(file);
     const BuiltScene built = build_scene(scene, &loader);
-    return Organ{"real kidney", {built.body->rest_surface(), built.body->faces()}, built.atoms_rest};
+    Organ o;
+    o.name = "real kidney";
+    o.surface = {built.body->rest_surface(), built.body->faces()};
+    o.atoms = built.atoms_rest;
+    return o;
   } catch (const Error& e) {
     why = e.what();
     return std::nullopt;
@@ -354,6 +422,9 @@ std::string markdown(const json& j) {
          << " mm at level " << c["level"] << " (" << c["nodes"] << " nodes): change "
          << pct(100 * c["rel_change"].get<double>()) << " % (target < 2 %).\n";
     }
+    if (o.contains("volumetric"))
+      md << "Volumetric spring model: " << o["volumetric"]["nodes"] << " nodes (" << o["volumetric"]["surface_nodes"]
+         << " on the surface), " << o["volumetric"]["tetrahedra"] << " linear tetrahedra (TetGen -pqY).\n";
     md << "\n| model | parameters | update us | case | contact FEM mm | contact model mm | contact err % | "
           "RMS mm | RMS % | max mm | max % |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -384,7 +455,8 @@ std::string markdown(const json& j) {
 }  // namespace
 
 int cmd_accuracy(const Args& args) {
-  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes"});
+  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes", "kinds",
+                      "nodes", "no-validation"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -396,6 +468,7 @@ int cmd_accuracy(const Args& args) {
   st.quiet = args.flag("quiet") || args.flag("json");
   st.level = static_cast<int>(args.integer("level", 1));
   require(st.level >= 1 && st.level <= 3, "accuracy: --level must be 1, 2 or 3");
+  read_kind_options(args, st, "accuracy");
   const bool force = args.flag("force");
   check_output_folder(*out, force);
 
@@ -404,7 +477,7 @@ int cmd_accuracy(const Args& args) {
             {"quick", st.quick},
             {"units", "mm, N, MPa; times in s (FEM) and us (updates)"}};
   json val = json::array();
-  for (int level = 1; level <= (st.quick ? 1 : 3); ++level) {
+  for (int level = 1; level <= (args.flag("no-validation") ? 0 : st.quick ? 1 : 3); ++level) {
     note(st, cat("validation level ", level));
     std::vector<fem::ValidationResult> rs = {fem::validate_uniaxial(level), fem::validate_cantilever(level)};
     if (!st.quick || level == 1)
@@ -466,7 +539,7 @@ int cmd_accuracy(const Args& args) {
 namespace medspring::cli {
 
 int cmd_calibrate(const Args& args) {
-  args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes"});
+  args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes"});
   Settings st;
   st.material = fem::Material::from_kpa(args.number("E-kPa", 10.0), args.number("nu", 0.45));
   fem::validate_material(st.material, "calibrate: --E-kPa/--nu");
@@ -475,7 +548,9 @@ int cmd_calibrate(const Args& args) {
   st.quiet = args.flag("quiet") || args.flag("json");
   const std::string organ = args.get_or("organ", "phantom"), kind = args.get_or("kind", "hybrid");
   require(organ == "phantom" || organ == "kidney", "calibrate: --organ must be phantom or kidney");
-  require(kind == "hybrid" || kind == "surface", "calibrate: --kind must be hybrid or surface");
+  require(kind == "hybrid" || kind == "surface" || kind == "volumetric",
+          "calibrate: --kind must be hybrid, surface or volumetric");
+  read_kind_options(args, st, "calibrate");
   Organ o;
   FileLoader loader;
   if (organ == "phantom") {
@@ -500,6 +575,8 @@ int cmd_calibrate(const Args& args) {
     out["multipliers"] = mult;
     if (kind == "surface")
       out["parameters"] = {{"k_N_per_mm", 0.05 * mult[0]}, {"k_r_N_per_mm", 0.02 * mult[1]}};
+    else if (kind == "volumetric")
+      out["parameters"] = {{"spring_scale", mult[0]}, {"volume_scale", mult[1]}};
     else
       out["parameters"] = {{"k_surf_N_per_mm", 0.05 * mult[0]},
                            {"k_spoke_N_per_mm", 0.05 * mult[1]},
