@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <iostream>
+#include <map>
 #include <random>
 
 #include "medspring/core/error.hpp"
@@ -83,6 +86,82 @@ VolumetricMesh cube_mesh(int cells, double L) {
     for (int k = 0; k < 3; ++k) m.F(f, k) = newid[static_cast<std::size_t>(B(f, k))];
   m.surface_nodes = ns;
   return m;
+}
+
+// Closed box surface [0, L]^3 with n x n squares per face (two triangles each), outward, shared vertices.
+SurfaceMesh box_surface(int n, double L) {
+  std::map<std::array<long, 3>, Index> id;
+  std::vector<Vec3> P;
+  std::vector<std::array<Index, 3>> T;
+  auto vid = [&](const Vec3& p) {
+    const std::array<long, 3> key{std::lround(p(0) * 1e6), std::lround(p(1) * 1e6), std::lround(p(2) * 1e6)};
+    auto it = id.find(key);
+    if (it != id.end()) return it->second;
+    P.push_back(p);
+    return id[key] = static_cast<Index>(P.size()) - 1;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          Index q[4];
+          for (int c = 0; c < 4; ++c) {
+            Vec3 p;
+            p(axis) = side * L;
+            p(u) = L * (i + (c == 1 || c == 2)) / n;
+            p(v) = L * (j + (c >= 2)) / n;
+            q[c] = vid(p);
+          }
+          // (u, v, axis) right-handed: counter-clockwise in (u, v) points along +axis
+          if (side == 1) {
+            T.push_back({q[0], q[1], q[2]});
+            T.push_back({q[0], q[2], q[3]});
+          } else {
+            T.push_back({q[0], q[2], q[1]});
+            T.push_back({q[0], q[3], q[2]});
+          }
+        }
+    }
+  SurfaceMesh m;
+  m.V.resize(static_cast<Index>(P.size()), 3);
+  for (std::size_t i = 0; i < P.size(); ++i) m.V.row(static_cast<Index>(i)) = P[i].transpose();
+  m.F.resize(static_cast<Index>(T.size()), 3);
+  for (std::size_t f = 0; f < T.size(); ++f)
+    for (int k = 0; k < 3; ++k) m.F(static_cast<Index>(f), k) = T[f][static_cast<std::size_t>(k)];
+  return m;
+}
+
+// Effective Young's modulus (kPa) and Poisson ratio of a box [0, L]^3 mesh under opposite uniform tractions
+// sigma on its faces z = 0 and z = L (tiny return springs against rigid motion): mean face displacements.
+std::pair<double, double> uniaxial(const VolumetricMesh& vm, double L, double nu) {
+  const double sigma = 1e-5;  // N/mm^2 (1e-3 of E): linear range
+  VolumetricSettings st;
+  st.E_kPa = 10;
+  st.nu = nu;
+  st.return_k = 1e-9;
+  const VolumetricBody body(vm, st, "box");
+  const Model& m = body.model();
+  MatX3 f = MatX3::Zero(m.num_nodes(), 3);
+  for (Index t = 0; t < vm.F.rows(); ++t) {
+    const Vec3 a = vm.X.row(vm.F(t, 0)), b = vm.X.row(vm.F(t, 1)), c = vm.X.row(vm.F(t, 2));
+    const Vec3 n = (b - a).cross(c - a);
+    if (std::abs(std::abs(n.normalized()(2)) - 1) > 1e-9) continue;
+    const double A = 0.5 * n.norm();
+    for (int k = 0; k < 3; ++k) f(vm.F(t, k), 2) += (a(2) > L / 2 ? 1 : -1) * sigma * A / 3;
+  }
+  const StaticResult r = static_equilibrium(m, f);
+  const MatX3 u = r.x - m.x0;
+  double top = 0, bot = 0, xp = 0, xm = 0;
+  int nt = 0, nb = 0, np = 0, nm = 0;
+  for (Index i = 0; i < body.num_surface_nodes(); ++i) {
+    if (std::abs(m.x0(i, 2) - L) < 1e-9) top += u(i, 2), ++nt;
+    if (std::abs(m.x0(i, 2)) < 1e-9) bot += u(i, 2), ++nb;
+    if (std::abs(m.x0(i, 0) - L) < 1e-9) xp += u(i, 0), ++np;
+    if (std::abs(m.x0(i, 0)) < 1e-9) xm += u(i, 0), ++nm;
+  }
+  const double ezz = (top / nt - bot / nb) / L, exx = (xp / np - xm / nm) / L;
+  return {sigma / ezz * 1e3, -exx / ezz};
 }
 
 }  // namespace
@@ -198,44 +277,24 @@ TEST(Volumetric, RegularTetrahedronMatchesLinearElasticityOnAverageOverOrientati
 }
 
 TEST(Volumetric, CubeUnderUniaxialTractionGivesYoungsModulusAndPoissonRatio) {
-  // Cube of 4^3 Kuhn cells, uniform traction sigma on the faces z = 0 and z = L (opposite), tiny return
-  // springs against rigid motion: the homogeneous stress state of linear elasticity, strain sigma / E.
-  const double L = 20, sigma = 1e-5;  // N/mm^2 (1e-3 of E): linear range
-  const VolumetricMesh vm = cube_mesh(4, L);
+  // Homogeneous uniaxial stress: linear elasticity gives strain sigma / E along z and -nu sigma / E across.
+  // On an unstructured TetGen mesh (edges of all orientations) the rule of docs/volumetric.md comes close;
+  // on the structured Kuhn split (every cell's edges along the axes, face and body diagonals) the springs
+  // are anisotropic (cubic symmetry) and nu is underestimated: reported, loosely bounded.
+  const double L = 20;
+  const fem::VolumetricMeshSettings ms{.target_nodes = 900};
+  const VolumetricMesh unstructured = fem::volumetric_mesh(box_surface(6, L), ms);
+  const VolumetricMesh kuhn = cube_mesh(4, L);
   for (double nu : {0.3, 0.45}) {
-    VolumetricSettings st;
-    st.E_kPa = 10;
-    st.nu = nu;
-    st.return_k = 1e-9;
-    const VolumetricBody body(vm, st, "cube");
-    const Model& m = body.model();
-    MatX3 f = MatX3::Zero(m.num_nodes(), 3);
-    for (Index t = 0; t < vm.F.rows(); ++t) {
-      const Vec3 a = vm.X.row(vm.F(t, 0)), b = vm.X.row(vm.F(t, 1)), c = vm.X.row(vm.F(t, 2));
-      const Vec3 n = (b - a).cross(c - a);
-      if (std::abs(std::abs(n.normalized()(2)) - 1) > 1e-9) continue;
-      const double A = 0.5 * n.norm();
-      const double z = a(2);
-      for (int k = 0; k < 3; ++k) f(vm.F(t, k), 2) += (z > L / 2 ? 1 : -1) * sigma * A / 3;
-    }
-    const StaticResult r = static_equilibrium(m, f);
-    const MatX3 u = r.x - m.x0;
-    // mean strains from the displacements of the face nodes
-    double top = 0, bot = 0, xp = 0, xm = 0;
-    int nt = 0, nb = 0, np = 0, nm = 0;
-    for (Index i = 0; i < body.num_surface_nodes(); ++i) {
-      if (std::abs(m.x0(i, 2) - L) < 1e-9) top += u(i, 2), ++nt;
-      if (std::abs(m.x0(i, 2)) < 1e-9) bot += u(i, 2), ++nb;
-      if (std::abs(m.x0(i, 0) - L) < 1e-9) xp += u(i, 0), ++np;
-      if (std::abs(m.x0(i, 0)) < 1e-9) xm += u(i, 0), ++nm;
-    }
-    const double ezz = (top / nt - bot / nb) / L, exx = (xp / np - xm / nm) / L;
-    const double E_eff = sigma / ezz * 1e3, nu_eff = -exx / ezz;  // kPa
-    RecordProperty(cat("E_eff_nu", nu), std::to_string(E_eff));
-    RecordProperty(cat("nu_eff_nu", nu), std::to_string(nu_eff));
-    std::cout << "cube, nu = " << nu << ": E_eff = " << E_eff << " kPa (10), nu_eff = " << nu_eff << "\n";
-    EXPECT_NEAR(E_eff / 10.0, 1.0, 0.25) << "nu " << nu;
-    EXPECT_NEAR(nu_eff, nu, 0.08) << "nu " << nu;
+    const auto [E_u, nu_u] = uniaxial(unstructured, L, nu);
+    const auto [E_k, nu_k] = uniaxial(kuhn, L, nu);
+    std::cout << "cube, nu = " << nu << ": TetGen " << unstructured.X.rows() << " nodes: E_eff = " << E_u
+              << " kPa (10), nu_eff = " << nu_u << "; Kuhn " << kuhn.X.rows() << " nodes: E_eff = " << E_k
+              << " kPa, nu_eff = " << nu_k << "\n";
+    EXPECT_NEAR(E_u / 10.0, 1.0, 0.15) << "nu " << nu;
+    EXPECT_NEAR(nu_u, nu, 0.05) << "nu " << nu;
+    EXPECT_NEAR(E_k / 10.0, 1.0, 0.3) << "nu " << nu;
+    EXPECT_NEAR(nu_k, nu, 0.15) << "nu " << nu;
   }
 }
 
@@ -351,13 +410,16 @@ TEST(Volumetric, TetgenBuildAimsAtTheNodeCountAndKeepsTheSurface) {
     EXPECT_EQ(body.model().volume.size(), vm.T.rows());
     // a load on a surface node moves the surface through the identity map
     State s = make_state(body.model());
-    body.transfer_force(10, Vec3(0, 0, -0.2), s.f_ext);
+    body.transfer_force(10, Vec3(0, 0, -0.01), s.f_ext);  // a point load: 0.2 N would invert tetrahedra
     for (int i = 0; i < 50; ++i) step(body.model(), s, {.dt = 0.5});
     MatX3 surface;
     body.map_to_surface(s, surface);
     EXPECT_EQ(surface.rows(), surf.num_vertices());
-    EXPECT_GT((surface.row(10) - surf.V.row(10)).norm(), 1e-3);
-    EXPECT_EQ(s.warnings.total(), 0u);
+    EXPECT_GT((surface.row(10) - surf.V.row(10)).norm(), 1e-4);
+    EXPECT_EQ(s.warnings.total(), 0u)
+        << "nonfinite " << s.warnings.nonfinite << " vmax " << s.warnings.velocity_limit << " capped "
+        << s.warnings.substeps_capped << " failed " << s.warnings.failed << " inverted "
+        << s.warnings.inverted_elements;
   }
   EXPECT_THROW(fem::volumetric_mesh(surf, {.target_nodes = 10}), InvalidInput);
 }
