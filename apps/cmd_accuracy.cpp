@@ -47,7 +47,8 @@ struct Organ {
 
 const VolumetricMesh& volumetric_mesh_of(const Organ& o) {
   if (!o.vmesh)
-    o.vmesh = std::make_shared<const VolumetricMesh>(fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes}));
+    o.vmesh = std::make_shared<const VolumetricMesh>(
+        fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes}));
   return *o.vmesh;
 }
 
@@ -159,6 +160,7 @@ struct Settings {
   bool quick = false;
   std::vector<std::string> kinds;  // --kinds: the bases to run (empty: all)
   Index volumetric_nodes = 2000;   // --nodes
+  std::vector<double> forces;      // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;
 };
@@ -169,11 +171,23 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
     std::stringstream ss(*k);
     std::string item;
     while (std::getline(ss, item, ',')) {
-      require(item == "surface" || item == "hybrid" || item == "volumetric", cmd, ": --kinds: unknown kind '", item,
-              "' (expected surface, hybrid, volumetric)");
+      require(item == "surface" || item == "hybrid" || item == "volumetric", cmd, ": --kinds: unknown kind '",
+              item, "' (expected surface, hybrid, volumetric)");
       st.kinds.push_back(item);
     }
     require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
+  }
+  if (auto f = args.get("forces")) {
+    std::stringstream ss(*f);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(item.c_str(), &end);
+      require(end && *end == '\0' && std::isfinite(v) && v > 0 && v <= 100, cmd, ": --forces: '", item,
+              "' is not a force in (0, 100] N");
+      st.forces.push_back(v);
+    }
+    require(!st.forces.empty(), cmd, ": --forces must list at least one force");
   }
   const long long nodes = args.integer("nodes", 2000);
   require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
@@ -193,8 +207,13 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   const std::vector<double> ts =
       st.quick ? std::vector<double>{-0.3, 0.3} : std::vector<double>{-0.45, -0.15, 0.15, 0.45};
   const std::vector<Index> sites = pick_sites(o.surface.V, f, ts);
-  const std::vector<double> forces = st.quick ? std::vector<double>{0.5} : std::vector<double>{0.2, 0.5, 1.0};
-  const double train_force = 0.5;
+  const std::vector<double> forces = !st.forces.empty() ? st.forces
+                                     : st.quick         ? std::vector<double>{0.5}
+                                                        : std::vector<double>{0.2, 0.5, 1.0};
+  // training force: 0.5 N, or the smallest of --forces without it (large-strain runs train on small loads)
+  const double train_force = std::find(forces.begin(), forces.end(), 0.5) != forces.end()
+                                 ? 0.5
+                                 : *std::min_element(forces.begin(), forces.end());
   // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
   const std::size_t train_sites = st.quick ? 1 : 2;
   json out = {
@@ -423,8 +442,9 @@ std::string markdown(const json& j) {
          << pct(100 * c["rel_change"].get<double>()) << " % (target < 2 %).\n";
     }
     if (o.contains("volumetric"))
-      md << "Volumetric spring model: " << o["volumetric"]["nodes"] << " nodes (" << o["volumetric"]["surface_nodes"]
-         << " on the surface), " << o["volumetric"]["tetrahedra"] << " linear tetrahedra (TetGen -pqY).\n";
+      md << "Volumetric spring model: " << o["volumetric"]["nodes"] << " nodes ("
+         << o["volumetric"]["surface_nodes"] << " on the surface), " << o["volumetric"]["tetrahedra"]
+         << " linear tetrahedra (TetGen -pqY).\n";
     md << "\n| model | parameters | update us | case | contact FEM mm | contact model mm | contact err % | "
           "RMS mm | RMS % | max mm | max % |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -455,8 +475,8 @@ std::string markdown(const json& j) {
 }  // namespace
 
 int cmd_accuracy(const Args& args) {
-  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes", "kinds",
-                      "nodes", "no-validation"});
+  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes",
+                      "kinds", "nodes", "no-validation", "forces", "organs"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -494,9 +514,15 @@ int cmd_accuracy(const Args& args) {
   }
   j["validation"] = val;
 
-  std::vector<Organ> organs = {phantom_organ()};
+  // --organs phantom,kidney (default both; --quick: the phantom)
+  const std::string organ_list = args.get_or("organs", "phantom,kidney");
+  require(organ_list == "phantom" || organ_list == "kidney" || organ_list == "phantom,kidney" ||
+              organ_list == "kidney,phantom",
+          "accuracy: --organs must be phantom, kidney or phantom,kidney (got '", organ_list, "')");
+  std::vector<Organ> organs;
+  if (organ_list.find("phantom") != std::string::npos) organs.push_back(phantom_organ());
   FileLoader loader;
-  if (!st.quick) {
+  if (!st.quick && organ_list.find("kidney") != std::string::npos) {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
     std::string why;
@@ -539,7 +565,8 @@ int cmd_accuracy(const Args& args) {
 namespace medspring::cli {
 
 int cmd_calibrate(const Args& args) {
-  args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes"});
+  args.require_known(
+      {"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes"});
   Settings st;
   st.material = fem::Material::from_kpa(args.number("E-kPa", 10.0), args.number("nu", 0.45));
   fem::validate_material(st.material, "calibrate: --E-kPa/--nu");

@@ -215,6 +215,8 @@ const std::vector<Command>& commands() {
        "  --level        FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)\n"
        "  --kinds LIST   model kinds to run: surface,hybrid,volumetric (default all; docs/volumetric.md)\n"
        "  --nodes N      node count of the volumetric model (default 2000)\n"
+       "  --forces LIST  contact forces in N (default 0.2,0.5,1.0; training at 0.5 N or the smallest)\n"
+       "  --organs LIST  phantom,kidney (default both)\n"
        "  --no-validation  skip the closed-form validation of the FEM pipeline\n",
        {"json", "force", "quick", "quiet", "no-validation"},
        cmd_accuracy},

@@ -465,7 +465,8 @@ void parse_model(const Ctx& c, const json& j, SceneModel& m) {
     fail(c, "model.atoms", cat("must be 0 (default) or >= 3 (got ", m.atoms, ")"));
   if (m.atoms > 0 && m.kind == ModelKind::Surface) fail(c, "model.atoms", "a surface model has no atoms");
   if (m.atoms > 0 && m.kind == ModelKind::Volumetric)
-    fail(c, "model.atoms", "a volumetric model has no atoms (its interior nodes come from the tetrahedral mesh)");
+    fail(c, "model.atoms",
+         "a volumetric model has no atoms (its interior nodes come from the tetrahedral mesh)");
   if (const json* p = o.get("parameters")) parse_parameters(c, *p, "model.parameters", m);
   o.finish();
   if (m.atoms == 0 && m.kind == ModelKind::Hybrid) m.atoms = 42;

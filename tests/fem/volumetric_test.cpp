@@ -14,6 +14,7 @@
 #include "medspring/core/error.hpp"
 #include "medspring/fem/tet_mesh.hpp"
 #include "medspring/geometry/phantoms.hpp"
+#include "medspring/models/model_package.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/integrators.hpp"
@@ -422,4 +423,19 @@ TEST(Volumetric, TetgenBuildAimsAtTheNodeCountAndKeepsTheSurface) {
         << s.warnings.inverted_elements;
   }
   EXPECT_THROW(fem::volumetric_mesh(surf, {.target_nodes = 10}), InvalidInput);
+}
+
+TEST(Volumetric, ModelPackageRebuildsTheSameModel) {
+  const VolumetricMesh vm = fem::volumetric_mesh(kidney_phantom(), {.target_nodes = 700});
+  VolumetricSettings st;
+  st.E_kPa = 12;
+  st.nu = 0.4;
+  st.fixed = {0, 1, 2, 3, 4, 5};
+  const VolumetricBody body(vm, st, "kidney");
+  const ModelPackage p = decode_model_package(encode_model_package(package_of(body, "vol")), "test");
+  EXPECT_EQ(p.kind, "volumetric");
+  const BodyPtr again = make_body(p);
+  EXPECT_EQ(again->kind(), "volumetric");
+  EXPECT_TRUE(check_fingerprint(p, *again));
+  EXPECT_EQ(model_fingerprint(again->model()), model_fingerprint(body.model()));
 }
