@@ -9,7 +9,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "accuracy_summary.hpp"
 #include "commands.hpp"
@@ -17,8 +19,10 @@
 #include "medspring/core/check.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/validation.hpp"
+#include "medspring/fem/volumetric.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
@@ -36,21 +40,46 @@ struct Organ {
   std::string name;
   SurfaceMesh surface;
   MatX3 atoms;
+  // volumetric kind (issue 23): the TetGen mesh of the surface (made once) and the material it gets
+  mutable std::shared_ptr<const VolumetricMesh> vmesh;
+  mutable double E_kPa = 10, nu = 0.45;
+  mutable Index target_nodes = 2000;
 };
 
-// A model kind of the tables: "surface" or "hybrid", linear or Duffing, with or without the local overlay.
+const VolumetricMesh& volumetric_mesh_of(const Organ& o) {
+  if (!o.vmesh)
+    o.vmesh = std::make_shared<const VolumetricMesh>(
+        fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes}));
+  return *o.vmesh;
+}
+
+// A model kind of the tables: "surface", "hybrid" or "volumetric", linear or Duffing, with or without the
+// local overlay.
 struct Kind {
-  std::string base;  // surface | hybrid
+  std::string base;  // surface | hybrid | volumetric
   bool nonlinear = false;
   bool local = false;
   std::string label() const {
     return base + (local ? " + local" : "") + (nonlinear ? " (Duffing)" : " (linear)");
   }
-  Index families() const { return (base == "surface" ? 2 : 4) + (local ? 1 : 0); }  // + k_loc
+  Index families() const {
+    return (base == "surface" || base == "volumetric" ? 2 : 4) + (local ? 1 : 0);  // + k_loc
+  }
 };
 
 // Stiffness families: surface (k, k_r); hybrid (k_surf, k_spoke, k_cl, k_r); multipliers m scale them.
+// Volumetric: (springs, volume terms) from E and nu (docs/volumetric.md); no return springs (supports).
 BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& support, const VecX& m) {
+  if (k.base == "volumetric") {
+    VolumetricSettings s;
+    s.E_kPa = o.E_kPa;
+    s.nu = o.nu;
+    s.spring_scale = m(0);
+    s.volume_scale = m(1);
+    if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
+    s.fixed = support;
+    return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
+  }
   if (k.base == "surface") {
     SurfaceBodyParams p;
     p.k *= m(0);
@@ -68,6 +97,70 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
   s.nonlinear = k.nonlinear;
   s.fixed = support;
   return std::make_shared<HybridKidney>(o.surface, o.atoms, s, o.name);
+}
+
+// Calibration of the volumetric kind (docs/volumetric.md): two families, springs s1 and volume terms s2. At
+// small strain the displacement under (c s1, c s2) is the one under (s1, s2) divided by c, so the fit is a
+// golden-section search over the ratio r = s2 / s1 (log range [1e-2, 1e2], 18 evaluations) with the common
+// scale c in closed form: the least-squares fit of u / c to the FEM in the cost of fem::calibrate_multipliers
+// (mean squared surface error + squared contact error, relative to the load's peak FEM displacement). The
+// tables then evaluate (c, c r) with the full (geometrically nonlinear) static solve. ~8x fewer solves than
+// the generic coordinate descent.
+VecX calibrate_volumetric(const fem::Response& response, const std::vector<fem::CalibrationCase>& training) {
+  auto cost = [&](double logr, double& c_out) {
+    VecX m(2);
+    m << 1.0, std::exp(logr);
+    std::vector<MatX3> us;
+    double uu = 0, uU = 0;
+    for (const auto& t : training) {
+      MatX3 u;
+      try {
+        u = response(m, t.load);
+      } catch (const SolverError&) {
+        return std::numeric_limits<double>::infinity();
+      }
+      const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
+      const double wn = 1.0 / (s * s * static_cast<double>(u.rows())), wc = 1.0 / (s * s);
+      uu += wn * u.squaredNorm() + wc * u.row(t.contact).squaredNorm();
+      uU += wn * (u.array() * t.u_fem.array()).sum() + wc * u.row(t.contact).dot(t.u_fem.row(t.contact));
+      us.push_back(std::move(u));
+    }
+    const double a = uU > 0 && uu > 0 ? uU / uu : 1.0;  // a = 1 / c
+    double cst = 0;
+    for (std::size_t i = 0; i < training.size(); ++i) {
+      const auto& t = training[i];
+      const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
+      cst += (a * us[i] - t.u_fem).squaredNorm() / (s * s * static_cast<double>(us[i].rows()));
+      cst += (a * us[i].row(t.contact) - t.u_fem.row(t.contact)).squaredNorm() / (s * s);
+    }
+    c_out = 1.0 / a;
+    return cst;
+  };
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  double lo = std::log(1e-2), hi = std::log(1e2), ca = 1, cb = 1;
+  double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
+  double fa = cost(a, ca), fb = cost(b, cb);
+  for (int it = 0; it < 16; ++it) {
+    if (fa < fb) {
+      hi = b;
+      b = a;
+      fb = fa;
+      cb = ca;
+      a = hi - g * (hi - lo);
+      fa = cost(a, ca);
+    } else {
+      lo = a;
+      a = b;
+      fa = fb;
+      ca = cb;
+      b = lo + g * (hi - lo);
+      fb = cost(b, cb);
+    }
+  }
+  const double logr = fa < fb ? a : b, c = fa < fb ? ca : cb;
+  VecX m(2);
+  m << c, c * std::exp(logr);
+  return m;
 }
 
 struct Frame {
@@ -130,9 +223,41 @@ struct Settings {
   fem::Material material;
   double radius = 8.0;
   bool quick = false;
+  std::vector<std::string> kinds;  // --kinds: the bases to run (empty: all)
+  Index volumetric_nodes = 2000;   // --nodes
+  std::vector<double> forces;      // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;
 };
+
+// --kinds surface,hybrid,volumetric (default all) and --nodes N (volumetric node count, default 2000).
+void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
+  if (auto k = args.get("kinds")) {
+    std::stringstream ss(*k);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing", cmd,
+              ": --kinds: unknown kind '", item, "' (expected surface, hybrid, volumetric, volumetric-duffing)");
+      st.kinds.push_back(item);
+    }
+    require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
+  }
+  if (auto f = args.get("forces")) {
+    std::stringstream ss(*f);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(item.c_str(), &end);
+      require(end && *end == '\0' && std::isfinite(v) && v > 0 && v <= 100, cmd, ": --forces: '", item,
+              "' is not a force in (0, 100] N");
+      st.forces.push_back(v);
+    }
+    require(!st.forces.empty(), cmd, ": --forces must list at least one force");
+  }
+  const long long nodes = args.integer("nodes", 2000);
+  require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
+  st.volumetric_nodes = static_cast<Index>(nodes);
+}
 
 void note(const Settings& s, const std::string& line) {
   if (!s.quiet) std::cerr << line << std::endl;
@@ -147,8 +272,13 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   const std::vector<double> ts =
       st.quick ? std::vector<double>{-0.3, 0.3} : std::vector<double>{-0.45, -0.15, 0.15, 0.45};
   const std::vector<Index> sites = pick_sites(o.surface.V, f, ts);
-  const std::vector<double> forces = st.quick ? std::vector<double>{0.5} : std::vector<double>{0.2, 0.5, 1.0};
-  const double train_force = 0.5;
+  const std::vector<double> forces = !st.forces.empty() ? st.forces
+                                     : st.quick         ? std::vector<double>{0.5}
+                                                        : std::vector<double>{0.2, 0.5, 1.0};
+  // training force: 0.5 N, or the smallest of --forces without it (large-strain runs train on small loads)
+  const double train_force = std::find(forces.begin(), forces.end(), 0.5) != forces.end()
+                                 ? 0.5
+                                 : *std::min_element(forces.begin(), forces.end());
   // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
   const std::size_t train_sites = st.quick ? 1 : 2;
   json out = {
@@ -226,9 +356,24 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   json rows = json::array();
   if (kinds.empty()) {
     for (bool nl : {false, true})
-      for (const char* b : {"surface", "hybrid"}) kinds.push_back({b, nl, false});
+      for (const char* b : {"surface", "hybrid", "volumetric"}) kinds.push_back({b, nl, false});
     kinds.push_back({"hybrid", true, true});
     kinds.push_back({"hybrid", false, true});
+  }
+  if (!st.kinds.empty())
+    std::erase_if(kinds, [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
+      const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing" : "");
+      return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
+    });
+  o.E_kPa = st.material.E * 1e3;
+  o.nu = st.material.nu;
+  o.target_nodes = st.volumetric_nodes;
+  if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
+    const VolumetricMesh& vm = volumetric_mesh_of(o);
+    out["volumetric"] = {{"nodes", vm.X.rows()},
+                         {"surface_nodes", vm.surface_nodes},
+                         {"tetrahedra", vm.T.rows()},
+                         {"target_nodes", st.volumetric_nodes}};
   }
   // The displacement of kind k with its families scaled by m (+ local: the last multiplier scales k_loc).
   auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {
@@ -242,9 +387,13 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       VecX m = VecX::Ones(k.families());
       if (calibrated) {
         note(st, cat(o.name, ": calibrating ", k.label()));
-        m = fem::calibrate_multipliers(
-            [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, k.families(),
-            training, st.quick ? 1 : 2);
+        if (k.base == "volumetric")
+          m = calibrate_volumetric([&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); },
+                                   training);
+        else
+          m = fem::calibrate_multipliers(
+              [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, k.families(),
+              training, st.quick ? 1 : 2);
       }
       const Index nb = k.families() - (k.local ? 1 : 0);
       const BodyPtr body = make_body(o, k, support, m.head(nb));
@@ -304,7 +453,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
 
 Organ phantom_organ() {
   const HybridKidney hk = hybrid_kidney_phantom();
-  return {"kidney phantom", {hk.rest_surface(), hk.faces()}, kidney_phantom_atoms()};
+  Organ o;
+  o.name = "kidney phantom";
+  o.surface = {hk.rest_surface(), hk.faces()};
+  o.atoms = kidney_phantom_atoms();
+  return o;
 }
 
 std::optional<Organ> real_kidney(const fs::path& scenes, FileLoader& loader, std::string& why) {
@@ -312,7 +465,11 @@ std::optional<Organ> real_kidney(const fs::path& scenes, FileLoader& loader, std
   try {
     const Scene scene = load_scene(file);
     const BuiltScene built = build_scene(scene, &loader);
-    return Organ{"real kidney", {built.body->rest_surface(), built.body->faces()}, built.atoms_rest};
+    Organ o;
+    o.name = "real kidney";
+    o.surface = {built.body->rest_surface(), built.body->faces()};
+    o.atoms = built.atoms_rest;
+    return o;
   } catch (const Error& e) {
     why = e.what();
     return std::nullopt;
@@ -354,6 +511,10 @@ std::string markdown(const json& j) {
          << " mm at level " << c["level"] << " (" << c["nodes"] << " nodes): change "
          << pct(100 * c["rel_change"].get<double>()) << " % (target < 2 %).\n";
     }
+    if (o.contains("volumetric"))
+      md << "Volumetric spring model: " << o["volumetric"]["nodes"] << " nodes ("
+         << o["volumetric"]["surface_nodes"] << " on the surface), " << o["volumetric"]["tetrahedra"]
+         << " linear tetrahedra (TetGen -pqY).\n";
     md << "\n| model | parameters | update us | case | contact FEM mm | contact model mm | contact err % | "
           "RMS mm | RMS % | max mm | max % |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -384,7 +545,8 @@ std::string markdown(const json& j) {
 }  // namespace
 
 int cmd_accuracy(const Args& args) {
-  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes"});
+  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes",
+                      "kinds", "nodes", "no-validation", "forces", "organs"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -396,6 +558,7 @@ int cmd_accuracy(const Args& args) {
   st.quiet = args.flag("quiet") || args.flag("json");
   st.level = static_cast<int>(args.integer("level", 1));
   require(st.level >= 1 && st.level <= 3, "accuracy: --level must be 1, 2 or 3");
+  read_kind_options(args, st, "accuracy");
   const bool force = args.flag("force");
   check_output_folder(*out, force);
 
@@ -404,7 +567,7 @@ int cmd_accuracy(const Args& args) {
             {"quick", st.quick},
             {"units", "mm, N, MPa; times in s (FEM) and us (updates)"}};
   json val = json::array();
-  for (int level = 1; level <= (st.quick ? 1 : 3); ++level) {
+  for (int level = 1; level <= (args.flag("no-validation") ? 0 : st.quick ? 1 : 3); ++level) {
     note(st, cat("validation level ", level));
     std::vector<fem::ValidationResult> rs = {fem::validate_uniaxial(level), fem::validate_cantilever(level)};
     if (!st.quick || level == 1)
@@ -421,9 +584,15 @@ int cmd_accuracy(const Args& args) {
   }
   j["validation"] = val;
 
-  std::vector<Organ> organs = {phantom_organ()};
+  // --organs phantom,kidney (default both; --quick: the phantom)
+  const std::string organ_list = args.get_or("organs", "phantom,kidney");
+  require(organ_list == "phantom" || organ_list == "kidney" || organ_list == "phantom,kidney" ||
+              organ_list == "kidney,phantom",
+          "accuracy: --organs must be phantom, kidney or phantom,kidney (got '", organ_list, "')");
+  std::vector<Organ> organs;
+  if (organ_list.find("phantom") != std::string::npos) organs.push_back(phantom_organ());
   FileLoader loader;
-  if (!st.quick) {
+  if (!st.quick && organ_list.find("kidney") != std::string::npos) {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
     std::string why;
@@ -466,7 +635,8 @@ int cmd_accuracy(const Args& args) {
 namespace medspring::cli {
 
 int cmd_calibrate(const Args& args) {
-  args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes"});
+  args.require_known(
+      {"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes"});
   Settings st;
   st.material = fem::Material::from_kpa(args.number("E-kPa", 10.0), args.number("nu", 0.45));
   fem::validate_material(st.material, "calibrate: --E-kPa/--nu");
@@ -475,7 +645,9 @@ int cmd_calibrate(const Args& args) {
   st.quiet = args.flag("quiet") || args.flag("json");
   const std::string organ = args.get_or("organ", "phantom"), kind = args.get_or("kind", "hybrid");
   require(organ == "phantom" || organ == "kidney", "calibrate: --organ must be phantom or kidney");
-  require(kind == "hybrid" || kind == "surface", "calibrate: --kind must be hybrid or surface");
+  require(kind == "hybrid" || kind == "surface" || kind == "volumetric",
+          "calibrate: --kind must be hybrid, surface or volumetric");
+  read_kind_options(args, st, "calibrate");
   Organ o;
   FileLoader loader;
   if (organ == "phantom") {
@@ -500,6 +672,8 @@ int cmd_calibrate(const Args& args) {
     out["multipliers"] = mult;
     if (kind == "surface")
       out["parameters"] = {{"k_N_per_mm", 0.05 * mult[0]}, {"k_r_N_per_mm", 0.02 * mult[1]}};
+    else if (kind == "volumetric")
+      out["parameters"] = {{"spring_scale", mult[0]}, {"volume_scale", mult[1]}};
     else
       out["parameters"] = {{"k_surf_N_per_mm", 0.05 * mult[0]},
                            {"k_spoke_N_per_mm", 0.05 * mult[1]},

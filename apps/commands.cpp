@@ -220,11 +220,17 @@ const std::vector<Command>& commands() {
        "  --quick        phantom only, 2 sites, 0.5 N, coarse validation (a smoke test)\n"
        "  --E-kPa, --nu  the tissue (Young's modulus in kPa, Poisson ratio < 0.5)\n"
        "  --radius       contact disk radius a, mm\n"
-       "  --level        FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)\n",
-       {"json", "force", "quick", "quiet"},
+       "  --level        FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)\n"
+       "  --kinds LIST   model kinds to run: surface,hybrid,volumetric (default all; docs/volumetric.md)\n"
+       "  --nodes N      node count of the volumetric model (default 2000)\n"
+       "  --forces LIST  contact forces in N (default 0.2,0.5,1.0; training at 0.5 N or the smallest)\n"
+       "  --organs LIST  phantom,kidney (default both)\n"
+       "  --no-validation  skip the closed-form validation of the FEM pipeline\n",
+       {"json", "force", "quick", "quiet", "no-validation"},
        cmd_accuracy},
       {"calibrate",
-       "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface] [--linear] [--E-kPa 10]\n"
+       "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"
+       "                           [--E-kPa 10] [--nodes 2000]\n"
        "                           [--nu 0.45] [--radius 8] [--json] [--quiet]\n\n"
        "Fits the stiffness of each spring family (surface: k, k_r; hybrid: k_surf, k_spoke, k_cl, k_r; k_loc "
        "=\n"

@@ -21,6 +21,9 @@
 #ifdef MEDSPRING_HAVE_MESHING
 #include "medspring/meshing/balloon.hpp"
 #include "medspring/meshing/isosurface.hpp"
+#ifdef MEDSPRING_HAVE_FEM
+#include "medspring/fem/volumetric.hpp"
+#endif
 #endif
 
 namespace medspring::cli {
@@ -53,6 +56,14 @@ SurfaceMesh FileLoader::isosurface(const MaskVolume& mask) {
 #else
   (void)mask;
   throw InvalidInput("isosurfaces need the meshing layer (build with MEDSPRING_WITH_CGAL=ON)");
+#endif
+}
+
+VolumetricMesh FileLoader::tetrahedralize(const SurfaceMesh& organ, Index nodes) {
+#ifdef MEDSPRING_HAVE_FEM
+  return fem::volumetric_mesh(organ, {.target_nodes = nodes});
+#else
+  return SceneLoader::tetrahedralize(organ, nodes);
 #endif
 }
 

@@ -28,6 +28,7 @@ class FileLoader final : public SceneLoader {
   LabelVolume read_label_volume(const std::filesystem::path& file) override;
   SurfaceMesh isosurface(const MaskVolume& mask) override;
   SurfaceMesh balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) override;
+  VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override;  // TetGen (fem layer)
 
  private:
   std::map<std::string, SurfaceMesh> meshes_;

@@ -8,7 +8,9 @@
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/state.hpp"
+#if MEDSPRING_BENCH_TABLES
 #include "table_cases.hpp"
+#endif
 
 namespace medspring::bench {
 
@@ -70,7 +72,9 @@ std::vector<BenchCase> all_cases(const CaseOptions& options) {
   cases.push_back(tube_case("scaling_tube_10k_explicit_nonlinear", "scaling", 100, 100, true));
   cases.push_back(tube_case("scaling_tube_100k_explicit_nonlinear", "scaling", 400, 250, true));
   if (options.large) cases.push_back(tube_case("tube_1M_explicit_nonlinear", "scaling", 1000, 1000, true));
+#if MEDSPRING_BENCH_TABLES
   for (TableCase& t : table_cases()) cases.push_back(std::move(t.bench));  // Tables I and II (D-18)
+#endif
   return cases;
 }
 

@@ -21,6 +21,9 @@
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/runner.hpp"
 #include "medspring/scene/scene.hpp"
+#ifdef MEDSPRING_PYTHON_WITH_FEM
+#include "medspring/fem/volumetric.hpp"
+#endif
 #ifdef MEDSPRING_PYTHON_WITH_IO
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"
@@ -70,6 +73,11 @@ class FileLoader final : public SceneLoader {
     throw InvalidInput(cat(file.string(), ": reading volumes needs the io layer (VTK) in this build"));
 #endif
   }
+#ifdef MEDSPRING_PYTHON_WITH_FEM
+  VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override {  // volumetric kind (TetGen)
+    return fem::volumetric_mesh(organ, {.target_nodes = nodes});
+  }
+#endif
   SurfaceMesh isosurface(const MaskVolume& mask) override {
 #ifdef MEDSPRING_PYTHON_WITH_MESHING
     return medspring::isosurface(mask);

@@ -153,6 +153,7 @@ TetMesh tet_mesh_from_surface(const SurfaceMesh& surface, const TetgenSettings& 
   sw << "-p";
   if (settings.radius_edge > 0) sw << "q" << settings.radius_edge;
   if (settings.max_volume > 0) sw << "a" << settings.max_volume;
+  if (settings.preserve_surface) sw << "Y";
   sw << "Q input.smesh";
   const int rc = detail::run_in(dir.path(), exe, sw.str(), "tetgen.log");
   if (rc != 0 || !fs::exists(dir.path() / "input.1.ele"))

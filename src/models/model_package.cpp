@@ -158,6 +158,9 @@ ModelPackage package_of(const Body& body, const std::string& name, const std::st
     p.atom_radius = v->atom_radius();
     p.binding = v->binding();
     p.smrm = v->settings();
+  } else if (const auto* q = dynamic_cast<const VolumetricBody*>(&body)) {
+    p.volumetric_mesh = q->mesh();
+    p.volumetric = q->settings();
   } else if (const auto* t = dynamic_cast<const SmrmTree*>(&body)) {
     p.tree = t->centerline_tree();
     p.smrm = t->settings().vessel;
@@ -186,10 +189,16 @@ BodyPtr make_body(const ModelPackage& p) {
       return std::make_shared<SmrmVessel>(std::move(parts), p.smrm);
     }
     if (p.kind == "smrm_tree") return std::make_shared<SmrmTree>(p.tree, SmrmTreeSettings{p.smrm});
+    if (p.kind == "volumetric") {
+      VolumetricMesh m = p.volumetric_mesh;
+      m.F = p.surface.F;
+      return std::make_shared<VolumetricBody>(m, p.volumetric, p.name);
+    }
   } catch (const InvalidInput& e) {
     throw InvalidInput(cat(w, ": ", e.what()));
   }
-  throw InvalidInput(cat(w, ": unknown kind '", p.kind, "' (expected surface, hybrid, smrm or smrm_tree)"));
+  throw InvalidInput(
+      cat(w, ": unknown kind '", p.kind, "' (expected surface, hybrid, smrm, smrm_tree or volumetric)"));
 }
 
 std::string encode_model_package(const ModelPackage& p) {
@@ -232,6 +241,19 @@ std::string encode_model_package(const ModelPackage& p) {
       put_doubles(w, b.line.radii);
     }
     put_smrm_settings(w, p.smrm);
+  } else if (p.kind == "volumetric") {
+    const VolumetricMesh& m = p.volumetric_mesh;
+    put_points(w, m.X);
+    w.i64(m.surface_nodes);
+    w.u64(static_cast<std::uint64_t>(m.T.rows()));
+    for (Index t = 0; t < m.T.rows(); ++t)
+      for (int c = 0; c < 4; ++c) w.i64(m.T(t, c));
+    const VolumetricSettings& s = p.volumetric;
+    for (double v : {s.E_kPa, s.nu, s.density, s.beta, s.spring_scale, s.volume_scale}) w.f64(v);
+    w.flag(s.return_k.has_value());
+    w.f64(s.return_k.value_or(0.0));
+    put_duffing(w, s.duffing);
+    put_indices(w, s.fixed);
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -248,8 +270,9 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
   p.name = r.str("name", kMaxText);
   p.description = r.str("description", kMaxText);
   p.kind = r.str("kind");
-  if (p.kind != "surface" && p.kind != "hybrid" && p.kind != "smrm" && p.kind != "smrm_tree")
-    r.fail(cat("kind: '", p.kind, "' (expected surface, hybrid, smrm or smrm_tree)"));
+  if (p.kind != "surface" && p.kind != "hybrid" && p.kind != "smrm" && p.kind != "smrm_tree" &&
+      p.kind != "volumetric")
+    r.fail(cat("kind: '", p.kind, "' (expected surface, hybrid, smrm, smrm_tree or volumetric)"));
   p.surface.V = get_points(r, "surface vertices");
   const Index nv = static_cast<Index>(p.surface.V.rows());
   const Index nf = r.count("surface faces", 3 * 8);
@@ -314,6 +337,29 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
       r.fail(cat("binding: ", m, " nodes, ", b.offset.rows(), " offsets, ", nl, " bracket parameters for ",
                  nv, " surface vertices"));
     get_smrm_settings(r, p.smrm, version);
+  } else if (p.kind == "volumetric") {
+    VolumetricMesh& m = p.volumetric_mesh;
+    m.X = get_points(r, "volumetric nodes");
+    const Index nn = static_cast<Index>(m.X.rows());
+    const std::int64_t ns = r.i64();
+    if (ns != nv || ns > nn)
+      r.fail(cat("volumetric: ", ns, " surface nodes for ", nv, " surface vertices and ", nn, " nodes"));
+    m.surface_nodes = static_cast<Index>(ns);
+    const Index nt = r.count("tetrahedra", 4 * 8);
+    m.T.resize(nt, 4);
+    for (Index t = 0; t < nt; ++t)
+      for (int c = 0; c < 4; ++c) {
+        const std::int64_t i = r.i64();
+        if (i < 0 || i >= nn) r.fail(cat("tetrahedron ", t, ": node ", i, " out of range [0, ", nn, ")"));
+        m.T(t, c) = static_cast<Index>(i);
+      }
+    VolumetricSettings& s = p.volumetric;
+    for (double* v : {&s.E_kPa, &s.nu, &s.density, &s.beta, &s.spring_scale, &s.volume_scale}) *v = r.f64();
+    const bool has_kr = r.flag("return_k");
+    const double kr = r.f64();
+    if (has_kr) s.return_k = kr;
+    s.duffing = get_duffing(r);
+    s.fixed = get_indices(r, "fixed", nv);
   } else {  // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));
@@ -359,6 +405,10 @@ TissueParams tissue_params(const ModelPackage& p) {
   } else if (p.kind == "hybrid") {
     const HybridSettings& h = p.hybrid;
     t = {h.k_surf, h.duffing.eta, h.surface_node.return_k, h.surface_node.beta, h.nonlinear};
+  } else if (p.kind == "volumetric") {  // k: Young's modulus in N/mm^2 (the springs and volume terms follow)
+    const VolumetricSettings& s = p.volumetric;
+    t = {s.E_kPa * 1e-3, s.duffing.eta, s.return_k.value_or(0.0), s.beta,
+         s.duffing.mode != DuffingMode::Linear};
   } else {
     const ChainSettings& c = p.smrm.chain;
     t = {c.k, c.duffing.eta, c.kr, c.beta, c.nonlinear};
@@ -393,6 +443,16 @@ void set_tissue_params(ModelPackage& p, const TissueParams& t) {
     if (t.nonlinear && h.duffing.mode == DuffingMode::Linear) h.duffing.mode = DuffingMode::Strain;
     h.surface_node.return_k = h.atom_node.return_k = t.kr;
     h.surface_node.beta = h.atom_node.beta = t.beta;
+  } else if (p.kind == "volumetric") {
+    VolumetricSettings& s = p.volumetric;
+    s.E_kPa = t.k * 1e3;
+    s.duffing.eta = t.eta;
+    if (!t.nonlinear)
+      s.duffing.mode = DuffingMode::Linear;
+    else if (s.duffing.mode == DuffingMode::Linear)
+      s.duffing.mode = DuffingMode::Strain;
+    s.return_k = t.kr;
+    s.beta = t.beta;
   } else if (p.kind == "smrm" || p.kind == "smrm_tree") {
     ChainSettings& c = p.smrm.chain;
     c.k = t.k;

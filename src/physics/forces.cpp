@@ -58,6 +58,10 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
   else
     stiff = stiffening ? spring_forces<false, true>(m, X, Fo) : spring_forces<false, false>(m, X, Fo);
   if (m.bending.size() > 0) bending_forces(m.bending, x, f);
+  if (m.volume.size() > 0) {
+    const double sv = add_volume_forces(m.volume, X, Fo);
+    if (stiffening) stiff = std::max(stiff, sv);
+  }
   return stiff;
 }
 
@@ -81,6 +85,7 @@ double potential_energy(const Model& m, const MatX3& x) {
     const Vec3 D = (x.row(B.a[t]) - 2.0 * x.row(B.b[t]) + x.row(B.c[t])).transpose();
     e += 0.5 * B.kb[t] * (D - B.D0.row(t).transpose()).squaredNorm();
   }
+  if (m.volume.size() > 0) e += volume_energy(m.volume, x);
   return e;
 }
 
@@ -127,6 +132,7 @@ Eigen::SparseMatrix<double> tangent_stiffness(const Model& m, const MatX3& x, co
     for (int p = 0; p < 3; ++p)
       for (int q = 0; q < 3; ++q) block(idx[p], idx[q], B.kb[t] * w[p] * w[q] * Mat3::Identity());
   }
+  if (m.volume.size() > 0) add_volume_stiffness_triplets(m.volume, x, T);
   Eigen::SparseMatrix<double> K(3 * n, 3 * n);
   K.setFromTriplets(T.begin(), T.end());
   return K;

@@ -115,6 +115,7 @@ void finalize(Model& m) {
     require_index(B.c[t], n, w, ": bending[", t, "].c");
     require_nonnegative(B.kb[t], w, ": bending[", t, "].kb");
   }
+  if (m.volume.size() > 0) finalize_volume_terms(m.volume, m.x0, w);
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) m.free_nodes.push_back(a);
@@ -186,6 +187,7 @@ Model ModelBuilder::build() {
   m.fixed = fixed_;
   m.springs = springs_;
   m.bending = bending_;
+  m.volume = volume_;
   finalize(m);
   return m;
 }
@@ -270,6 +272,14 @@ std::uint64_t model_fingerprint(const Model& m) {
   h = hash_vector(B.b, h);
   h = hash_vector(B.c, h);
   h = hash_dense(B.kb, h);
+  if (m.volume.size() > 0) {  // appended only when present: fingerprints of other models unchanged
+    const VolumeTerms& T = m.volume;
+    h = hash_vector(T.a, h);
+    h = hash_vector(T.b, h);
+    h = hash_vector(T.c, h);
+    h = hash_vector(T.d, h);
+    h = hash_vector(T.kv, h);
+  }
   return h;
 }
 

@@ -35,6 +35,7 @@ double gershgorin_omega(const Model& m, const MatX3& x) {
     off[B.b[t]] += 4 * B.kb[t] / m.mass[B.b[t]];
     off[B.c[t]] += 3 * B.kb[t] / m.mass[B.c[t]];
   }
+  if (m.volume.size() > 0) add_volume_gershgorin(m.volume, x, m.mass, m.fixed, diag, off);
   double w2 = 0;
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) w2 = std::max(w2, diag[a] / m.mass[a] + off[a]);
@@ -81,6 +82,7 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
       y.segment<3>(3 * B.b[t]) -= 2.0 * g;
       y.segment<3>(3 * B.c[t]) += g;
     }
+    if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, p, y);
   };
   VecX y(3 * n), w(3 * n);
   VecX s(3 * n);  // M^-1/2 scaling, zero on fixed DOFs (removed from the system, §1.5)

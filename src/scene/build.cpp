@@ -12,12 +12,19 @@
 #include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/models/volumetric_body.hpp"
 #include "medspring/skeleton/centerline_extraction.hpp"
 #include "medspring/skeleton/voxelize.hpp"
 
 namespace medspring {
 
 namespace fs = std::filesystem;
+
+VolumetricMesh SceneLoader::tetrahedralize(const SurfaceMesh&, Index) {
+  throw InvalidInput(
+      "a volumetric model needs a tetrahedral mesher (TetGen): the loader of the medspring command or of the "
+      "Python module");
+}
 
 namespace {
 
@@ -171,6 +178,27 @@ struct Builder {
     return h;
   }
 
+  // The volumetric organ (issue 23): the loader's TetGen mesh of the surface, constants from E and nu.
+  BodyPtr volumetric_body(const SurfaceMesh& surface, const std::string& name) {
+    if (loader == nullptr)
+      fail("model.kind", "a volumetric model needs the tetrahedral mesher (TetGen) of the medspring command");
+    const SceneModel& m = scene.model;
+    std::shared_ptr<VolumetricBody> b;
+    try {
+      b = std::make_shared<VolumetricBody>(loader->tetrahedralize(surface, m.volumetric_nodes), m.volumetric,
+                                           name);
+    } catch (const InvalidInput& e) {
+      fail("model", e.what());
+    }
+    const VolumetricStats& st = b->stats();
+    out.notes.push_back(cat("volumetric: ", st.nodes, " nodes (", st.surface_nodes, " on the surface), ",
+                            st.tetrahedra, " tetrahedra, ", st.springs, " springs; E = ", m.volumetric.E_kPa,
+                            " kPa, nu = ", m.volumetric.nu, ", return springs ",
+                            b->model().kr.maxCoeff() > 0 ? "on" : "off (supports)"));
+    for (const std::string& w : b->warnings()) out.notes.push_back(w);
+    return b;
+  }
+
   BodyPtr smrm_body(SmrmVessel v) {
     auto p = std::make_shared<SmrmVessel>(std::move(v));
     out.notes.push_back(cat("smrm: ", p->num_atoms(), " atoms, ", p->num_surface_nodes(), " surface nodes"));
@@ -203,6 +231,7 @@ struct Builder {
       case ModelSource::Type::Phantom:
         if (s.phantom == "kidney") {
           if (m.kind == ModelKind::Surface) return surface_body(kidney_phantom(), "kidney phantom");
+          if (m.kind == ModelKind::Volumetric) return volumetric_body(kidney_phantom(), "kidney phantom");
           return hybrid_body(kidney_phantom(), kidney_phantom_atoms(m.atoms), "kidney phantom");
         }
         if (s.phantom == "tube")
@@ -212,6 +241,7 @@ struct Builder {
       case ModelSource::Type::Mesh: {
         const SurfaceMesh organ = read_organ_mesh();
         if (m.kind == ModelKind::Surface) return surface_body(maybe_balloon(organ), name);
+        if (m.kind == ModelKind::Volumetric) return volumetric_body(maybe_balloon(organ), name);
         SkeletonSettings sk;
         sk.atom_count = m.atoms;
         const MeshCenterline mc = centerline_from_mesh(organ, sk);
@@ -234,6 +264,7 @@ struct Builder {
         const SurfaceMesh organ = files("model.source.segmentation").isosurface(mask);
         out.notes.push_back(cat("isosurface: ", organ.num_vertices(), " vertices"));
         if (m.kind == ModelKind::Surface) return surface_body(maybe_balloon(organ), name);
+        if (m.kind == ModelKind::Volumetric) return volumetric_body(maybe_balloon(organ), name);
         const MatX3 atoms = skeleton_atoms(extract_centerline(mask, sk));
         return hybrid_body(maybe_balloon(organ), atoms, name, &mask);
       }

@@ -28,7 +28,8 @@ ModelKind parse_model_kind(const std::string& text) {
   if (text == "surface") return ModelKind::Surface;
   if (text == "hybrid") return ModelKind::Hybrid;
   if (text == "smrm") return ModelKind::Smrm;
-  throw InvalidInput(cat("unknown model kind '", text, "' (expected surface, hybrid or smrm)"));
+  if (text == "volumetric") return ModelKind::Volumetric;
+  throw InvalidInput(cat("unknown model kind '", text, "' (expected surface, hybrid, smrm or volumetric)"));
 }
 
 std::string to_string(ModelKind kind) {
@@ -39,6 +40,8 @@ std::string to_string(ModelKind kind) {
       return "hybrid";
     case ModelKind::Smrm:
       return "smrm";
+    case ModelKind::Volumetric:
+      return "volumetric";
   }
   return "?";
 }
@@ -127,7 +130,7 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
     if (!ok)
       fail(c, pp,
            cat("phantom '", s.phantom, "' cannot make a ", to_string(m.kind),
-               " model (kidney: surface or hybrid; tube: surface; vessel: smrm)"));
+               " model (kidney: surface, hybrid or volumetric; tube: surface; vessel: smrm)"));
   }
   if (mesh) {
     Obj p(c, *mesh, o.at("mesh"));
@@ -228,6 +231,18 @@ void parse_parameters(const Ctx& c, const json& j, const std::string& path, Scen
       }
       break;
     }
+    case ModelKind::Volumetric: {  // issue 23: E and nu come from "material"
+      VolumetricSettings& v = m.volumetric;
+      m.volumetric_nodes = o.index("nodes", m.volumetric_nodes, 10);
+      v.density = o.positive("density", v.density);
+      v.beta = o.nonnegative("beta", v.beta);
+      if (o.has("k_r")) v.return_k = o.nonnegative("k_r", 0.0);
+      v.spring_scale = o.positive("spring_scale", v.spring_scale);
+      v.volume_scale = o.nonnegative("volume_scale", v.volume_scale);
+      if (const json* d = o.get("duffing")) v.duffing = parse_duffing(c, *d, o.at("duffing"), v.duffing);
+      if (const json* f = o.get("fixed")) v.fixed = parse_index_list(c, *f, o.at("fixed"));
+      break;
+    }
   }
   o.finish();
 }
@@ -267,6 +282,10 @@ void parse_material(const Ctx& c, const json& j, const std::string& path, SceneM
   if (m.kind == ModelKind::Hybrid) apply_tissue(t, organ, m.hybrid);
   if (m.kind == ModelKind::Surface) apply_tissue(t, organ, m.surface);
   if (m.kind == ModelKind::Smrm) apply_tissue(t, m.smrm);
+  if (m.kind == ModelKind::Volumetric) {  // no calibration: the stiffness rule of models/volumetric_body.hpp
+    m.volumetric.E_kPa = t.E_kPa;
+    m.volumetric.nu = t.nu;
+  }
   m.material = t;
 }
 
@@ -279,7 +298,8 @@ void parse_model(const Ctx& c, const json& j, SceneModel& m) {
   const json* source = o.get("source");
   if (!source) fail(c, "model.source", "is required");
   parse_source(c, *source, "model.source", m);
-  m.nonlinear = o.boolean("nonlinear", true);
+  m.nonlinear = o.boolean("nonlinear", m.kind != ModelKind::Volumetric);  // volumetric: linear by default
+  if (m.kind == ModelKind::Volumetric && m.nonlinear) m.volumetric.duffing = DuffingSettings{};
   if (const json* t = o.get("material")) parse_material(c, *t, "model.material", m);
   m.surface_nodes = o.index("surface_nodes", 0, 0);
   if (m.surface_nodes > 0 && m.surface_nodes < 20) fail(c, "model.surface_nodes", "must be 0 or >= 20");
@@ -290,6 +310,9 @@ void parse_model(const Ctx& c, const json& j, SceneModel& m) {
   if (m.atoms > 0 && m.atoms < 3)
     fail(c, "model.atoms", cat("must be 0 (default) or >= 3 (got ", m.atoms, ")"));
   if (m.atoms > 0 && m.kind == ModelKind::Surface) fail(c, "model.atoms", "a surface model has no atoms");
+  if (m.atoms > 0 && m.kind == ModelKind::Volumetric)
+    fail(c, "model.atoms",
+         "a volumetric model has no atoms (its interior nodes come from the tetrahedral mesh)");
   if (const json* p = o.get("parameters")) parse_parameters(c, *p, "model.parameters", m);
   o.finish();
   if (m.atoms == 0 && m.kind == ModelKind::Hybrid) m.atoms = 42;
@@ -560,6 +583,16 @@ std::string scene_to_json(const Scene& s) {
               {"k", p.k},
               {"duffing", duffing_json(p.duffing)},
               {"fixed", p.fixed}};
+  } else if (m.kind == ModelKind::Volumetric) {
+    const VolumetricSettings& v = m.volumetric;
+    params = {{"nodes", m.volumetric_nodes},
+              {"density", v.density},
+              {"beta", v.beta},
+              {"spring_scale", v.spring_scale},
+              {"volume_scale", v.volume_scale},
+              {"duffing", duffing_json(v.duffing)},
+              {"fixed", v.fixed}};
+    if (v.return_k) params["k_r"] = *v.return_k;
   } else {
     const SmrmSettings& q = m.smrm;
     params = {{"spokes", q.spokes},
@@ -583,7 +616,9 @@ std::string scene_to_json(const Scene& s) {
                 {"nonlinear", m.nonlinear},
                 {"surface_nodes", m.surface_nodes},
                 {"parameters", params}};
-  if (m.kind != ModelKind::Surface) model["atoms"] = m.atoms;
+  if (m.kind != ModelKind::Surface && m.kind != ModelKind::Volumetric) model["atoms"] = m.atoms;
+  if (m.kind == ModelKind::Volumetric && !m.material)  // E and nu are the model's parameters
+    model["material"] = {{"E_kPa", m.volumetric.E_kPa}, {"nu", m.volumetric.nu}};
   if (m.material) {
     if (!m.material->preset.empty())
       model["material"] = m.material->preset;

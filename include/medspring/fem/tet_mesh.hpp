@@ -42,6 +42,7 @@ std::vector<double> graded(double a, double b, int n, double grading = 1.0);
 struct TetgenSettings {
   double max_volume = 0.0;      // mm^3, 0 = no volume constraint (-a)
   double radius_edge = 1.6;     // quality bound (-q); 0 = none (fewest elements)
+  bool preserve_surface = false;  // -Y: no Steiner points on the surface (its vertices stay the first nodes)
   std::string executable = "";  // default: $MEDSPRING_TETGEN, then `tetgen` on PATH
 };
 

@@ -25,6 +25,7 @@
 #include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/models/volumetric_body.hpp"
 
 namespace medspring {
 
@@ -51,6 +52,9 @@ struct ModelPackage {
   SmrmSettings smrm;       // smrm and smrm_tree (the tree's SmrmTreeSettings::vessel)
   // smrm_tree: the centerline tree it is built from (SmrmTree resamples it deterministically)
   CenterlineTree tree;
+  // volumetric (issue 23): the tetrahedral mesh (its F is surface.F) and the settings (E, nu, ...)
+  VolumetricMesh volumetric_mesh;
+  VolumetricSettings volumetric;
   /// model_fingerprint() of the model the package was made from (0 = unknown). make_body does not
   /// require a match (another compiler may round the rest lengths differently); check_fingerprint does.
   std::uint64_t fingerprint = 0;

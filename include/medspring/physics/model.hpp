@@ -8,6 +8,7 @@
 #include "medspring/core/types.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/physics/spring_law.hpp"
+#include "medspring/physics/volume_terms.hpp"
 
 namespace medspring {
 
@@ -44,6 +45,7 @@ struct Model {
   std::vector<std::uint8_t> fixed;  // (#N) 1 = pinned at x0
   Springs springs;
   BendingTerms bending;
+  VolumeTerms volume;  // volumetric spring models (issue 23): one term per tetrahedron
 
   // Derived by finalize():
   VecX inv_k;  // (#S) 1/k (0 when k = 0), for the run-time stability estimate
@@ -85,6 +87,8 @@ class ModelBuilder {
   void set_fixed(Index node, bool fixed = true);
   void reserve_springs(Index n) { springs_.reserve(n); }
   void add_bending(Index a, Index b, Index c, double kb);
+  /// Adds a volume term on the tetrahedron (a, b, c, d) (positive rest volume) of modulus kv (N/mm^2).
+  void add_volume(Index a, Index b, Index c, Index d, double kv) { volume_.add(a, b, c, d, kv); }
   Index num_nodes() const { return static_cast<Index>(nodes_.size()); }
   const Vec3& position(Index i) const { return nodes_[i]; }
   /// Validates and returns the finished model.
@@ -97,6 +101,7 @@ class ModelBuilder {
   std::vector<std::uint8_t> fixed_;
   Springs springs_;
   BendingTerms bending_;
+  VolumeTerms volume_;
 };
 
 /// A surface mass-spring body from a triangle mesh: one spring per unique edge (D-1), uniform nodes.

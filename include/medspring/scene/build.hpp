@@ -34,6 +34,10 @@ class SceneLoader {
   /// A balloon surface of `organ` with exactly `nodes` nodes (§1.1, §4.4); `notes` receives one line
   /// per finding worth reporting (distance to the organ, warnings).
   virtual SurfaceMesh balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) = 0;
+  /// Linear tetrahedra of a closed surface with about `nodes` nodes, the surface's vertices first and its
+  /// triangles as the boundary (TetGen -pqY; the volumetric model kind, issue 23). This default refuses
+  /// (a loader without a tetrahedral mesher); the medspring command's and the Python module's mesh.
+  virtual VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes);
 };
 
 /// A scene whose model is built and whose loads are resolved on surface nodes.

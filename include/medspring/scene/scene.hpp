@@ -24,6 +24,7 @@
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/tissue.hpp"
+#include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/scene/scene_tools.hpp"
@@ -32,8 +33,8 @@
 namespace medspring {
 
 /// The three model kinds (DESIGN.md): plain surface mass-spring, hybrid (surface + atoms), SMRM vessel.
-enum class ModelKind { Surface, Hybrid, Smrm };
-ModelKind parse_model_kind(const std::string& text);  // "surface" | "hybrid" | "smrm"
+enum class ModelKind { Surface, Hybrid, Smrm, Volumetric };
+ModelKind parse_model_kind(const std::string& text);  // "surface" | "hybrid" | "smrm" | "volumetric"
 std::string to_string(ModelKind kind);
 
 /// Where the geometry of a model comes from: exactly one of a phantom, a mesh, a segmentation or a
@@ -80,6 +81,8 @@ struct SceneModel {
   HybridSettings hybrid;      // kind "hybrid" (nonlinear copied in by the parser)
   SurfaceBodyParams surface;  // kind "surface" (duffing.mode Linear when not nonlinear)
   SmrmSettings smrm;          // kind "smrm" (chain.nonlinear copied in by the parser)
+  VolumetricSettings volumetric;  // kind "volumetric" (E, nu from "material"; issue 23)
+  Index volumetric_nodes = 2000;  // kind "volumetric": node count aimed at ("parameters": {"nodes"})
   // "material": a preset name or {"E_kPa", "nu"} (or {"preset"}): resolved by the parser to the calibrated
   // stiffnesses of the kind (models/tissue.hpp) before "parameters", which override them.
   std::optional<TissueMaterial> material;

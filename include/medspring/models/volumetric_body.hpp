@@ -1,0 +1,95 @@
+// The volumetric spring organ (issue 23, docs/volumetric.md): the nodes of a linear tetrahedral mesh of
+// the organ (surface nodes first, then interior nodes), one spring per tetrahedron edge and one volume
+// term per tetrahedron, both with constants derived from the tissue's Young's modulus E and Poisson
+// ratio nu. Model kind "volumetric". The surface nodes are the first DOFs, so the visible surface is the
+// organ's surface (identity map): loads, tools, local deformation, output and the viewer work unchanged.
+//
+//   VolumetricMesh vm = ...;                 // from fem::volumetric_mesh (TetGen) or by hand
+//   VolumetricSettings s;  s.E_kPa = 10;  s.nu = 0.45;  s.fixed = support;
+//   VolumetricBody body(vm, s);
+//
+// Stiffness rule (derivation in docs/volumetric.md): with mu = E / 2(1+nu), lambda = E nu / (1+nu)(1-2nu),
+// every tetrahedron t of volume V_t adds k = (5/2) mu V_t / L_e^2 to each of its six edge springs (so that
+// the isotropic part of its spring stiffness tensor has shear modulus mu and Lame lambda_s = mu, the
+// Cauchy relation of central springs), and a volume term of modulus kv = lambda - mu that brings the bulk
+// modulus to the exact lambda + 2 mu / 3 for every tetrahedron shape. nu < 1/4 would need kv < 0: there
+// kv = 0 and the model's Poisson ratio stays near 1/4 (said in the build warnings).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/models/body.hpp"
+
+namespace medspring {
+
+using MatX4i = Eigen::Matrix<Index, Eigen::Dynamic, 4, Eigen::RowMajor>;
+
+/// A linear tetrahedral mesh whose first `surface_nodes` nodes are the vertices of the surface triangles F
+/// (mm). Tetrahedra may have either orientation (they are reoriented).
+struct VolumetricMesh {
+  MatX3 X;   // nodes (#N x 3), surface nodes first
+  MatX4i T;  // tetrahedra (#T x 4)
+  MatX3i F;  // surface triangles over nodes [0, surface_nodes), outward
+  Index surface_nodes = 0;
+};
+
+struct VolumetricSettings {
+  double E_kPa = 10.0;             // Young's modulus, kPa (> 0)
+  double nu = 0.45;                // Poisson ratio, (-1, 0.5)
+  double density = 1.05e-3;        // g/mm^3 (lumped: a quarter of each tetrahedron's mass per corner)
+  double beta = 0.5;               // mass-proportional damping d = beta m, 1/ms
+  std::optional<double> return_k;  // N/mm per surface node; default: 0 with supports, else 0.02
+  double spring_scale = 1.0;       // calibration multipliers of the spring and volume families
+  double volume_scale = 1.0;
+  DuffingSettings duffing{DuffingMode::Linear};  // Duffing term of the springs (off by default)
+  std::vector<Index> fixed;                      // pinned surface nodes
+};
+
+struct VolumetricStats {
+  Index nodes = 0, surface_nodes = 0, interior_nodes = 0, tetrahedra = 0, springs = 0;
+  double volume_mm3 = 0, mu = 0, lambda = 0, kv = 0;  // moduli in N/mm^2
+  double min_tet_volume = 0;
+};
+
+class VolumetricBody final : public Body {
+ public:
+  /// Validates and builds: E <= 0, nu outside (-1, 0.5), inverted or degenerate tetrahedra, a surface
+  /// that is not the mesh's boundary, an interior node outside the surface, and supports (fixed nodes,
+  /// no return springs) that leave a rigid motion free are refused with InvalidInput naming the defect.
+  VolumetricBody(const VolumetricMesh& mesh, const VolumetricSettings& settings = {},
+                 std::string name = "volumetric");
+  std::string kind() const override { return "volumetric"; }
+  const Model& model() const override { return model_; }
+  const MatX3i& faces() const override { return F_; }
+  const MatX3& rest_surface() const override { return rest_surface_; }
+  void map_to_surface(const State& state, MatX3& surface) const override;
+  void transfer_force(Index node, const Vec3& F, MatX3& f_dof) const override;
+  double local_stiffness() const override { return k_local_; }
+  std::vector<std::uint8_t> fixed_surface_nodes() const override;
+  const VolumetricSettings& settings() const { return settings_; }
+  const VolumetricMesh& mesh() const { return mesh_; }
+  const VolumetricStats& stats() const { return stats_; }
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+ private:
+  Model model_;
+  VolumetricMesh mesh_;
+  MatX3i F_;
+  MatX3 rest_surface_;
+  VolumetricSettings settings_;
+  VolumetricStats stats_;
+  double k_local_ = 0.05;
+  std::vector<std::string> warnings_;
+};
+
+/// Lame parameters (N/mm^2) from E (kPa) and nu; throws InvalidInput naming `where` for E <= 0 or nu
+/// outside (-1, 0.5).
+void lame_parameters(double E_kPa, double nu, double& mu, double& lambda, const std::string& where);
+
+/// Generalised winding number of the closed surface (V, F) at p: ~1 inside, ~0 outside.
+double winding_number(const MatX3& V, const MatX3i& F, const Vec3& p);
+
+}  // namespace medspring

@@ -1,0 +1,66 @@
+// Volume terms of a volumetric spring model (issue 23, docs/volumetric.md): one per tetrahedron,
+//   E_t = kv_t / (2 V0_t) (V_t - V0_t)^2,   V_t = (x_b - x_a) . ((x_c - x_a) x (x_d - x_a)) / 6,
+// the energy of a bulk-like modulus kv (N/mm^2) acting on the volume strain (V - V0) / V0. It restores the
+// Poisson effect that edge springs lack (a spring lattice is locked near nu = 1/4). The energy is a
+// polynomial of the positions, so an inverted tetrahedron (V < 0) gets a finite restoring force, never a
+// NaN; inverted elements are counted per frame in State::warnings.inverted_elements.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "medspring/core/types.hpp"
+
+namespace medspring {
+
+/// Volume terms as a struct of arrays; term t spans the tetrahedron (a[t], b[t], c[t], d[t]) with a
+/// positive rest volume.
+struct VolumeTerms {
+  std::vector<Index> a, b, c, d;  // (#T) corners, positive orientation at rest
+  std::vector<double> kv;         // (#T) modulus, N/mm^2 (= MPa), >= 0
+  std::vector<double> V0;         // (#T) rest volume, mm^3 (set by finalize from the rest positions)
+  std::vector<double> G0;         // (#T) rest sum over corners of |dV/dx|^2, mm^4 (set by finalize)
+  Index size() const { return static_cast<Index>(a.size()); }
+  void add(Index na, Index nb, Index nc, Index nd, double modulus) {
+    a.push_back(na);
+    b.push_back(nb);
+    c.push_back(nc);
+    d.push_back(nd);
+    kv.push_back(modulus);
+    V0.push_back(0.0);
+    G0.push_back(0.0);
+  }
+};
+
+/// Signed volume (mm^3) of the tetrahedron (p0, p1, p2, p3); positive when (p1-p0, p2-p0, p3-p0) is
+/// right-handed.
+double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3);
+
+/// Sets V0 and G0 from the rest positions x0; throws InvalidInput naming `what` and the term when a
+/// corner is out of range, repeated, kv is negative or not finite, or the rest tetrahedron is inverted
+/// or degenerate (volume <= 1e-12 of its longest edge cubed).
+void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& what);
+
+/// Adds the volume forces -dE/dx to f (flat 3N arrays). Returns the stiffening of the terms (>= 1): the
+/// largest ratio of a term's current curvature bound to its rest one, for the stable step (§2.2).
+double add_volume_forces(const VolumeTerms& T, const double* x, double* f);
+/// Sum of the volume energies (mJ).
+double volume_energy(const VolumeTerms& T, const MatX3& x);
+/// Number of terms whose tetrahedron is inverted or flat (V <= 0) at x.
+std::uint64_t count_inverted(const VolumeTerms& T, const MatX3& x);
+/// y += K_vol p, the exact Hessian of the volume energy at x applied to p (flat 3N); gauss_newton drops
+/// the (V - V0) d^2V part (symmetric positive semi-definite, for CG solves).
+void add_volume_stiffness_product(const VolumeTerms& T, const MatX3& x, const VecX& p, VecX& y,
+                                  bool gauss_newton = false);
+/// Appends the exact 12 x 12 Hessian blocks of every term at x as triplets (3N x 3N).
+void add_volume_stiffness_triplets(const VolumeTerms& T, const MatX3& x,
+                                   std::vector<Eigen::Triplet<double>>& out);
+/// Adds, per node, the Gershgorin row bound of the terms' Hessian at x: diag[a] += sum over its terms of
+/// the norm of its own block, off[a] += sum of the norms of its blocks with the free other corners / sqrt
+/// of the masses (the §2.2 form used for springs).
+void add_volume_gershgorin(const VolumeTerms& T, const MatX3& x, const VecX& mass,
+                           const std::vector<std::uint8_t>& fixed, VecX& diag, VecX& off);
+
+}  // namespace medspring
