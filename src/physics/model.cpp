@@ -4,6 +4,7 @@
 
 #include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/core/memory.hpp"
 #include "medspring/geometry/topology.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
@@ -191,6 +192,8 @@ Model ModelBuilder::build() {
 }
 
 Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& p, const std::string& name) {
+  require_memory(kModelBuildBytesPerNode * static_cast<double>(mesh.num_vertices()),
+                 cat(name, ": a model of ", mesh.num_vertices(), " nodes"));
   require_valid_mesh(mesh, name, {.closed = false, .manifold = false});
   ModelBuilder b(name);
   for (Index a = 0; a < mesh.num_vertices(); ++a) b.add_node(mesh.V.row(a).transpose(), p.node);
