@@ -17,7 +17,8 @@ const std::vector<Command>& commands() {
        "  MedSpring (1 and N threads, default 2), the plain reference loop and Bullet btSoftBody on the\n"
        "  same tube at 1.2k, 10k, 100k and 1M nodes (--quick: up to 100k), in one run (docs/performance.md)\n"
        "  --sizes LIST   only these tubes (of 1.2k,10k,100k,1M,3M)\n"
-       "  --order O      node order of the tube: built (ring by ring), shuffled, rcm (shuffled, then reordered)\n"
+       "  --order O      node order of the tube: built (ring by ring), shuffled, rcm (shuffled, then "
+       "reordered)\n"
        "medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
        "  the same from 1.2k to 3M nodes; writes DIR/scaling.json and the log-log plot DIR/scaling.png\n",
        {"json", "quick", "compare", "scaling", "no-bullet"},
