@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <iostream>
+#include <new>
 
 #include "medspring/core/check.hpp"
 
@@ -75,6 +76,10 @@ void Args::require_known(const std::vector<std::string>& known) const {
 int guarded(const std::string& command, int (*body)(const Args&), const Args& args) {
   try {
     return body(args);
+  } catch (const std::bad_alloc&) {
+    std::cerr << "medspring " << command
+              << ": error: out of memory: the model or data is too large for this machine's memory\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "medspring " << command << ": error: " << e.what() << "\n";
     return 1;

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "commands.hpp"
 #include "compare.hpp"
@@ -52,7 +53,8 @@ std::string series_name(const bench::CompareResult& r) {
 }  // namespace
 
 int cmd_bench_compare(const Args& args) {
-  args.require_known({"compare", "scaling", "json", "quick", "threads", "out", "no-bullet", "samples"});
+  args.require_known(
+      {"compare", "scaling", "json", "quick", "threads", "out", "no-bullet", "samples", "order", "sizes"});
   const bool scaling = args.flag("scaling"), json = args.flag("json"), quick = args.flag("quick");
   const long threads = args.integer("threads", 2);
   require_thread_count(threads, "--threads");
@@ -73,6 +75,25 @@ int cmd_bench_compare(const Args& args) {
   opt.sizes = {{40, 30}, {100, 100}, {400, 250}};
   if (!quick) opt.sizes.push_back({1000, 1000});
   if (scaling && !quick) opt.sizes.push_back({2000, 1500});
+  opt.order = args.get("order").value_or("built");
+  require(opt.order == "built" || opt.order == "shuffled" || opt.order == "rcm",
+          "--order: must be built, shuffled or rcm (got '", opt.order, "')");
+  if (const auto list = args.get("sizes")) {  // e.g. --sizes 1.2k,1M
+    const std::map<std::string, bench::TubeSize> known = {{"1.2k", {40, 30}},
+                                                          {"10k", {100, 100}},
+                                                          {"100k", {400, 250}},
+                                                          {"1M", {1000, 1000}},
+                                                          {"3M", {2000, 1500}}};
+    opt.sizes.clear();
+    std::stringstream ss(*list);
+    for (std::string item; std::getline(ss, item, ',');) {
+      const auto it = known.find(item);
+      require(it != known.end(), "--sizes: unknown size '", item,
+              "' (expected a list of 1.2k, 10k, 100k, 1M, 3M)");
+      opt.sizes.push_back(it->second);
+    }
+    require(!opt.sizes.empty(), "--sizes: empty list (expected e.g. 1.2k,1M)");
+  }
   const bool table = !json && !scaling;
   if (!json) {
     std::printf("# one run, one process; Bullet %s\n",

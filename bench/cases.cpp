@@ -29,10 +29,10 @@ std::function<void()> surface_update(const SurfaceMesh& mesh, bool nonlinear, In
   if (!nonlinear) p.duffing.mode = DuffingMode::Linear;
   auto sim = std::make_shared<Sim>();
   sim->model = make_surface_model(mesh, p, "bench");
-  sim->state = make_state(sim->model);
-  sim->state.f_ext.row(c) = F.transpose();
   sim->settings.dt = 0.5;
   sim->settings.integrator = integrator;
+  sim->state = make_state(sim->model, sim->settings);  // scratch of this integrator only, as Simulation
+  sim->state.f_ext.row(c) = F.transpose();
   return [sim] { step(sim->model, sim->state, sim->settings); };
 }
 

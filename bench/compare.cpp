@@ -5,8 +5,11 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <numeric>
+#include <random>
 
 #include "medspring/core/check.hpp"
+#include "medspring/geometry/locality.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/geometry/topology.hpp"
 #include "medspring/physics/integrators.hpp"
@@ -43,20 +46,52 @@ std::string size_name(long nodes) {
   return cat("tube_", nodes);
 }
 
-Model tube_model(const TubeSize& size) {
+namespace {
+
+struct Tube {
+  Model model;
+  std::vector<Index> new_of_old;  // tube node (ring-by-ring numbering) -> model node
+};
+
+// The tube in the node order asked for: "built" (ring by ring, as tube() numbers it), "shuffled" (a
+// fixed random permutation: what an unordered mesh looks like) or "rcm" (the shuffled tube put back
+// into reverse Cuthill-McKee order by locality_order, as the builders do for their meshes).
+Tube tube_model(const TubeSize& size, const std::string& order) {
   const double radius = std::max(3.0, 2.5 * static_cast<double>(size.spokes) / (2.0 * std::numbers::pi));
-  const SurfaceMesh mesh = tube(size.rings, size.spokes, 2.5, radius);
+  SurfaceMesh mesh = tube(size.rings, size.spokes, 2.5, radius);
+  const auto n = static_cast<std::size_t>(mesh.num_vertices());
+  std::vector<Index> old_of_new(n);
+  std::iota(old_of_new.begin(), old_of_new.end(), 0);
+  if (order != "built") {
+    std::mt19937_64 rng(15);
+    std::shuffle(old_of_new.begin(), old_of_new.end(), rng);
+    mesh = permute_vertices(mesh, old_of_new);
+    if (order == "rcm") {
+      const std::vector<Index> rcm = locality_order(mesh);
+      mesh = permute_vertices(mesh, rcm);
+      std::vector<Index> composed(n);
+      for (std::size_t k = 0; k < n; ++k) composed[k] = old_of_new[static_cast<std::size_t>(rcm[k])];
+      old_of_new = std::move(composed);
+    }
+  }
+  Tube t;
+  t.new_of_old = inverse_permutation(old_of_new);
   SurfaceBodyParams p;  // Strain Duffing law, k 0.05 N/mm, kidney node parameters
   for (Index j = 0; j < size.spokes; ++j) {
-    p.fixed.push_back(j);
-    p.fixed.push_back((size.rings - 1) * size.spokes + j);
+    p.fixed.push_back(t.new_of_old[static_cast<std::size_t>(j)]);
+    p.fixed.push_back(t.new_of_old[static_cast<std::size_t>((size.rings - 1) * size.spokes + j)]);
   }
-  return make_surface_model(mesh, p, size_name(size.nodes()));
+  t.model = make_surface_model(mesh, p, size_name(size.nodes()));
+  return t;
 }
+
+}  // namespace
+
+Model tube_model(const TubeSize& size) { return tube_model(size, "built").model; }
 
 namespace {
 
-TubeData tube_data(const Model& m, const TubeSize& size) {
+TubeData tube_data(const Model& m, const TubeSize& size, const std::vector<Index>& new_of_old) {
   TubeData d;
   const auto n = static_cast<std::size_t>(m.num_nodes());
   d.x0.assign(m.x0.data(), m.x0.data() + 3 * n);
@@ -69,7 +104,7 @@ TubeData tube_data(const Model& m, const TubeSize& size) {
   d.L0 = m.springs.L0;
   d.k = m.springs.k;
   d.kp = m.springs.kp;
-  d.load_node = (size.rings / 2) * size.spokes + size.spokes / 4;
+  d.load_node = new_of_old[static_cast<std::size_t>((size.rings / 2) * size.spokes + size.spokes / 4)];
   return d;
 }
 
@@ -174,9 +209,11 @@ std::vector<CompareResult> run_compare(const CompareOptions& o,
   if (sizes.empty()) sizes = {{40, 30}, {100, 100}, {400, 250}, {1000, 1000}};
   for (const TubeSize& size : sizes) {
     auto t0 = clock_type::now();
-    const auto model = std::make_shared<const Model>(tube_model(size));
+    Tube built = tube_model(size, o.order);
+    const auto model = std::make_shared<const Model>(std::move(built.model));
     const double build_s = seconds_since(t0);
-    const TubeData data = tube_data(*model, size);
+    const TubeData data = tube_data(*model, size, built.new_of_old);
+    built.new_of_old = {};
     CompareResult base;
     base.name = size_name(size.nodes());
     base.nodes = model->num_nodes();

@@ -61,6 +61,7 @@ struct CompareOptions {
   double budget_s = 2.0;  // per engine and size
   long samples = 2000;
   bool bullet = true;
+  std::string order = "built";  // node order of the tube: built (ring by ring) | shuffled | rcm
 };
 
 /// True when the benchmark was built with Bullet (libbullet-dev).

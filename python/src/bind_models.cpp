@@ -184,7 +184,12 @@ void bind_models(py::module_& m) {
            "params"_a = SurfaceBodyParams{}, "name"_a = "surface", "grid"_a = GridLayout{},
            "A surface body from a triangle mesh (mm): one spring per unique edge; `grid` for a structured "
            "tube "
-           "(local 5 x 5 window).");
+           "(local 5 x 5 window).")
+      .def_property_readonly(
+          "dof_of_surface", [](const SurfaceBody& b) { return copy_of(b.dof_of_surface()); },
+          "DOF (model node) of every surface node: a large mesh with scattered numbering is simulated in "
+          "reverse Cuthill-McKee order (empty array: DOF = surface node). Loads, fixed nodes, surface, "
+          "normals keep the mesh's numbering; positions/velocities are in DOF order.");
 
   // ---- HybridKidney ----
   py::class_<HybridSettings> hs(m, "HybridSettings",

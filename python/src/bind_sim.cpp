@@ -72,14 +72,16 @@ void bind_sim(py::module_& m) {
   sset.def_readwrite("step", &SimulationSettings::step,
                      "StepSettings (dt 0.5 ms, symplectic Euler, sub-stepping).")
       .def_readwrite("local", &SimulationSettings::local, "LocalOptions.")
-      .def_readwrite("normals", &SimulationSettings::normals,
-                     "Recompute vertex normals every update (True).");
+      .def_readwrite(
+          "normals", &SimulationSettings::normals,
+          "Vertex normals available (True): computed when read after an update, not in every update.");
   settings_helpers(sset);
 
   py::class_<Simulation>(
       m, "Simulation",
       "One simulated organ over time: a Body, its state, loads on surface nodes and the local overlay. One "
-      "update = loads -> DOF forces -> step -> map to the surface -> + local displacement -> normals "
+      "update = loads -> DOF forces -> step -> map to the surface -> + local displacement (normals when "
+      "read) "
       "(D-18).\n\n"
       "    sim = medspring.Simulation(medspring.hybrid_kidney_phantom())\n"
       "    sim.set_loads([medspring.PointLoad(node=223, force=(0, 0, -1), t_release=500)])\n"
@@ -150,7 +152,10 @@ void bind_sim(py::module_& m) {
           "Mapped surface without the local overlay (S, 3), read-only view.")
       .def_property_readonly(
           "normals", [](py::object self) { return view_of(self.cast<const Simulation&>().normals(), self); },
-          "Unit vertex normals of the surface (S, 3), read-only view (valid when settings.normals).")
+          "Unit vertex normals of the surface (S, 3), read-only view, computed on access: reading it after "
+          "an "
+          "update recomputes them (a view held across updates is refreshed by the next read). Empty when "
+          "settings.normals is False.")
       .def(
           "displacement", [](const Simulation& s) { return copy_of(s.displacement()); },
           "Displacement of the displayed surface from rest (S, 3), mm (a new array).")

@@ -5,12 +5,16 @@
 #include <numbers>
 
 #include "medspring/core/check.hpp"
+#include "medspring/core/memory.hpp"
 
 namespace medspring {
 
 MatX3i tube_grid_faces(Index rings, Index spokes) {
   require(rings >= 2, "tube: rings must be >= 2 (got ", rings, ")");
   require(spokes >= 3, "tube: spokes must be >= 3 (got ", spokes, ")");
+  const double nodes = static_cast<double>(rings) * static_cast<double>(spokes);
+  require_index_count(2.0 * nodes, cat("tube: ", rings, " x ", spokes, " nodes: the face count"));
+  require_memory(48.0 * nodes, cat("tube: ", rings, " x ", spokes, " nodes"));  // V and F
   MatX3i F(2 * spokes * (rings - 1), 3);
   Index f = 0;
   for (Index i = 0; i + 1 < rings; ++i)

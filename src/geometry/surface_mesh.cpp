@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
-#include <unordered_map>
 
 #include "medspring/core/check.hpp"
 #include "medspring/geometry/topology.hpp"
@@ -12,11 +12,6 @@
 namespace medspring {
 
 namespace {
-
-struct EdgeUse {
-  Index faces = 0;
-  Index forward = 0;  // times traversed i -> j with i < j
-};
 
 Index find_root(std::vector<Index>& parent, Index a) {
   while (parent[a] != a) {
@@ -77,9 +72,11 @@ MeshReport validate_mesh(const SurfaceMesh& mesh) {
   }
   const double area_tol = 1e-12 * r.bbox_diagonal * r.bbox_diagonal;
   std::vector<char> used(static_cast<std::size_t>(nv), 0);
-  std::unordered_map<std::uint64_t, EdgeUse> edges;
-  edges.reserve(static_cast<std::size_t>(nf) * 2);
-  std::vector<std::array<Index, 3>> sorted_faces;
+  // Every face side as one sortable key: (lo << 33) | (hi << 1) | (lo -> hi is the face's direction).
+  // Sorting the keys groups the sides of each edge (no hash map: 1M-node meshes validate in a second).
+  std::vector<std::uint64_t> sides;
+  sides.reserve(static_cast<std::size_t>(nf) * 3);
+  std::vector<std::pair<std::array<Index, 3>, Index>> sorted_faces;  // (sorted corners, face)
   sorted_faces.reserve(static_cast<std::size_t>(nf));
   std::vector<Index> good_faces;
   for (Index f = 0; f < nf; ++f) {
@@ -100,47 +97,48 @@ MeshReport validate_mesh(const SurfaceMesh& mesh) {
       if (r.degenerate_faces == 0) note(cat("face ", f, ": degenerate triangle (", a, ", ", b, ", ", c, ")"));
       ++r.degenerate_faces;
     }
-    std::array<Index, 3> s{a, b, c};
-    std::sort(s.begin(), s.end());
-    sorted_faces.push_back(s);
+    std::array<Index, 3> sc{a, b, c};
+    std::sort(sc.begin(), sc.end());
+    sorted_faces.emplace_back(sc, static_cast<Index>(good_faces.size()));
     good_faces.push_back(f);
     const Index tri[3] = {a, b, c};
     for (int k = 0; k < 3; ++k) {
       const Index u = tri[k], w = tri[(k + 1) % 3];
       if (u == w) continue;
-      const Index lo = std::min(u, w), hi = std::max(u, w);
-      auto& e = edges[(static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint32_t>(hi)];
-      ++e.faces;
-      if (u < w) ++e.forward;
+      const auto lo = static_cast<std::uint64_t>(std::min(u, w)),
+                 hi = static_cast<std::uint64_t>(std::max(u, w));
+      sides.push_back((lo << 33) | (hi << 1) | (u < w ? 1u : 0u));
     }
   }
-  // duplicates
+  // duplicates: faces with the same corners, reported in (corners, face order) order
   {
-    std::vector<Index> order(sorted_faces.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](Index x, Index y) { return sorted_faces[x] < sorted_faces[y]; });
-    for (std::size_t k = 1; k < order.size(); ++k) {
-      if (sorted_faces[order[k]] == sorted_faces[order[k - 1]]) {
+    std::sort(sorted_faces.begin(), sorted_faces.end());
+    for (std::size_t k = 1; k < sorted_faces.size(); ++k) {
+      if (sorted_faces[k].first == sorted_faces[k - 1].first) {
         if (r.duplicate_faces == 0)
-          note(cat("face ", good_faces[order[k]], ": duplicate of face ", good_faces[order[k - 1]]));
+          note(cat("face ", good_faces[static_cast<std::size_t>(sorted_faces[k].second)],
+                   ": duplicate of face ", good_faces[static_cast<std::size_t>(sorted_faces[k - 1].second)]));
         ++r.duplicate_faces;
       }
     }
   }
-  r.edges = static_cast<Index>(edges.size());
-  std::vector<std::pair<std::uint64_t, EdgeUse>> sorted_edges(edges.begin(), edges.end());
-  std::sort(sorted_edges.begin(), sorted_edges.end(),
-            [](const auto& x, const auto& y) { return x.first < y.first; });
-  for (const auto& [key, e] : sorted_edges) {
+  std::sort(sides.begin(), sides.end());
+  for (std::size_t q = 0; q < sides.size();) {
+    const std::uint64_t key = sides[q] >> 1;
+    Index faces = 0, forward = 0;
+    for (; q < sides.size() && (sides[q] >> 1) == key; ++q) {
+      ++faces;
+      forward += static_cast<Index>(sides[q] & 1u);
+    }
+    ++r.edges;
     const Index lo = static_cast<Index>(key >> 32), hi = static_cast<Index>(key & 0xffffffffu);
-    if (e.faces == 1) ++r.boundary_edges;
-    if (e.faces > 2) {
+    if (faces == 1) ++r.boundary_edges;
+    if (faces > 2) {
       if (r.nonmanifold_edges == 0)
-        note(cat("edge (", lo, ", ", hi, "): non-manifold, shared by ", e.faces, " faces"));
+        note(cat("edge (", lo, ", ", hi, "): non-manifold, shared by ", faces, " faces"));
       ++r.nonmanifold_edges;
     }
-    if (e.faces == 2 && e.forward != 1) ++r.inconsistent_edges;
+    if (faces == 2 && forward != 1) ++r.inconsistent_edges;
   }
   for (Index i = 0; i < nv; ++i) r.isolated_vertices += used[i] ? 0 : 1;
   // components over faces via union-find on vertices

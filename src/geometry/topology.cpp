@@ -1,6 +1,7 @@
 #include "medspring/geometry/topology.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <deque>
 #include <numeric>
 
@@ -9,43 +10,56 @@
 namespace medspring {
 
 MatX2i unique_edges(const MatX3i& F) {
-  std::vector<std::pair<Index, Index>> e;
+  // (min << 32) | max keys: one integer sort instead of a sort of pairs (the same lexicographic order)
+  std::vector<std::uint64_t> e;
   e.reserve(static_cast<std::size_t>(F.rows()) * 3);
   for (Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const Index a = F(f, k), b = F(f, (k + 1) % 3);
-      if (a != b) e.emplace_back(std::min(a, b), std::max(a, b));
+      if (a != b)
+        e.push_back((static_cast<std::uint64_t>(static_cast<std::uint32_t>(std::min(a, b))) << 32) |
+                    static_cast<std::uint32_t>(std::max(a, b)));
     }
   std::sort(e.begin(), e.end());
   e.erase(std::unique(e.begin(), e.end()), e.end());
   MatX2i E(static_cast<Index>(e.size()), 2);
   for (std::size_t s = 0; s < e.size(); ++s) {
-    E(static_cast<Index>(s), 0) = e[s].first;
-    E(static_cast<Index>(s), 1) = e[s].second;
+    E(static_cast<Index>(s), 0) = static_cast<Index>(static_cast<std::int32_t>(e[s] >> 32));
+    E(static_cast<Index>(s), 1) = static_cast<Index>(static_cast<std::int32_t>(e[s] & 0xffffffffu));
   }
   return E;
 }
 
 Adjacency vertex_adjacency(Index n, const MatX2i& edges) {
-  std::vector<std::vector<Index>> nb(static_cast<std::size_t>(n));
+  // compressed rows in two passes (count, fill), then each row sorted and de-duplicated in place
+  std::vector<Index> count(static_cast<std::size_t>(n) + 1, 0);
   for (Index s = 0; s < edges.rows(); ++s) {
     const Index a = edges(s, 0), b = edges(s, 1);
     require_index(a, n, "edges[", s, "][0]");
     require_index(b, n, "edges[", s, "][1]");
     if (a == b) continue;
-    nb[a].push_back(b);
-    nb[b].push_back(a);
+    ++count[static_cast<std::size_t>(a) + 1];
+    ++count[static_cast<std::size_t>(b) + 1];
+  }
+  for (std::size_t i = 1; i < count.size(); ++i) count[i] += count[i - 1];
+  std::vector<Index> fill(count.begin(), count.end() - 1);
+  std::vector<Index> nb(static_cast<std::size_t>(count.back()));
+  for (Index s = 0; s < edges.rows(); ++s) {
+    const Index a = edges(s, 0), b = edges(s, 1);
+    if (a == b) continue;
+    nb[static_cast<std::size_t>(fill[a]++)] = b;
+    nb[static_cast<std::size_t>(fill[b]++)] = a;
   }
   Adjacency adj;
   adj.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
+  adj.neighbors.reserve(nb.size());
   for (Index i = 0; i < n; ++i) {
-    auto& v = nb[i];
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
-    adj.offsets[i + 1] = adj.offsets[i] + static_cast<Index>(v.size());
+    const auto first = nb.begin() + count[i], last = nb.begin() + count[static_cast<std::size_t>(i) + 1];
+    std::sort(first, last);
+    const auto end = std::unique(first, last);
+    adj.neighbors.insert(adj.neighbors.end(), first, end);
+    adj.offsets[static_cast<std::size_t>(i) + 1] = static_cast<Index>(adj.neighbors.size());
   }
-  adj.neighbors.reserve(static_cast<std::size_t>(adj.offsets.back()));
-  for (const auto& v : nb) adj.neighbors.insert(adj.neighbors.end(), v.begin(), v.end());
   return adj;
 }
 

@@ -463,6 +463,8 @@ BalloonResult build_balloon_surface(const SurfaceMesh& organ_in, const BalloonSe
           " is too small for this organ: the result is not a closed manifold surface (", out.mesh.summary(),
           ")");
   if (signed_volume(result.mesh.V, result.mesh.F) < 0.0) result.mesh.F.col(1).swap(result.mesh.F.col(2));
+  // Generated numbering: renumber for locality (the users' node numbers are the ones of this result).
+  if (settings.locality_order) result.mesh = permute_vertices(result.mesh, locality_order(result.mesh));
 
   rep.nodes = result.mesh.num_vertices();
   rep.faces = result.mesh.num_faces();

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "medspring/core/check.hpp"
+#include "medspring/geometry/locality.hpp"
 #include "medspring/geometry/topology.hpp"
 #include "medspring/meshing/balloon.hpp"
 #include "medspring/meshing/mesh_repair.hpp"

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "medspring/core/check.hpp"
+#include "medspring/core/memory.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/geometry/topology.hpp"
 
@@ -106,6 +107,8 @@ MatX2i union_spokes(const MatX3& S, const MatX3& A, Index K, const MaskVolume* m
 HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const HybridSettings& st,
                            std::string name, const MaskVolume* mask)
     : F_(surface.F), rest_surface_(surface.V), settings_(st) {
+  require_memory(kModelBuildBytesPerNode * static_cast<double>(surface.num_vertices()),
+                 cat(name, ": a hybrid model of ", surface.num_vertices(), " surface nodes"));
   require_valid_mesh(surface, name, {.closed = false, .manifold = true});
   require(atoms.rows() >= 2, name, ": a hybrid model needs at least 2 centerline atoms (got ", atoms.rows(),
           ")");

@@ -4,6 +4,7 @@
 
 #include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/core/memory.hpp"
 #include "medspring/geometry/topology.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
@@ -184,24 +185,36 @@ Model ModelBuilder::build() {
     m.damping[a] = damping_[a];
     m.kr[a] = kr_[a];
   }
-  m.fixed = fixed_;
-  m.springs = springs_;
-  m.bending = bending_;
-  m.volume = volume_;
+  // The builder hands its arrays over (a 1M-node model is not held twice while finalize runs); it is
+  // left empty, as after construction.
+  std::vector<Vec3>().swap(nodes_);
+  for (auto* v : {&mass_, &damping_, &kr_}) std::vector<double>().swap(*v);
+  m.fixed = std::move(fixed_);
+  m.springs = std::move(springs_);
+  m.bending = std::move(bending_);
+  m.volume = std::move(volume_);
+  fixed_.clear();
+  springs_ = Springs{};
+  bending_ = BendingTerms{};
+  volume_ = VolumeTerms{};
   finalize(m);
   return m;
 }
 
 Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& p, const std::string& name) {
+  require_memory(kModelBuildBytesPerNode * static_cast<double>(mesh.num_vertices()),
+                 cat(name, ": a model of ", mesh.num_vertices(), " nodes"));
   require_valid_mesh(mesh, name, {.closed = false, .manifold = false});
   ModelBuilder b(name);
   for (Index a = 0; a < mesh.num_vertices(); ++a) b.add_node(mesh.V.row(a).transpose(), p.node);
-  const MatX2i E = unique_edges(mesh.F);
-  b.reserve_springs(static_cast<Index>(E.rows()));
-  for (Index s = 0; s < E.rows(); ++s) {
-    const double L0 = (mesh.V.row(E(s, 1)) - mesh.V.row(E(s, 0))).norm();
-    if (L0 < 1e-9) continue;  // §1.1: drop edges shorter than 1e-9 mm
-    b.add_spring(E(s, 0), E(s, 1), p.k, p.duffing);
+  {
+    const MatX2i E = unique_edges(mesh.F);
+    b.reserve_springs(static_cast<Index>(E.rows()));
+    for (Index s = 0; s < E.rows(); ++s) {
+      const double L0 = (mesh.V.row(E(s, 1)) - mesh.V.row(E(s, 0))).norm();
+      if (L0 < 1e-9) continue;  // §1.1: drop edges shorter than 1e-9 mm
+      b.add_spring(E(s, 0), E(s, 1), p.k, p.duffing);
+    }
   }
   for (std::size_t q = 0; q < p.fixed.size(); ++q) {
     require_index(p.fixed[q], mesh.num_vertices(), name, ": fixed[", q, "]");

@@ -49,27 +49,31 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
   // assembled matrix.
   const Springs& S = m.springs;
   const Index ns = S.size();
-  MatX3 nh(ns, 3);
+  // ca, cb per spring; the unit direction is recomputed in every product from x (the same expression, so
+  // the same bits as storing it) to keep a 1M-node build within its memory budget.
   VecX ca(ns), cb(ns);
   for (Index q = 0; q < ns; ++q) {
     const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
     const double L = e.norm();
     if (L < 1e-9) {
       ca[q] = cb[q] = 0;
-      nh.row(q).setZero();
       continue;
     }
     const double d = L - S.L0[q];
     cb[q] = spring_tension(S.k[q], S.kp[q], d) / L;
     ca[q] = spring_tension_derivative(S.k[q], S.kp[q], d) - cb[q];
-    nh.row(q) = (e / L).transpose();
   }
+  auto unit = [&](Index q) -> Vec3 {
+    const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
+    const double L = e.norm();
+    return L < 1e-9 ? Vec3::Zero() : Vec3(e / L);
+  };
   auto apply_K = [&](const VecX& p, VecX& y) {
     for (Index a = 0; a < n; ++a) y.segment<3>(3 * a) = m.kr[a] * p.segment<3>(3 * a);
     for (Index q = 0; q < ns; ++q) {
       const Index i = 3 * S.i[q], j = 3 * S.j[q];
       const Vec3 dp = p.segment<3>(i) - p.segment<3>(j);
-      const Vec3 nq = nh.row(q).transpose();
+      const Vec3 nq = unit(q);
       const Vec3 kd = ca[q] * nq * nq.dot(dp) + cb[q] * dp;
       y.segment<3>(i) += kd;
       y.segment<3>(j) -= kd;
@@ -85,25 +89,27 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
     if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, p, y);
   };
   VecX y(3 * n), w(3 * n);
-  VecX s(3 * n);  // M^-1/2 scaling, zero on fixed DOFs (removed from the system, §1.5)
-  for (Index a = 0; a < n; ++a)
-    s.segment<3>(3 * a).setConstant(m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]));
+  VecX s(n);  // M^-1/2 scaling per node, zero on fixed DOFs (removed from the system, §1.5)
+  for (Index a = 0; a < n; ++a) s[a] = m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]);
+  auto scale = [&](const VecX& in, VecX& out) {  // out = M^-1/2 in
+    for (Index a = 0; a < n; ++a) out.segment<3>(3 * a) = s[a] * in.segment<3>(3 * a);
+  };
   VecX z(3 * n);
   std::uint64_t seed = 0x9E3779B97F4A7C15ull;  // deterministic pseudo-random start
   for (Index q = 0; q < 3 * n; ++q) {
     seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-    z[q] = (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * s[q];
+    z[q] = (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * s[q / 3];
   }
   double lambda = 0;
   for (int it = 0; it < iterations; ++it) {
     const double nz = z.norm();
     if (nz == 0) return 0.0;
     z /= nz;
-    w = s.cwiseProduct(z);
+    scale(z, w);
     apply_K(w, y);
-    y = s.cwiseProduct(y);
+    scale(y, y);
     lambda = z.dot(y);
-    z = y;
+    z.swap(y);
   }
   return safety * std::sqrt(std::max(lambda, 0.0));
 }

@@ -125,7 +125,18 @@ void Simulation::refresh_surface() {
       local_active_ = true;
     }  // else U_ keeps its storage for the next contact; local_displacement() reads empty
   }
-  if (settings_.normals) vertex_normals(surface_, body_->faces(), normals_);
+  normals_stale_ = true;  // recomputed when read (normals())
+}
+
+const MatX3& Simulation::normals() const {
+  if (normals_stale_) {
+    if (settings_.normals)
+      vertex_normals(surface_, body_->faces(), normals_);
+    else
+      normals_.resize(0, 3);
+    normals_stale_ = false;
+  }
+  return normals_;
 }
 
 const std::vector<Index>& Simulation::local_nodes() const {

@@ -326,6 +326,35 @@ TEST(CliThreads, BadThreadCountsFailWithOneLine) {
   EXPECT_EQ(nlohmann::json::parse(ok.out)["updates"], 100);
 }
 
+// Issue 15, bad input: a model too large for memory (or for 32-bit indices) is refused before anything
+// is built or written, with one line naming the model, its size and the memory.
+TEST(CliTooLarge, ModelsBeyondMemoryFailWithOneLine) {
+  const fs::path dir = testing::temp_dir("cli-too-large");
+  const std::string scene =
+      R"({"model": {"kind": "surface", "source": {"phantom": {"name": "tube", "rings": 1000,
+    "spokes": 1000}}}, "loads": [{"node": 5, "direction": [0, 0, -1], "magnitude": 0.5}], "duration": 5})";
+  write(dir / "big.json", scene);
+  write(dir / "huge.json", replaced(scene, "\"rings\": 1000", "\"rings\": 100000"));
+  ::setenv("MEDSPRING_MEMORY_LIMIT_MB", "100", 1);  // the 1M-node tube then needs more than the machine has
+  const Result run =
+      medspring("run " + quote((dir / "big.json").string()) + " --out " + quote((dir / "out").string()));
+  const Result bench = medspring("bench --compare --sizes 1M --no-bullet");
+  ::unsetenv("MEDSPRING_MEMORY_LIMIT_MB");
+  for (const Result& r : {run, bench}) {
+    EXPECT_EQ(r.rc, 1) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("a model of 1000000 nodes: needs about 0.9 GB of memory, more than the 0.1 GB"),
+              std::string::npos)
+        << r.err;
+  }
+  const Result huge =
+      medspring("run " + quote((dir / "huge.json").string()) + " --out " + quote((dir / "out").string()));
+  EXPECT_EQ(huge.rc, 1) << huge.err;
+  EXPECT_EQ(count_lines(huge.err), 1) << huge.err;
+  EXPECT_NE(huge.err.find("too large (indices are 32-bit"), std::string::npos) << huge.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(CliPaper, QuickRunMakesTheReportFiguresAndTablesOnThePhantoms) {
   const fs::path dir = testing::temp_dir("cli-paper");
   const fs::path out = dir / "paper";

@@ -36,6 +36,7 @@ struct BalloonSettings {
   double max_flip_deviation = 0.15;  // a flip may not put its new edge's midpoint farther than this
                                      // fraction of the edge length from the organ surface
   bool measure_distance = true;      // fill BalloonReport::hausdorff_mm / mean_distance_mm
+  bool locality_order = true;        // nodes numbered in reverse Cuthill-McKee order (cache locality)
 };
 
 struct BalloonReport {

@@ -111,8 +111,14 @@ struct SurfaceBodyParams {
   DuffingSettings duffing{};  // Strain (D-3) by default
   std::vector<Index> fixed;   // pinned nodes
 };
+/// Refused up front (InvalidInput naming the node count and the memory) when kModelBuildBytesPerNode
+/// per node exceeds the machine's memory (core/memory.hpp).
 Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& params,
                          const std::string& name = "surface");
+
+/// Peak bytes per node of building a surface model and simulating it (mesh, builder arrays, model,
+/// explicit state, with margin), for the memory check of make_surface_model and the model builders.
+inline constexpr double kModelBuildBytesPerNode = 1000.0;
 
 /// Fingerprint of a model: FNV-1a 64 over the node count, rest positions, masses, damping, return
 /// springs, fixed flags, springs (ends, rest lengths, k, k') and bending terms (bit patterns of the

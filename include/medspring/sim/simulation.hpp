@@ -1,5 +1,6 @@
 // One simulated organ over time: a Body, its state, loads on surface nodes and the local-deformation
-// overlay. One update (D-18) = loads -> DOF forces -> step -> map to the surface -> + local U -> normals.
+// overlay. One update (D-18) = loads -> DOF forces -> step -> map to the surface -> + local U; normals when
+// read.
 //
 //   Simulation sim(std::make_shared<HybridKidney>(hybrid_kidney_phantom()));
 //   sim.set_loads({{.node = 223, .force = {0, 0, -1}, .t_release = 500}});
@@ -28,7 +29,7 @@ struct LocalOptions {
 struct SimulationSettings {
   StepSettings step{};  // dt 0.5 ms, symplectic Euler, sub-stepping on
   LocalOptions local{};
-  bool normals = true;  // recompute vertex normals every update (rendering)
+  bool normals = true;  // vertex normals available (computed lazily when read after an update; false: none)
 };
 
 class Simulation {
@@ -70,8 +71,11 @@ class Simulation {
   const MatX3& surface() const { return surface_; }
   /// Global (mapped) surface without the local overlay.
   const MatX3& global_surface() const { return global_; }
-  /// Area-weighted unit vertex normals of surface() (valid when settings.normals).
-  const MatX3& normals() const { return normals_; }
+  /// Area-weighted unit vertex normals of surface() (empty unless settings.normals). Computed on demand:
+  /// an update only marks them stale, and the first read after it recomputes them (a renderer reading
+  /// once per displayed frame pays once per frame, not once per 0.5 ms update). The returned matrix
+  /// keeps its storage; it holds the current normals until the next update.
+  const MatX3& normals() const;
   /// Displacement of the displayed surface from rest (#S x 3).
   MatX3 displacement() const { return surface_ - body_->rest_surface(); }
   /// Total external force currently applied (loads + tool force, N) = minus the reaction on the tool.
@@ -93,7 +97,9 @@ class Simulation {
   SimulationSettings settings_;
   State state_;
   std::vector<PointLoad> loads_;
-  MatX3 global_, surface_, normals_, U_;
+  MatX3 global_, surface_, U_;
+  mutable MatX3 normals_;  // valid when !normals_stale_ (see normals())
+  mutable bool normals_stale_ = true;
   std::optional<LocalDeformer> local_;
   bool local_active_ = false;
   Index tool_node_ = -1;
