@@ -19,9 +19,13 @@
 #include "medspring/core/check.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/validation.hpp"
+#include "medspring/fem/vessel.hpp"
 #include "medspring/fem/volumetric.hpp"
+#include "medspring/medial/chain.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/models/tissue.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/scene/build.hpp"
@@ -62,9 +66,13 @@ struct Kind {
   std::string label() const {
     return base + (local ? " + local" : "") + (nonlinear ? " (Duffing)" : " (linear)");
   }
-  Index families() const {
-    return (base == "surface" || base == "volumetric" ? 2 : 4) + (local ? 1 : 0);  // + k_loc
-  }
+  Index stiffness_families() const { return base == "surface" || base == "volumetric" ? 2 : 4; }
+  // + eta of the Duffing springs (D-3: k' = eta k / L0^2; the volumetric kind keeps eta = 1: its
+  // calibration fits springs and volume terms only) + k_loc
+  bool fits_eta() const { return nonlinear && base != "volumetric"; }
+  Index families() const { return stiffness_families() + (fits_eta() ? 1 : 0) + (local ? 1 : 0); }
+  Index eta_index() const { return fits_eta() ? stiffness_families() : -1; }
+  Index local_index() const { return local ? families() - 1 : -1; }
 };
 
 // Stiffness families: surface (k, k_r); hybrid (k_surf, k_spoke, k_cl, k_r); multipliers m scale them.
@@ -85,6 +93,7 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     p.k *= m(0);
     p.node.return_k *= m(1);
     if (!k.nonlinear) p.duffing.mode = DuffingMode::Linear;
+    if (k.nonlinear) p.duffing.eta *= m(k.eta_index());
     p.fixed = support;
     return std::make_shared<SurfaceBody>(o.surface, p, o.name);
   }
@@ -95,6 +104,7 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
   s.surface_node.return_k *= m(3);
   s.atom_node.return_k *= m(3);
   s.nonlinear = k.nonlinear;
+  if (k.nonlinear) s.duffing.eta *= m(k.eta_index());
   s.fixed = support;
   return std::make_shared<HybridKidney>(o.surface, o.atoms, s, o.name);
 }
@@ -377,9 +387,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   }
   // The displacement of kind k with its families scaled by m (+ local: the last multiplier scales k_loc).
   auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {
-    const Index nb = k.families() - (k.local ? 1 : 0);
-    const BodyPtr body = make_body(o, k, support, m.head(nb));
-    return k.local ? fem::spring_displacement_local(*body, load, body->local_stiffness() * m(nb))
+    const BodyPtr body = make_body(o, k, support, m);
+    return k.local ? fem::spring_displacement_local(*body, load, body->local_stiffness() * m(k.local_index()))
                    : fem::spring_displacement(*body, load);
   };
   for (const Kind& k : kinds) {
@@ -395,8 +404,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
               [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, k.families(),
               training, st.quick ? 1 : 2);
       }
-      const Index nb = k.families() - (k.local ? 1 : 0);
-      const BodyPtr body = make_body(o, k, support, m.head(nb));
+      const BodyPtr body = make_body(o, k, support, m);
       json errs = json::array();
       double sum_rms_rel_held = 0, n_held = 0;
       for (const auto& c : cases) {
@@ -409,7 +417,12 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         }
         const Index contact = sites[static_cast<std::size_t>(c.site_index)];
         const fem::SurfaceError e = fem::compare(u, c.u_fem, contact);
+        // the contact error split along the load and across it (a sliding of the contact node)
+        const Vec3 fd = c.load.force.normalized(), du = (u.row(contact) - c.u_fem.row(contact)).transpose();
+        const double along = std::abs(du.dot(fd)), across = (du - du.dot(fd) * fd).norm();
         errs.push_back({{"site", c.site_index},
+                        {"contact_error_along_pct", 100 * e.rel(along)},
+                        {"contact_error_across_pct", 100 * e.rel(across)},
                         {"force_N", c.force},
                         {"train", c.train},
                         {"contact_fem_mm", e.contact_fem},
@@ -448,6 +461,219 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   }
   out["models"] = rows;
   out["fem"]["total_solve_s"] = fem_seconds;
+  return out;
+}
+
+// ---- The vessel (docs/accuracy.md, "The vessel"): SMRM centerline against the FEM wall ----------------
+
+// An SMRM parameter set: the scene's own settings ("default"), the wall's E set to the material's
+// ("material", what a scene's "material" block gives) and the material's with fitted multipliers on the
+// chain springs k_cl, the return springs k_r and the bending stiffness k_b ("calibrated").
+SmrmSettings vessel_settings(const SmrmSettings& base, const fem::Material& mat, bool material, const VecX& m,
+                             bool nonlinear) {
+  SmrmSettings s = base;
+  if (material) s.wall.E = mat.E;
+  s.chain.k *= m(0);
+  s.chain.kr *= m(1);
+  s.wall.E *= m(2);
+  s.chain.nonlinear = nonlinear;
+  if (nonlinear && m.size() > 3) s.chain.duffing.eta *= m(3);  // Duffing strength of the chain springs
+  return s;
+}
+
+json run_vessel(Scene scene0, const std::string& name, const Settings& st, const fem::Material& mat,
+                const fem::VesselMeshSettings& vms, FileLoader& loader) {
+  require(scene0.model.kind == ModelKind::Smrm, "accuracy: the vessel scene must be an smrm model");
+  scene0.loads.clear();  // the sites and loads are the table's
+  scene0.record.atoms.clear();
+  scene0.record.nodes.clear();
+  const BuiltScene built = build_scene(scene0, &loader);
+  const auto vessel = std::dynamic_pointer_cast<const SmrmVessel>(built.body);
+  require(vessel != nullptr, "accuracy: the vessel scene did not build one SMRM vessel");
+  const Index n = vessel->num_atoms(), M = vessel->grid().spokes;
+  const MatX3& C0 = vessel->rest_atoms();
+  const MatX3& S0 = vessel->rest_surface();
+  const SmrmSettings& base = vessel->settings();
+  const VecX kb0 = vessel->bending_stiffness();  // at base.wall.E (Wall mode: k_b is linear in E)
+  require(base.bending == BendingMode::Wall, "accuracy: the vessel must use wall bending");
+
+  std::vector<Index> sites;
+  if (st.quick)
+    sites = {n / 2, n / 3};
+  else
+    sites = {n / 2, n / 4, (3 * n) / 8, (5 * n) / 8, (3 * n) / 4};  // the first (the paper's atom) trains
+  const std::vector<double> forces =
+      st.quick ? std::vector<double>{0.005} : std::vector<double>{0.05, 0.5};  // the paper's light, strong
+  auto is_train = [&](std::size_t si, double) { return si == 0; };             // the paper's atom trains
+  json out = {{"vessel", name},
+              {"atoms", n},
+              {"surface_nodes", vessel->num_surface_nodes()},
+              {"length_mm",
+               [&] {
+                 double l = 0;
+                 for (Index i = 0; i + 1 < n; ++i) l += (C0.row(i + 1) - C0.row(i)).norm();
+                 return l;
+               }()},
+              {"radius_min_mm", vessel->atom_radius().minCoeff()},
+              {"radius_max_mm", vessel->atom_radius().maxCoeff()},
+              {"thickness_ratio", vms.thickness_ratio},
+              {"material", {{"E_kPa", mat.E * 1e3}, {"nu", mat.nu}}},
+              {"default_wall_E_kPa", base.wall.E * 1e3},
+              {"sites", sites},
+              {"forces_N", forces},
+              {"load",
+               "uniform traction (fixed direction) over the outer wall within half an atom spacing of the "
+               "loaded atom; the SMRM gets the whole force on that atom (D-14)"}};
+
+  note(st, cat(name, ": meshing the wall"));
+  const fem::VesselReference ref(*vessel, mat, vms);
+  out["fem"] = {{"nodes", ref.tube().mesh.num_nodes()},         {"elements", ref.tube().mesh.num_elements()},
+                {"fixed_nodes", ref.fixed_fem_nodes().size()},  {"spokes", ref.tube().spokes},
+                {"axial_subdivisions", vms.axial_subdivisions}, {"layers", vms.layers}};
+
+  struct Case {
+    Index site_index, atom;
+    double force;
+    Vec3 F;
+    fem::VesselFemResult fem;
+    bool train;
+  };
+  std::vector<Case> cases;
+  json fem_failed = json::array();  // loads under which CalculiX found no equilibrium (reported, not hidden)
+  for (std::size_t si = 0; si < sites.size(); ++si)
+    for (double F : forces) {
+      const Index a = sites[si];
+      const Vec3 d = (C0.row(a) - S0.row(a * M)).normalized();  // inward normal of spoke 0 of ring a
+      note(st, cat(name, ": FEM atom ", a, ", ", F, " N"));
+      try {
+        Case c{static_cast<Index>(si), a, F, F * d, ref.solve(a, F * d), is_train(si, F)};
+        cases.push_back(std::move(c));
+      } catch (const SolverError& e) {
+        note(st, cat(name, ": FEM atom ", a, ", ", F, " N: no equilibrium"));
+        fem_failed.push_back({{"atom", a}, {"force_N", F}, {"train", is_train(si, F)}, {"error", e.what()}});
+      }
+    }
+  out["fem_failed"] = fem_failed;
+  require(!cases.empty() && cases[0].train, "accuracy: ", name,
+          ": the FEM found no equilibrium for the training loads");
+  {
+    std::vector<double> v;
+    for (const auto& c : cases) v.push_back(c.fem.solve_seconds);
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    out["fem"]["median_solve_s"] = v[v.size() / 2];
+  }
+  if (!st.quick) {  // mesh convergence: the light training case on a finer wall
+    fem::VesselMeshSettings fine = vms;
+    fine.spoke_stride = std::max<Index>(1, (2 * vms.spoke_stride) / 3);  // 10 -> 15 spokes of 30
+    fine.axial_subdivisions = 2 * vms.axial_subdivisions;
+    note(st, cat(name, ": FEM convergence (finer wall)"));
+    const fem::VesselReference ref2(*vessel, mat, fine);
+    const Case& c0 = cases[0];
+    const fem::VesselFemResult r2 = ref2.solve(c0.atom, c0.F);
+    out["fem"]["convergence"] = {
+        {"nodes", ref2.tube().mesh.num_nodes()},
+        {"spokes", ref2.tube().spokes},
+        {"axial_subdivisions", fine.axial_subdivisions},
+        {"layers", fine.layers},
+        {"loaded_mm", r2.centerline.row(c0.atom).norm()},
+        {"loaded_mm_level", c0.fem.centerline.row(c0.atom).norm()},
+        {"rel_change", (r2.centerline.row(c0.atom) - c0.fem.centerline.row(c0.atom)).norm() /
+                           r2.centerline.row(c0.atom).norm()},
+        {"solve_s", r2.solve_seconds}};
+  }
+
+  std::vector<fem::CalibrationCase> training;
+  for (const auto& c : cases)
+    if (c.train) training.push_back({{C0.row(c.atom).transpose(), c.F, 0.0}, c.fem.centerline, c.atom});
+  // The centerline of a parameter set: the chain with k_cl, k_r scaled and k_b = kb0 E / E_base.
+  auto centerline = [&](const SmrmSettings& s, const Vec3& F, Index atom) {
+    const VecX kb = kb0 * (s.wall.E / base.wall.E);
+    const Model chain = make_chain_model(C0, s.chain, name, kb);
+    return fem::smrm_centerline_displacement(chain, atom, F);
+  };
+  auto nearest_atom = [&](const Vec3& p) {
+    Index best = 0;
+    for (Index i = 1; i < n; ++i)
+      if ((C0.row(i).transpose() - p).squaredNorm() < (C0.row(best).transpose() - p).squaredNorm()) best = i;
+    return best;
+  };
+  json rows = json::array();
+  for (bool nl : {false, true})
+    for (const char* params : {"default", "material", "calibrated"}) {
+      const bool material = std::string(params) != "default",
+                 calibrated = std::string(params) == "calibrated";
+      VecX m = VecX::Ones(nl ? 4 : 3);
+      if (calibrated) {
+        note(st, cat(name, ": calibrating SMRM", nl ? " (Duffing)" : " (linear)"));
+        m = fem::calibrate_multipliers(
+            [&](const VecX& mm, const fem::ContactLoad& l) {
+              return centerline(vessel_settings(base, mat, true, mm, nl), l.force, nearest_atom(l.centre));
+            },
+            static_cast<Index>(m.size()), training, st.quick ? 1 : 2);
+      }
+      const SmrmSettings s = vessel_settings(base, mat, material, m, nl);
+      json errs = json::array();
+      for (const auto& c : cases) {
+        MatX3 u;
+        try {
+          u = centerline(s, c.F, c.atom);
+        } catch (const SolverError& e) {
+          errs.push_back({{"atom", c.atom}, {"force_N", c.force}, {"error", e.what()}});
+          continue;
+        }
+        const fem::CenterlineError e = fem::compare_centerline(u, c.fem.centerline, c.atom);
+        State state = make_state(vessel->model());
+        state.x = C0 + u;
+        MatX3 surf;
+        vessel->map_to_surface(state, surf);
+        const VecX ds = ((surf - S0) - c.fem.lumen).rowwise().norm();
+        const double lumen_rms = std::sqrt(ds.squaredNorm() / static_cast<double>(ds.size()));
+        errs.push_back({{"atom", c.atom},
+                        {"site", c.site_index},
+                        {"force_N", c.force},
+                        {"train", c.train},
+                        {"loaded_fem_mm", e.loaded_fem},
+                        {"loaded_model_mm", e.loaded_model},
+                        {"loaded_error_mm", e.loaded_error},
+                        {"loaded_error_pct", 100 * e.rel(e.loaded_error)},
+                        {"rms_mm", e.rms},
+                        {"rms_pct", 100 * e.rel(e.rms)},
+                        {"max_mm", e.max},
+                        {"max_pct", 100 * e.rel(e.max)},
+                        {"lumen_rms_mm", lumen_rms},
+                        {"lumen_rms_pct", 100 * e.rel(lumen_rms)}});
+      }
+      // time per update of this parameter set (the vessel rebuilt with it; stiffer = more sub-steps)
+      Scene sc = scene0;
+      sc.model.smrm = s;
+      const BuiltScene b = build_scene(sc, &loader);
+      SimulationSettings ss = b.settings;
+      ss.local.enabled = false;
+      ss.normals = false;
+      Simulation sim(b.body, ss);
+      sim.set_loads({{.node = sites[0] * M, .force = cases[0].F, .t_ramp = 0}});
+      sim.advance(50);
+      std::vector<double> us;
+      for (int i = 0; i < (st.quick ? 100 : 500); ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        sim.update();
+        us.push_back(
+            std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+      }
+      std::nth_element(us.begin(), us.begin() + static_cast<long>(us.size() / 2), us.end());
+      rows.push_back({{"kind", std::string("SMRM") + (nl ? " (Duffing)" : " (linear)")},
+                      {"nonlinear", nl},
+                      {"params", params},
+                      {"calibrated", calibrated},
+                      {"multipliers", std::vector<double>(m.data(), m.data() + m.size())},
+                      {"k_cl_N_per_mm", s.chain.k},
+                      {"k_r_N_per_mm", s.chain.kr},
+                      {"wall_E_kPa", s.wall.E * 1e3},
+                      {"eta", nl ? s.chain.duffing.eta : 0.0},
+                      {"update_us", us[us.size() / 2]},
+                      {"cases", errs}});
+    }
+  out["models"] = rows;
   return out;
 }
 
@@ -536,6 +762,52 @@ std::string markdown(const json& j) {
       }
     }
   }
+  for (const auto& v : j.value("vessels", json::array())) {
+    md << "\n## " << v["vessel"].get<std::string>() << ": SMRM centerline against the FEM wall\n\n";
+    md << "The wall as a tube of quadratic tetrahedra around the SMRM's rest rings (" << v["atoms"]
+       << " atoms, length " << pct(v["length_mm"].get<double>()) << " mm, lumen radius "
+       << pct(v["radius_min_mm"].get<double>()) << "-" << pct(v["radius_max_mm"].get<double>())
+       << " mm), wall thickness " << v["thickness_ratio"].get<double>()
+       << " x the lumen radius, both end rings clamped; E = " << v["material"]["E_kPa"].get<double>()
+       << " kPa, nu = " << v["material"]["nu"].get<double>() << ". FEM: " << v["fem"]["nodes"] << " nodes, "
+       << v["fem"]["elements"] << " C3D10 (" << v["fem"]["spokes"] << " spokes, "
+       << v["fem"]["axial_subdivisions"] << " rings per atom interval, " << v["fem"]["layers"]
+       << " layer(s) through the wall); median CalculiX solve "
+       << pct(v["fem"]["median_solve_s"].get<double>()) << " s. Load: " << v["load"].get<std::string>()
+       << ". Compared: the SMRM atoms against the centroid of the FEM wall's mid-surface ring at each atom, "
+          "in % of the FEM displacement of the loaded atom; lumen = the SMRM's rebuilt surface against the "
+          "FEM lumen (RMS). Parameters: default = the scene's (wall E "
+       << v["default_wall_E_kPa"].get<double>()
+       << " kPa), material = wall E set to the material's, calibrated = the material's with k_cl, k_r, k_b "
+          "fitted on the (train) cases.\n";
+    if (v["fem"].contains("convergence")) {
+      const auto& c = v["fem"]["convergence"];
+      md << "Mesh convergence (first case on a wall of " << c["nodes"] << " nodes, " << c["spokes"]
+         << " spokes, " << c["axial_subdivisions"] << " rings per interval, " << c["layers"]
+         << " layers): loaded-atom displacement " << c["loaded_mm_level"].get<double>() << " mm -> "
+         << c["loaded_mm"].get<double>() << " mm, change " << pct(100 * c["rel_change"].get<double>())
+         << " %.\n";
+    }
+    for (const auto& f : v.value("fem_failed", json::array()))
+      md << "CalculiX found no equilibrium at atom " << f["atom"] << ", " << f["force_N"].get<double>()
+         << " N (left out of the table): " << f["error"].get<std::string>().substr(0, 160) << "\n";
+    md << "\n| model | parameters | update us | case | loaded FEM mm | loaded SMRM mm | loaded err % | "
+          "centerline RMS % | centerline max % | lumen RMS % |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& r : v["models"])
+      for (const auto& c : r["cases"]) {
+        md << "| " << r["kind"].get<std::string>() << " | " << r["params"].get<std::string>() << " | "
+           << pct(r["update_us"].get<double>()) << " | atom " << c["atom"] << ", "
+           << c["force_N"].get<double>() << " N";
+        if (c.contains("error")) {
+          md << " | no equilibrium | | | | | |\n";
+          continue;
+        }
+        md << (c["train"].get<bool>() ? " (train)" : "") << " | " << pct(c["loaded_fem_mm"].get<double>())
+           << " | " << pct(c["loaded_model_mm"].get<double>()) << " | "
+           << pct(c["loaded_error_pct"].get<double>()) << " | " << pct(c["rms_pct"].get<double>()) << " | "
+           << pct(c["max_pct"].get<double>()) << " | " << pct(c["lumen_rms_pct"].get<double>()) << " |\n";
+      }
+  }
   md << "\nFigures: figures/speed_accuracy.png (time per update against the mean held-out RMS error, FEM "
         "solve "
         "time for scale), figures/error_*.png (surface error maps).\n";
@@ -546,7 +818,8 @@ std::string markdown(const json& j) {
 
 int cmd_accuracy(const Args& args) {
   args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes",
-                      "kinds", "nodes", "no-validation", "forces", "organs"});
+                      "kinds", "nodes", "no-validation", "forces", "organs", "vessel-E-kPa", "wall-ratio",
+                      "no-vessel", "vessel-only"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -566,8 +839,11 @@ int cmd_accuracy(const Args& args) {
             {"contact_radius_mm", st.radius},
             {"quick", st.quick},
             {"units", "mm, N, MPa; times in s (FEM) and us (updates)"}};
+  const bool vessel_only = args.flag("vessel-only");
+  require(!(vessel_only && args.flag("no-vessel")),
+          "accuracy: --vessel-only and --no-vessel exclude each other");
   json val = json::array();
-  for (int level = 1; level <= (args.flag("no-validation") ? 0 : st.quick ? 1 : 3); ++level) {
+  for (int level = 1; level <= (args.flag("no-validation") || vessel_only ? 0 : st.quick ? 1 : 3); ++level) {
     note(st, cat("validation level ", level));
     std::vector<fem::ValidationResult> rs = {fem::validate_uniaxial(level), fem::validate_cantilever(level)};
     if (!st.quick || level == 1)
@@ -590,9 +866,9 @@ int cmd_accuracy(const Args& args) {
               organ_list == "kidney,phantom",
           "accuracy: --organs must be phantom, kidney or phantom,kidney (got '", organ_list, "')");
   std::vector<Organ> organs;
-  if (organ_list.find("phantom") != std::string::npos) organs.push_back(phantom_organ());
+  if (!vessel_only && organ_list.find("phantom") != std::string::npos) organs.push_back(phantom_organ());
   FileLoader loader;
-  if (!st.quick && organ_list.find("kidney") != std::string::npos) {
+  if (!st.quick && !vessel_only && organ_list.find("kidney") != std::string::npos) {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
     std::string why;
@@ -601,8 +877,41 @@ int cmd_accuracy(const Args& args) {
     else
       j["notes"].push_back("real kidney left out: " + why);
   }
+  // The vessel material and wall (checked before any solve)
+  const fem::Material vessel_mat =
+      fem::Material::from_kpa(args.number("vessel-E-kPa", 1e3 * SmrmSettings{}.wall.E), st.material.nu);
+  fem::validate_material(vessel_mat, "accuracy: --vessel-E-kPa");
+  fem::VesselMeshSettings vms;  // 10 FEM spokes, one ring per atom interval: ~4,400 nodes on the aorta
+  vms.spoke_stride = 3;
+  vms.axial_subdivisions = 1;
+  vms.solver.increments = 2;
+  vms.thickness_ratio = args.number("wall-ratio", SmrmSettings{}.wall.thickness_ratio);
+  require(std::isfinite(vms.thickness_ratio) && vms.thickness_ratio > 0 && vms.thickness_ratio <= 1,
+          "accuracy: --wall-ratio must be in (0, 1] (wall thickness / lumen radius)");
   json maps = json::object();
+  j["organs"] = json::array();
   for (const auto& o : organs) j["organs"].push_back(run_organ(o, st, maps));
+  if (!args.flag("no-vessel")) {
+    const fs::path scenes =
+        find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
+    Scene vs = load_scene(scenes / "phantom" / "vessel_light_nonlinear.json");
+    std::string vname = "vessel phantom (straight)";
+    if (st.quick) {
+      vs.model.atoms = 12;  // 27.5 mm of the straight phantom: a wall mesh that solves in seconds
+      vs.model.smrm.atoms = 12;
+    } else {
+      try {
+        Scene real = load_scene(scenes / "vessel_light_nonlinear.json");
+        build_scene(real, &loader);  // the aorta centerline must be readable
+        vs = real;
+        vname = "aorta (VMR 0159)";
+      } catch (const Error& e) {
+        j["notes"].push_back(std::string("real aorta left out (phantom vessel used): ") + e.what());
+      }
+    }
+    vs.model.smrm.wall.thickness_ratio = vms.thickness_ratio;
+    j["vessels"].push_back(run_vessel(vs, vname, st, vessel_mat, vms, loader));
+  }
 
   const fs::path scripts = find_folder(std::nullopt, MEDSPRING_SOURCE_PAPER_SCRIPTS_DIR, "scripts",
                                        "figure scripts", "accuracy_plots.py");
@@ -621,7 +930,7 @@ int cmd_accuracy(const Args& args) {
     fs::remove(dir / "figures.log");
   });
   // The full run is kept as the latest for `medspring paper`'s summary (accuracy_summary.hpp).
-  if (!st.quick && !keep_latest_accuracy(j) && !args.flag("json"))
+  if (!st.quick && !vessel_only && !keep_latest_accuracy(j) && !args.flag("json"))
     std::cout << "accuracy: note: could not keep the run as " << latest_accuracy_path().string() << std::endl;
   if (args.flag("json"))
     std::cout << j.dump(1) << '\n';
@@ -680,6 +989,8 @@ int cmd_calibrate(const Args& args) {
                            {"k_cl_N_per_mm", 0.1 * mult[2]},
                            {"k_r_N_per_mm", 0.02 * mult[3]},
                            {"k_loc_N_per_mm", 0.05 * mult[0]}};
+    if (!args.flag("linear") && mult.size() > (kind == "surface" ? 2u : 4u))
+      out["parameters"]["eta"] = mult[kind == "surface" ? 2 : 4];  // Duffing strength (D-3), default 1
     out["held_out_mean_rms_pct"] = m["held_out_mean_rms_pct"];
     out["cases"] = m["cases"];
   }

@@ -206,7 +206,9 @@ const std::vector<Command>& commands() {
        cmd_study},
       {"accuracy",
        "usage: medspring accuracy --out DIR [--force] [--quick] [--quiet] [--json] [--E-kPa 10] [--nu 0.45]\n"
-       "                          [--radius 8] [--level 1] [--scenes DIR]\n\n"
+       "                          [--radius 8] [--level 1] [--scenes DIR] [--vessel-E-kPa 500] [--wall-ratio "
+       "0.1]\n"
+       "                          [--no-vessel | --vessel-only]\n\n"
        "Measures the spring models against an independent FEM reference (CalculiX, compressible "
        "Neo-Hookean,\n"
        "NLGEOM; docs/accuracy.md): first the FEM pipeline against closed forms (uniaxial stretch, "
@@ -228,8 +230,13 @@ const std::vector<Command>& commands() {
        "  --nodes N      node count of the volumetric model (default 2000)\n"
        "  --forces LIST  contact forces in N (default 0.2,0.5,1.0; training at 0.5 N or the smallest)\n"
        "  --organs LIST  phantom,kidney (default both)\n"
-       "  --no-validation  skip the closed-form validation of the FEM pipeline\n",
-       {"json", "force", "quick", "quiet", "no-validation"},
+       "  --no-validation  skip the closed-form validation of the FEM pipeline\n"
+       "  --vessel-E-kPa the vessel wall (default: the SMRM's wall, 500 kPa); the SMRM of the paper's aorta\n"
+       "                 (VMR 0159; --quick: a 12-atom straight phantom) against the wall as a tube of\n"
+       "                 tetrahedra, ends clamped, at 5 atoms x 0.05 / 0.5 N: centerline error\n"
+       "  --wall-ratio   vessel wall thickness / lumen radius\n"
+       "  --no-vessel, --vessel-only  leave the vessel out / run only the vessel\n",
+       {"json", "force", "quick", "quiet", "no-validation", "no-vessel", "vessel-only"},
        cmd_accuracy},
       {"calibrate",
        "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"

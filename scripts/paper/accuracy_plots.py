@@ -28,6 +28,22 @@ def speed_accuracy(acc, out):
         ax.axvline(fem_us, color="k", ls="--", lw=0.8)
         ax.annotate("FEM solve\n%s" % organ["organ"], (fem_us, 0.02 + 0.12 * i), xycoords=("data", "axes fraction"),
                     fontsize=7, ha="right")
+    # the vessel: SMRM rows, y = mean held-out lumen RMS error in % of the FEM loaded-atom displacement
+    vkinds = sorted({r["kind"] for v in acc.get("vessels", []) for r in v["models"]})
+    for k in vkinds:
+        colour[k] = "C%d" % (len(colour) % 10)
+    kinds = kinds + vkinds
+    for i, v in enumerate(acc.get("vessels", [])):
+        organ_marker[v["vessel"]] = "v<>p"[i % 4]
+        for r in v["models"]:
+            held = [c["lumen_rms_pct"] for c in r["cases"] if "lumen_rms_pct" in c and not c["train"]]
+            if held:
+                ax.scatter([r["update_us"]], [sum(held) / len(held)], marker=organ_marker[v["vessel"]], s=40,
+                           facecolors=colour[r["kind"]] if r["calibrated"] else "none", edgecolors=colour[r["kind"]])
+        fem_us = v["fem"]["median_solve_s"] * 1e6
+        ax.axvline(fem_us, color="k", ls=":", lw=0.8)
+        ax.annotate("FEM solve\n%s" % v["vessel"], (fem_us, 0.9 - 0.12 * i), xycoords=("data", "axes fraction"),
+                    fontsize=7, ha="right")
     handles = [plt.Line2D([], [], color=colour[k], marker="o", ls="", label=k) for k in kinds]
     handles += [plt.Line2D([], [], color="k", marker=m, ls="", mfc="none", label=o) for o, m in organ_marker.items()]
     ax.legend(handles=handles, fontsize=7, loc="upper center", ncol=2)
@@ -106,6 +122,34 @@ def error_map(m, out):
     plt.close(fig)
 
 
+def vessel_force_displacement(v, out):
+    """Loaded-atom displacement against the force, per site: FEM (black) and the SMRM parameter sets."""
+    atoms = sorted({c["atom"] for r in v["models"] for c in r["cases"]})
+    fig, axes = plt.subplots(1, len(atoms), figsize=(3.2 * len(atoms), 3.2), squeeze=False)
+    style = {"default": ":", "material": "--", "calibrated": "-"}
+    for ax, a in zip(axes[0], atoms):
+        fem = {}
+        for r in v["models"]:
+            pts = sorted((c["force_N"], c["loaded_model_mm"]) for c in r["cases"] if c["atom"] == a and "loaded_model_mm" in c)
+            for c in r["cases"]:
+                if c["atom"] == a and "loaded_fem_mm" in c:
+                    fem[c["force_N"]] = c["loaded_fem_mm"]
+            if pts:
+                ax.plot([0] + [p[0] for p in pts], [0] + [p[1] for p in pts], style.get(r["params"], "-"),
+                        color="C0" if r["nonlinear"] else "C1", lw=1, label="%s, %s" % (r["kind"], r["params"]))
+        f = sorted(fem)
+        ax.plot([0] + f, [0] + [fem[x] for x in f], "k-o", ms=3, lw=1.5, label="FEM wall (mid-surface)")
+        ax.set_title("atom %d" % a, fontsize=9)
+        ax.set_xlabel("force (N)")
+        ax.grid(True, alpha=0.3)
+    axes[0][0].set_ylabel("loaded-atom displacement (mm)")
+    axes[0][-1].legend(fontsize=6)
+    fig.suptitle("%s: SMRM centerline against the FEM wall" % v["vessel"], fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+
+
 def main():
     d = pathlib.Path(sys.argv[1])
     acc = json.loads((d / "accuracy.json").read_text())
@@ -114,6 +158,8 @@ def main():
     speed_accuracy(acc, d / "figures" / "speed_accuracy.png")
     for organ in acc["organs"]:
         force_displacement(organ, d / "figures" / ("force_displacement_" + organ["organ"].replace(" ", "_") + ".png"))
+    for v in acc.get("vessels", []):
+        vessel_force_displacement(v, d / "figures" / ("force_displacement_" + v["vessel"].split(" ")[0] + ".png"))
     for name, m in maps.items():
         error_map(m, d / "figures" / ("error_" + name.replace(" ", "_") + ".png"))
 

@@ -66,6 +66,27 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
           (m["calibrated"].get<bool>() ? train_cal : train_default) = c["rms_mm"].get<double>();
   EXPECT_GT(train_default, 0.0);
   EXPECT_LT(train_cal, train_default);
+
+  // the vessel: the SMRM centerline against the FEM wall (a 12-atom straight phantom in --quick)
+  ASSERT_EQ(j["vessels"].size(), 1u);
+  const auto& v = j["vessels"][0];
+  EXPECT_EQ(v["atoms"].get<int>(), 12);
+  EXPECT_EQ(v["fem_failed"].size(), 0u);
+  ASSERT_EQ(v["models"].size(), 6u);  // linear, Duffing x (default, material, calibrated)
+  double v_default = -1, v_cal = -1;
+  for (const auto& m : v["models"])
+    for (const auto& c : m["cases"]) {
+      ASSERT_FALSE(c.contains("error")) << c.dump();
+      EXPECT_GT(c["loaded_fem_mm"].get<double>(), 0.0);
+      EXPECT_TRUE(std::isfinite(c["rms_mm"].get<double>()));
+      EXPECT_GE(c["max_mm"].get<double>(), c["rms_mm"].get<double>());
+      if (c["train"].get<bool>() && m["kind"] == "SMRM (linear)") {
+        if (m["params"] == "material") v_default = c["rms_mm"].get<double>();
+        if (m["params"] == "calibrated") v_cal = c["rms_mm"].get<double>();
+      }
+    }
+  EXPECT_GT(v_default, 0.0);
+  EXPECT_LT(v_cal, v_default);  // the fit lowers its own training error
 }
 
 TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
