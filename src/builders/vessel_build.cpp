@@ -108,7 +108,7 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
         require(std::isfinite(st.blend_spacing) && st.blend_spacing >= 0,
                 "vessel: blend spacing must be >= 0 mm (got ", st.blend_spacing, ")");
         const MatX3& C = tree->branch_vessel(0).rest_atoms();
-        const double spacing = st.blend_spacing > 0 ? st.blend_spacing : 0.5 * (C.row(1) - C.row(0)).norm();
+        const double spacing = st.blend_spacing > 0 ? st.blend_spacing : (C.row(1) - C.row(0)).norm();
         // Rings too far apart on a tight bend, or too close on a wavy wide stretch (neighbouring rings of a
         // 12 mm radius tilt into each other), make a tube cross itself: every path takes the first ring
         // spacing of spacing x (1, 0.9, 1.1, 0.8, 1.2, ...) that gives a simple tube.

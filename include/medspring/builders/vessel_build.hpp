@@ -36,7 +36,7 @@ struct VesselBuildSettings {
   double merge_tolerance = 0.05;  // mm: points of two polylines closer than this are one
   bool blend = false;             // tree: one watertight surface (union of the closed path tubes, CGAL)
                                   // instead of one open tube per branch
-  double blend_spacing = 0.0;     // mm between the rings of the path tubes; 0 = half the atom spacing
+  double blend_spacing = 0.0;     // mm between the rings of the path tubes; 0 = the atom spacing
   OrganSource source{};           // a mesh or a segmentation (exactly one source in all)
   SmrmSettings smrm{};            // atoms (40), spokes (30), bending, chain
 };
