@@ -376,9 +376,19 @@ SmrmTree::SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings,
     for (std::size_t q = 0; q < bb.nodes.size(); ++q)
       P.row(static_cast<Index>(q)) = surface.V.row(bb.nodes[q]);
     VecX dist;
-    bb.binding = bind_to_polyline(P, v.frame_reference(), &dist);  // §5.9: exact at rest
+    bb.binding = bind_to_polyline(P, v.frame_reference(), &dist);  // §5.9 bracket (i, lambda)
     if (bb.binding.lambda.empty())  // keep it generic even with no node (an empty branch)
       bb.binding.lambda.assign(bb.binding.atom.size(), 0.0);
+    const FrameReference& ref = v.frame_reference();
+    const Index nq = static_cast<Index>(bb.nodes.size());
+    bb.o0.resize(nq, 3);
+    bb.o1.resize(nq, 3);
+    for (Index q = 0; q < nq; ++q) {  // o = F0_a^T (p0 - C0_a) for both bracket atoms
+      const Index i = bb.binding.atom[static_cast<std::size_t>(q)];
+      const Vec3 p0 = row3(P, q);
+      bb.o0.row(q) = (ref.F0.frame(i).transpose() * (p0 - row3(ref.C0, i))).transpose();
+      bb.o1.row(q) = (ref.F0.frame(i + 1).transpose() * (p0 - row3(ref.C0, i + 1))).transpose();
+    }
     for (std::size_t q = 0; q < bb.nodes.size(); ++q) blend_spoke_[bb.nodes[q]] = dist[static_cast<Index>(q)];
   }
   rest_surface_ = surface.V;
@@ -387,8 +397,7 @@ SmrmTree::SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings,
 }
 
 Index SmrmTree::surface_rows(std::size_t b) const {
-  return blended() ? static_cast<Index>(blend_[b].nodes.size())
-                   : static_cast<Index>(branches_[b]->rest_surface().rows());
+  return blended() ? 0 : static_cast<Index>(branches_[b]->rest_surface().rows());
 }
 
 SmrmTree::Workspace SmrmTree::make_workspace() const {
@@ -414,14 +423,25 @@ void SmrmTree::map_to_surface(const MatX3& x, Workspace& ws, MatX3& surface) con
     }
     const BlendBranch& bb = blend_[b];
     if (bb.nodes.empty()) continue;
-    compute_frames(A, branches_[b]->frame_reference(), ws.vessel[b].frames);               // §5.5
-    reconstruct(bb.binding, A, ws.vessel[b].frames, ws.vessel[b].scratch, ws.surface[b]);  // §5.9
-    const MatX3& S = ws.surface[b];
-    for (std::size_t q = 0; q < bb.nodes.size(); ++q) {
-      const Index k = bb.nodes[q], r = static_cast<Index>(q);
-      surface(k, 0) = S(r, 0);
-      surface(k, 1) = S(r, 1);
-      surface(k, 2) = S(r, 2);
+    const FrameField& F = ws.vessel[b].frames;
+    compute_frames(A, branches_[b]->frame_reference(), ws.vessel[b].frames);  // §5.5
+    const double* C = A.data();
+    const double* U = F.u.data();
+    const double* V = F.v.data();
+    const double* T = F.t.data();
+    const double* O0 = bb.o0.data();
+    const double* O1 = bb.o1.data();
+    double* out = surface.data();
+    const std::size_t nq = bb.nodes.size();
+    for (std::size_t q = 0; q < nq; ++q) {  // both bracket atoms' rigid maps, blended linearly
+      const Index i0 = 3 * bb.binding.atom[q], i1 = i0 + 3;
+      const double l = bb.binding.lambda[q], w = 1.0 - l;
+      const double a = O0[3 * q], bo = O0[3 * q + 1], c = O0[3 * q + 2];
+      const double d = O1[3 * q], e = O1[3 * q + 1], g = O1[3 * q + 2];
+      double* o = out + 3 * bb.nodes[q];
+      for (int r = 0; r < 3; ++r)
+        o[r] = w * (C[i0 + r] + a * U[i0 + r] + bo * V[i0 + r] + c * T[i0 + r]) +
+               l * (C[i1 + r] + d * U[i1 + r] + e * V[i1 + r] + g * T[i1 + r]);
     }
   }
 }

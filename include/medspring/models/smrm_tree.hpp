@@ -73,9 +73,12 @@ class SmrmTree final : public Body {
   /// fixes the root's first atom and every leaf's last atom. Throws InvalidInput naming the branch.
   explicit SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings = {});
   /// The same tree with `surface` (closed, e.g. the union of tree_path_tubes) as its surface instead of
-  /// one tube per branch: every vertex is bound (§5.9, generic, exact at rest) to the branch whose rest
-  /// tube it lies closest to: min over branches of |distance to the branch's atoms polyline - the
-  /// interpolated atom radius|. Throws InvalidInput for an invalid or open mesh.
+  /// one tube per branch. Every vertex belongs to the branch whose rest tube it lies closest to (min over
+  /// branches of |distance to the branch's atom polyline - the interpolated atom radius|), rides on the
+  /// bracket (i, lambda) of its closest point there (§5.9) and follows both bracket atoms' frames,
+  /// blended linearly: p = (1 - lambda) (C_i + F_i o0) + lambda (C_i+1 + F_i+1 o1), with o0, o1 its
+  /// rest offsets in the two rest frames (exact at rest; no trigonometry per update). Throws
+  /// InvalidInput for an invalid or open mesh.
   SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings, const SurfaceMesh& surface);
   /// True for a tree built with its own (watertight) surface.
   bool blended() const { return !blend_.empty(); }
@@ -135,7 +138,8 @@ class SmrmTree final : public Body {
   // blended surface: per branch its nodes (global indices) and their generic binding to the branch atoms
   struct BlendBranch {
     std::vector<Index> nodes;
-    SurfaceBinding binding;
+    SurfaceBinding binding;  // bracket (atom, lambda) of every node on the branch's rest atoms
+    MatX3 o0, o1;            // rest offsets in the rest frames of the bracket's two atoms
   };
   std::vector<BlendBranch> blend_;
   std::vector<Index> blend_branch_, blend_local_;  // per node: its branch, its row in that branch
