@@ -78,8 +78,8 @@ void BM_SmrmTreeUpdate(benchmark::State& st) {
 BENCHMARK(BM_SmrmTreeUpdate)->Unit(benchmark::kMicrosecond);
 
 #ifdef MEDSPRING_BENCH_HAVE_BUILDERS
-// The same update with the watertight junction surface (union of the closed path tubes, --blend): generic
-// (§5.9) reconstruction of every branch's nodes and area-weighted normals of the whole mesh.
+// The same update with the watertight junction surface (union of the closed path tubes, --blend): every
+// node rebuilt from its two bracket atoms' frames, and area-weighted normals of the whole mesh.
 void BM_SmrmTreeBlendedUpdate(benchmark::State& st) {
   const std::filesystem::path file = data_dir() / "vmr-0159-aorta-centerline.vtp";
   if (!std::filesystem::exists(file)) {

@@ -11,7 +11,7 @@
 // branch (the child's first ring sits at the junction inside the parent's last ring): not one watertight
 // mesh. The watertight junction surface is the union of the closed path tubes (tree_path_tubes; the
 // union itself is CGAL's, meshing/mesh_union.hpp, made by the builders) given to the second constructor:
-// each of its vertices rides on the branch whose rest tube it lies on (generic binding, §5.9).
+// each of its vertices rides on the two bracket atoms (§5.9) of the branch whose rest tube it lies on.
 #pragma once
 
 #include <memory>
