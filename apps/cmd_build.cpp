@@ -232,6 +232,12 @@ nlohmann::json vessel_json(const VesselSummary& s) {
     j["input_branches"] = s.input_branches;
     j["branch"] = s.branch;
   }
+  if (s.blended)
+    j["watertight_surface"] = {{"path_tubes", s.path_tubes},
+                               {"closed_manifold", s.surface_closed},
+                               {"components", s.surface_components},
+                               {"self_intersections", s.self_intersections},
+                               {"volume_mm3", s.surface_volume_mm3}};
   if (s.has_distance) {
     j["hausdorff_mm"] = s.hausdorff_mm;
     j["mean_distance_mm"] = s.mean_distance_mm;
@@ -243,9 +249,10 @@ nlohmann::json vessel_json(const VesselSummary& s) {
 
 /// medspring build vessel --centerline F --unit U [--branch N] | --mesh F --unit U | --segmentation F
 /// [--label L]  --out DIR [--atoms N] [--spokes M] [--k-b K | --wall-e E] [--json] [--force]
+/// (a tree: --branches all [--blend [--blend-spacing MM]] for one watertight surface)
 int build_vessel_cmd(const Args& args) {
   args.require_known({"json", "force", "centerline", "branch", "branches", "mesh", "segmentation", "mask",
-                      "label", "unit", "atoms", "spokes", "k-b", "wall-e", "out"});
+                      "label", "unit", "atoms", "spokes", "k-b", "wall-e", "out", "blend", "blend-spacing"});
   VesselBuildSettings st;
   const auto line = args.get("centerline"), mesh = args.get("mesh");
   auto seg = args.get("segmentation");
@@ -263,10 +270,21 @@ int build_vessel_cmd(const Args& args) {
       require(!args.get("branch"), "give at most one of --branch and --branches");
       st.all_branches = true;
     }
+    if (args.flag("blend") || args.get("blend-spacing")) {  // the watertight junction surface (a tree)
+      require(st.all_branches, "option --blend: applies to a tree (--branches all)");
+      st.blend = true;
+      if (args.get("blend-spacing")) {
+        st.blend_spacing = args.number("blend-spacing", 0.0);
+        require(st.blend_spacing > 0 && std::isfinite(st.blend_spacing),
+                "option --blend-spacing: must be > 0 mm");
+      }
+    }
     require(!args.get("label"), "option --label: applies to --segmentation only");
   } else {
     require(!args.get("branch") && !args.get("branches"),
             "options --branch, --branches: apply to --centerline only");
+    require(!args.get("blend") && !args.get("blend-spacing"),
+            "options --blend, --blend-spacing: apply to --centerline with --branches all");
     if (mesh) {
       st.source.mesh = *mesh;
       require(!args.get("label"), "option --label: applies to --segmentation only");

@@ -68,6 +68,9 @@ const std::vector<Command>& commands() {
        "              (default the longest); --branches all: every polyline, merged into a tree where\n"
        "              they share their start (shared junction atoms, one tube per branch; its\n"
        "              vessel.msm is of kind smrm_tree).\n"
+       "              --blend [--blend-spacing MM]: one watertight surface instead (the union of the\n"
+       "              closed path tubes, bound to the branch atoms; rings MM apart, default the atom\n"
+       "              spacing).\n"
        "              Writes surface.vtp, atoms.vtp, spokes.vtp, vessel.msm and summary.json.\n"
        "  --mesh FILE        closed organ surface (.obj .stl .ply .vtp .vtk); --unit: its length unit\n"
        "  --close-holes N    close holes of up to N edges first (an open mesh is refused otherwise)\n"
@@ -78,7 +81,7 @@ const std::vector<Command>& commands() {
        "  --out DIR          output folder, written whole or not at all; a non-empty one needs --force\n"
        "  --json             print the summary as JSON (counts, valence histogram, Hausdorff and mean\n"
        "                     distance to the input in mm, atoms outside, spokes per atom, build time)\n",
-       {"json", "force"},
+       {"json", "force", "blend"},
        cmd_build},
       {"run",
        "usage: medspring run SCENE --out DIR [--force] [--quiet] [--json] [--static-curve]\n"

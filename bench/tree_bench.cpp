@@ -13,6 +13,10 @@
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/data_dir.hpp"
 #endif
+#ifdef MEDSPRING_BENCH_HAVE_BUILDERS
+#include "medspring/builders/vessel_build.hpp"
+#include "medspring/medial/reconstruction.hpp"
+#endif
 
 namespace {
 
@@ -72,6 +76,49 @@ void BM_SmrmTreeUpdate(benchmark::State& st) {
   st.counters["substeps_per_frame"] = static_cast<double>(s.substeps) / frames;
 }
 BENCHMARK(BM_SmrmTreeUpdate)->Unit(benchmark::kMicrosecond);
+
+#ifdef MEDSPRING_BENCH_HAVE_BUILDERS
+// The same update with the watertight junction surface (union of the closed path tubes, --blend): every
+// node rebuilt from its two bracket atoms' frames, and area-weighted normals of the whole mesh.
+void BM_SmrmTreeBlendedUpdate(benchmark::State& st) {
+  const std::filesystem::path file = data_dir() / "vmr-0159-aorta-centerline.vtp";
+  if (!std::filesystem::exists(file)) {
+    st.SkipWithError("vmr-0159-aorta-centerline.vtp not found (MEDSPRING_DATA)");
+    return;
+  }
+  VesselBuildSettings vs;
+  vs.centerline = file;
+  vs.centerline_unit = LengthUnit::Centimetre;
+  vs.all_branches = true;
+  vs.blend = true;
+  const VesselBuild v = build_vessel(vs);
+  const SmrmTree& tree = *v.tree;
+  State s = make_state(tree.model());
+  const Index leaf = tree.num_branches() - 1;
+  const Index a = tree.branch_atoms(leaf)[tree.branch_atoms(leaf).size() / 2];
+  s.f_ext.row(a) << 0.5, 0.0, 0.0;
+  const StepSettings ss{.dt = 0.5};
+  SmrmTree::Workspace ws = tree.make_workspace();
+  MatX3 S = tree.rest_surface(), N;
+  const NormalPlan plan = make_normal_plan(static_cast<Index>(S.rows()), tree.faces());
+  ReconstructionScratch scratch(2, static_cast<Index>(tree.faces().rows()));
+  double frames = 0;
+  auto update = [&] {
+    frames += 1;
+    step(tree.model(), s, ss);
+    tree.map_to_surface(s.x, ws, S);
+    vertex_normals(plan, S, scratch, N);
+  };
+  for (int i = 0; i < 200; ++i) update();
+  for (auto _ : st) {
+    update();
+    benchmark::DoNotOptimize(S.data());
+  }
+  st.counters["surface_nodes"] = static_cast<double>(S.rows());
+  st.counters["substeps_per_frame"] = static_cast<double>(s.substeps) / frames;
+}
+BENCHMARK(BM_SmrmTreeBlendedUpdate)->Unit(benchmark::kMicrosecond);
+#endif
 #endif
 
 }  // namespace

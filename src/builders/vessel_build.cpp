@@ -9,6 +9,8 @@
 #include "medspring/core/check.hpp"
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"
+#include "medspring/meshing/mesh_repair.hpp"
+#include "medspring/meshing/mesh_union.hpp"
 #include "medspring/meshing/surface_distance.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/physics/stability.hpp"
@@ -56,9 +58,18 @@ VesselBuild finish_tree(std::shared_ptr<SmrmTree> tree, VesselSummary s,
     s.kb_max = kb.maxCoeff();
   }
   s.dt_safe_ms = dt_safe(t.model(), 1.0);
-  s.notes.push_back(
-      cat(s.input_branches, " polylines merged into ", s.branches, " branches at ", s.junctions,
-          " junctions (shared junction atoms); one tube per branch, not one watertight surface"));
+  if (t.blended()) {
+    s.spokes = t.branch_vessel(0).settings().spokes;
+    s.notes.push_back(cat(s.input_branches, " polylines merged into ", s.branches, " branches at ",
+                          s.junctions,
+                          " junctions (shared junction atoms); one watertight surface: the union "
+                          "of ",
+                          s.path_tubes, " closed path tubes"));
+  } else {
+    s.notes.push_back(
+        cat(s.input_branches, " polylines merged into ", s.branches, " branches at ", s.junctions,
+            " junctions (shared junction atoms); one tube per branch, not one watertight surface"));
+  }
   out.tree = std::move(tree);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.summary = std::move(s);
@@ -74,6 +85,8 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   const bool has_organ = !st.source.mesh.empty() || !st.source.mask.empty();
   require(has_line != has_organ, "vessel: give exactly one of a centerline, a mesh and a segmentation");
   require(!st.all_branches || has_line, "vessel: all branches (a tree) need a centerline file");
+  require(!st.blend || st.all_branches,
+          "vessel: a blended (watertight) surface applies to a tree (all branches)");
   require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");
   require(st.smrm.spokes >= 3, "vessel: spokes must be >= 3 (got ", st.smrm.spokes, ")");
   VesselBuild out;
@@ -89,7 +102,60 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
       require(st.branch < 0, "vessel: give a branch or all branches, not both");
       SmrmTreeSettings ts;
       ts.vessel = st.smrm;
-      auto tree = std::make_shared<SmrmTree>(merge_centerlines(lines, st.merge_tolerance), ts);
+      const CenterlineTree ct = merge_centerlines(lines, st.merge_tolerance);
+      auto tree = std::make_shared<SmrmTree>(ct, ts);
+      if (st.blend) {  // the watertight junction surface: union of the closed path tubes
+        require(std::isfinite(st.blend_spacing) && st.blend_spacing >= 0,
+                "vessel: blend spacing must be >= 0 mm (got ", st.blend_spacing, ")");
+        const MatX3& C = tree->branch_vessel(0).rest_atoms();
+        const double spacing = st.blend_spacing > 0 ? st.blend_spacing : (C.row(1) - C.row(0)).norm();
+        // Rings too far apart on a tight bend, or too close on a wavy wide stretch (neighbouring rings of a
+        // 12 mm radius tilt into each other), make a tube cross itself: every path takes the first ring
+        // spacing of spacing x (1, 0.9, 1.1, 0.8, 1.2, ...) that gives a simple tube.
+        const std::vector<double> factors{1.0, 0.9, 1.1, 0.8, 1.2, 0.7, 1.3, 0.6, 1.4, 1.5};
+        std::vector<SurfaceMesh> tubes;
+        std::vector<double> used;
+        for (double f : factors) {
+          const std::vector<SurfaceMesh> cand = tree_path_tubes(ct, st.smrm.spokes, f * spacing);
+          if (tubes.empty()) {
+            tubes.resize(cand.size());
+            used.assign(cand.size(), 0.0);
+          }
+          bool all = true;
+          for (std::size_t q = 0; q < cand.size(); ++q) {
+            if (used[q] > 0) continue;
+            if (self_intersections(cand[q], "vessel tree tube") == 0) {
+              tubes[q] = cand[q];
+              used[q] = f * spacing;
+            } else {
+              all = false;
+            }
+          }
+          if (all) break;
+        }
+        for (std::size_t q = 0; q < used.size(); ++q)
+          require(used[q] > 0, "vessel tree surface: path tube ", q,
+                  " intersects itself at every ring spacing tried (", factors.back() * spacing, " to ",
+                  0.6 * spacing, " mm): a bend tighter than the vessel's radius");
+        s.notes.push_back(cat("path tube ring spacing ", *std::min_element(used.begin(), used.end()), "..",
+                              *std::max_element(used.begin(), used.end()), " mm (the first of ", spacing,
+                              " mm x 1, 0.9, 1.1, ... without self-intersection)"));
+        const SurfaceMesh u = union_of_closed_meshes(tubes, "vessel tree surface");
+        const ClosedManifoldReport cm = check_closed_manifold(u);
+        s.blended = true;
+        s.path_tubes = static_cast<Index>(tubes.size());
+        s.surface_closed = cm.ok();
+        s.surface_components = cm.mesh.components;
+        s.self_intersections = self_intersections(u, "vessel tree surface");
+        s.surface_volume_mm3 = signed_volume(u.V, u.F);
+        require(s.surface_closed,
+                "vessel tree surface: the union of the path tubes is not a closed manifold (",
+                cm.mesh.summary(), ")");
+        if (s.self_intersections > 0)
+          s.warnings.push_back(cat("the tree surface intersects itself: ", s.self_intersections,
+                                   " triangle pairs (try another --blend-spacing)"));
+        tree = std::make_shared<SmrmTree>(ct, ts, u);
+      }
       return finish_tree(std::move(tree), s, t0);
     }
     if (st.branch < 0) {
@@ -187,6 +253,11 @@ std::string VesselSummary::text() const {
              " mm (both count the input's end caps, which the open tube lacks); surface nodes to the input: "
              "max ",
              to_input_max_mm, " mm, mean ", to_input_mean_mm, " mm\n");
+  if (blended)
+    t += cat("  watertight surface: union of ", path_tubes, " closed path tubes, ",
+             surface_closed ? "closed and manifold" : "NOT closed", ", ", surface_components,
+             " component(s), ", self_intersections, " self-intersecting triangle pairs, volume ",
+             surface_volume_mm3, " mm^3\n");
   t += cat("  built in ", seconds, " s\n");
   for (const auto& n : notes) t += cat("  note: ", n, "\n");
   for (const auto& w : warnings) t += cat("  warning: ", w, "\n");

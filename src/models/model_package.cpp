@@ -188,7 +188,14 @@ BodyPtr make_body(const ModelPackage& p) {
       parts.grid = p.grid;
       return std::make_shared<SmrmVessel>(std::move(parts), p.smrm);
     }
-    if (p.kind == "smrm_tree") return std::make_shared<SmrmTree>(p.tree, SmrmTreeSettings{p.smrm});
+    if (p.kind == "smrm_tree") {
+      auto t = std::make_shared<SmrmTree>(p.tree, SmrmTreeSettings{p.smrm});
+      // A surface other than the tree's own tubes is its watertight junction surface (SmrmTree blended).
+      if (p.surface.V.rows() > 0 && (p.surface.F.rows() != t->faces().rows() || p.surface.F != t->faces() ||
+                                     p.surface.V.rows() != t->rest_surface().rows()))
+        return std::make_shared<SmrmTree>(p.tree, SmrmTreeSettings{p.smrm}, p.surface);
+      return t;
+    }
     if (p.kind == "volumetric") {
       VolumetricMesh m = p.volumetric_mesh;
       m.F = p.surface.F;

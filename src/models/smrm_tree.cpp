@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <utility>
 
 #include "medspring/core/check.hpp"
+#include "medspring/medial/reconstruction.hpp"
 
 namespace medspring {
 
@@ -291,8 +293,15 @@ SmrmTree::SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings)
     if (p >= 0) {  // junction: parent's second-to-last, junction, child's second atom
       const std::vector<Index>& pid = atoms_[static_cast<std::size_t>(p)];
       const std::vector<Index> j3{pid[pid.size() - 2], ids[0], ids[1]};
+      // The turn at the junction bends the parent's last half segment (wall of the junction radius r[0])
+      // and the child's first half segment (wall of the child's radius r[1]) in series: the harmonic
+      // mean of the two E I, weighted by the segment lengths (I ~ r^4 at a fixed thickness ratio).
+      const double hp = (X[static_cast<std::size_t>(j3[1])] - X[static_cast<std::size_t>(j3[0])]).norm();
+      const double hc = (X[static_cast<std::size_t>(j3[2])] - X[static_cast<std::size_t>(j3[1])]).norm();
+      const double r0 = r[0], r1 = r[1];
+      const double req = std::pow((hp + hc) / (hp / std::pow(r0, 4) + hc / std::pow(r1, 4)), 0.25);
       VecX rj(3);
-      rj << r[0], r[0], r[0];
+      rj << req, req, req;
       const VecX kj = bending_of(positions(j3), rj);
       if (kj[1] > 0) mb.add_bending(j3[0], j3[1], j3[2], kj[1]);
     }
@@ -328,11 +337,74 @@ SmrmTree::SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings)
   }
 }
 
+SmrmTree::SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings, const SurfaceMesh& surface)
+    : SmrmTree(tree, settings) {
+  const MeshReport rep = require_valid_mesh(surface, "vessel tree surface", {.closed = true});
+  require(rep.inconsistent_edges == 0, "vessel tree surface: inconsistently oriented (",
+          rep.inconsistent_edges, " edges)");
+  const Index m = surface.num_vertices(), nb = num_branches();
+  // Which branch's rest tube every vertex lies on: |distance to the atoms' polyline - radius there|.
+  blend_branch_.assign(static_cast<std::size_t>(m), 0);
+  VecX best = VecX::Constant(m, std::numeric_limits<double>::infinity());
+  for (Index b = 0; b < nb; ++b) {
+    const SmrmVessel& v = *branches_[static_cast<std::size_t>(b)];
+    const MatX3& C = v.rest_atoms();
+    const VecX& r = v.atom_radius();
+    for (Index k = 0; k < m; ++k) {
+      const PolylinePoint q = closest_point_on_polyline(C, row3(surface.V, k));
+      const Index i = std::min<Index>(q.segment, static_cast<Index>(C.rows()) - 2);
+      const double lam = q.segment > i ? 1.0 : q.lambda;
+      const double score = std::abs(q.distance - ((1.0 - lam) * r[i] + lam * r[i + 1]));
+      if (score < best[k]) {
+        best[k] = score;
+        blend_branch_[static_cast<std::size_t>(k)] = b;
+      }
+    }
+  }
+  blend_.assign(static_cast<std::size_t>(nb), {});
+  blend_local_.assign(static_cast<std::size_t>(m), 0);
+  for (Index k = 0; k < m; ++k) {
+    BlendBranch& bb = blend_[static_cast<std::size_t>(blend_branch_[static_cast<std::size_t>(k)])];
+    blend_local_[static_cast<std::size_t>(k)] = static_cast<Index>(bb.nodes.size());
+    bb.nodes.push_back(k);
+  }
+  blend_spoke_.resize(m);
+  for (Index b = 0; b < nb; ++b) {
+    BlendBranch& bb = blend_[static_cast<std::size_t>(b)];
+    const SmrmVessel& v = *branches_[static_cast<std::size_t>(b)];
+    MatX3 P(static_cast<Index>(bb.nodes.size()), 3);
+    for (std::size_t q = 0; q < bb.nodes.size(); ++q)
+      P.row(static_cast<Index>(q)) = surface.V.row(bb.nodes[q]);
+    VecX dist;
+    bb.binding = bind_to_polyline(P, v.frame_reference(), &dist);  // §5.9 bracket (i, lambda)
+    if (bb.binding.lambda.empty())  // keep it generic even with no node (an empty branch)
+      bb.binding.lambda.assign(bb.binding.atom.size(), 0.0);
+    const FrameReference& ref = v.frame_reference();
+    const Index nq = static_cast<Index>(bb.nodes.size());
+    bb.o0.resize(nq, 3);
+    bb.o1.resize(nq, 3);
+    for (Index q = 0; q < nq; ++q) {  // o = F0_a^T (p0 - C0_a) for both bracket atoms
+      const Index i = bb.binding.atom[static_cast<std::size_t>(q)];
+      const Vec3 p0 = row3(P, q);
+      bb.o0.row(q) = (ref.F0.frame(i).transpose() * (p0 - row3(ref.C0, i))).transpose();
+      bb.o1.row(q) = (ref.F0.frame(i + 1).transpose() * (p0 - row3(ref.C0, i + 1))).transpose();
+    }
+    for (std::size_t q = 0; q < bb.nodes.size(); ++q) blend_spoke_[bb.nodes[q]] = dist[static_cast<Index>(q)];
+  }
+  rest_surface_ = surface.V;
+  faces_ = surface.F;
+  if (signed_volume(rest_surface_, faces_) < 0.0) faces_.col(1).swap(faces_.col(2));  // outward
+}
+
+Index SmrmTree::surface_rows(std::size_t b) const {
+  return blended() ? 0 : static_cast<Index>(branches_[b]->rest_surface().rows());
+}
+
 SmrmTree::Workspace SmrmTree::make_workspace() const {
   Workspace ws;
   for (std::size_t b = 0; b < branches_.size(); ++b) {
     ws.atoms.emplace_back(static_cast<Index>(atoms_[b].size()), 3);
-    ws.surface.emplace_back(branches_[b]->rest_surface().rows(), 3);
+    ws.surface.emplace_back(surface_rows(b), 3);
     ws.vessel.push_back(branches_[b]->make_workspace());
   }
   return ws;
@@ -344,8 +416,33 @@ void SmrmTree::map_to_surface(const MatX3& x, Workspace& ws, MatX3& surface) con
     const std::vector<Index>& ids = atoms_[b];
     MatX3& A = ws.atoms[b];
     for (std::size_t k = 0; k < ids.size(); ++k) A.row(static_cast<Index>(k)) = x.row(ids[k]);
-    branches_[b]->map_to_surface(A, ws.vessel[b], ws.surface[b]);
-    surface.middleRows(node_begin_[b], ws.surface[b].rows()) = ws.surface[b];
+    if (!blended()) {
+      branches_[b]->map_to_surface(A, ws.vessel[b], ws.surface[b]);
+      surface.middleRows(node_begin_[b], ws.surface[b].rows()) = ws.surface[b];
+      continue;
+    }
+    const BlendBranch& bb = blend_[b];
+    if (bb.nodes.empty()) continue;
+    const FrameField& F = ws.vessel[b].frames;
+    compute_frames(A, branches_[b]->frame_reference(), ws.vessel[b].frames);  // §5.5
+    const double* C = A.data();
+    const double* U = F.u.data();
+    const double* V = F.v.data();
+    const double* T = F.t.data();
+    const double* O0 = bb.o0.data();
+    const double* O1 = bb.o1.data();
+    double* out = surface.data();
+    const std::size_t nq = bb.nodes.size();
+    for (std::size_t q = 0; q < nq; ++q) {  // both bracket atoms' rigid maps, blended linearly
+      const Index i0 = 3 * bb.binding.atom[q], i1 = i0 + 3;
+      const double l = bb.binding.lambda[q], w = 1.0 - l;
+      const double a = O0[3 * q], bo = O0[3 * q + 1], c = O0[3 * q + 2];
+      const double d = O1[3 * q], e = O1[3 * q + 1], g = O1[3 * q + 2];
+      double* o = out + 3 * bb.nodes[q];
+      for (int r = 0; r < 3; ++r)
+        o[r] = w * (C[i0 + r] + a * U[i0 + r] + bo * V[i0 + r] + c * T[i0 + r]) +
+               l * (C[i1 + r] + d * U[i1 + r] + e * V[i1 + r] + g * T[i1 + r]);
+    }
   }
 }
 
@@ -387,25 +484,46 @@ void SmrmTree::map_to_surface(const State& state, MatX3& surface) const {
 }
 
 Index SmrmTree::node_branch(Index node) const {
-  require_index(node, node_begin_.back(), "vessel tree: surface node");
+  require_index(node, static_cast<Index>(rest_surface_.rows()), "vessel tree: surface node");
+  if (blended()) return blend_branch_[static_cast<std::size_t>(node)];
   const auto it = std::upper_bound(node_begin_.begin(), node_begin_.end(), node);
   return static_cast<Index>(it - node_begin_.begin()) - 1;
 }
 
 Index SmrmTree::node_atom(Index node) const {
   const Index b = node_branch(node);
+  if (blended()) {
+    const SurfaceBinding& sb = blend_[static_cast<std::size_t>(b)].binding;
+    const std::size_t q = static_cast<std::size_t>(blend_local_[static_cast<std::size_t>(node)]);
+    const Index local = sb.atom[q] + (sb.lambda[q] > 0.5 ? 1 : 0);
+    return atoms_[static_cast<std::size_t>(b)][static_cast<std::size_t>(local)];
+  }
   const Index local =
       branches_[static_cast<std::size_t>(b)]->node_atom(node - node_begin_[static_cast<std::size_t>(b)]);
   return atoms_[static_cast<std::size_t>(b)][static_cast<std::size_t>(local)];
 }
 
 void SmrmTree::transfer_force(Index node, const Vec3& F, MatX3& f_dof) const {
+  if (blended()) {  // D-14, generic: (1 - lambda) F and lambda F to the bracket atoms of the branch
+    const Index b = node_branch(node);
+    const SurfaceBinding& sb = blend_[static_cast<std::size_t>(b)].binding;
+    const std::size_t q = static_cast<std::size_t>(blend_local_[static_cast<std::size_t>(node)]);
+    const std::vector<Index>& ids = atoms_[static_cast<std::size_t>(b)];
+    const Index a0 = ids[static_cast<std::size_t>(sb.atom[q])],
+                a1 = ids[static_cast<std::size_t>(sb.atom[q] + 1)];
+    const double lam = sb.lambda[q];
+    if (lam < 1.0 && !model_.fixed[static_cast<std::size_t>(a0)])
+      f_dof.row(a0) += ((1.0 - lam) * F).transpose();
+    if (lam > 0.0 && !model_.fixed[static_cast<std::size_t>(a1)]) f_dof.row(a1) += (lam * F).transpose();
+    return;
+  }
   const Index a = node_atom(node);
   if (!model_.fixed[static_cast<std::size_t>(a)]) f_dof.row(a) += F.transpose();
 }
 
 double SmrmTree::spoke_length(Index node) const {
   const Index b = node_branch(node);
+  if (blended()) return blend_spoke_[node];
   return branches_[static_cast<std::size_t>(b)]->spoke_length(node -
                                                               node_begin_[static_cast<std::size_t>(b)]);
 }

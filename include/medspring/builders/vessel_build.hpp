@@ -34,6 +34,9 @@ struct VesselBuildSettings {
   Index branch = -1;              // centerline: the polyline to use; -1 = the longest
   bool all_branches = false;      // centerline: every polyline, merged into a tree (SmrmTree)
   double merge_tolerance = 0.05;  // mm: points of two polylines closer than this are one
+  bool blend = false;             // tree: one watertight surface (union of the closed path tubes, CGAL)
+                                  // instead of one open tube per branch
+  double blend_spacing = 0.0;     // mm between the rings of the path tubes; 0 = the atom spacing
   OrganSource source{};           // a mesh or a segmentation (exactly one source in all)
   SmrmSettings smrm{};            // atoms (40), spokes (30), bending, chain
 };
@@ -58,6 +61,13 @@ struct VesselSummary {
   double to_input_max_mm = 0.0;   // rebuilt surface nodes -> input surface, max
   double to_input_mean_mm = 0.0;  // rebuilt surface nodes -> input surface, mean
   Index spokes_without_hit = 0;   // spoke marching found no boundary (rho = r_i used)
+  // tree with blend: the watertight junction surface
+  bool blended = false;
+  Index path_tubes = 0;             // closed tubes united
+  bool surface_closed = false;      // no boundary edge, edge- and vertex-manifold, consistently oriented
+  Index surface_components = 0;     // connected components of the surface
+  Index self_intersections = -1;    // intersecting triangle pairs (-1: not checked)
+  double surface_volume_mm3 = 0.0;  // signed volume (> 0: outward)
   double seconds = 0.0;
   std::vector<std::string> notes;
   std::vector<std::string> warnings;

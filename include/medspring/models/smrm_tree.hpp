@@ -7,8 +7,11 @@
 //
 // Junction coupling: a child's first atom IS its parent's last atom (a shared atom), and a bending term
 // joins the parent's second-to-last atom, the junction and the child's second atom (rest angle as zero),
-// so a force on one branch reaches the others through the junction. The surface is one tube per branch
-// (the child's first ring sits at the junction inside the parent's last ring): not one watertight mesh.
+// so a force on one branch reaches the others through the junction. The default surface is one tube per
+// branch (the child's first ring sits at the junction inside the parent's last ring): not one watertight
+// mesh. The watertight junction surface is the union of the closed path tubes (tree_path_tubes; the
+// union itself is CGAL's, meshing/mesh_union.hpp, made by the builders) given to the second constructor:
+// each of its vertices rides on the two bracket atoms (§5.9) of the branch whose rest tube it lies on.
 #pragma once
 
 #include <memory>
@@ -16,6 +19,7 @@
 #include <vector>
 
 #include "medspring/geometry/polyline.hpp"
+#include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/models/body.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 
@@ -51,11 +55,33 @@ struct SmrmTreeSettings {
                           // root-to-leaf path (sets the spacing of every branch)
 };
 
+/// The closed tubes whose union is the watertight surface of a tree (docs/vessels.md): the branches are
+/// joined into paths (at every junction the parent continues into the child whose start is best aligned
+/// with its end; every other child starts a path of its own), every path is resampled from the input
+/// centerline at `spacing` mm and gets `spokes` circular spokes per ring in rotation-minimising frames
+/// and a flat cap at both ends. A path that starts at a junction is narrowed where it runs inside its
+/// parent (within the junction radius of the start): radius min(r, r at the junction radius), so that
+/// its start cap lies inside the parent tube. Each tube is closed, manifold and outward-oriented.
+/// `path_branches` (if given) receives the branches of every path. Throws InvalidInput for spacing
+/// <= 0 or spokes < 3.
+std::vector<SurfaceMesh> tree_path_tubes(const CenterlineTree& tree, Index spokes, double spacing,
+                                         std::vector<std::vector<Index>>* path_branches = nullptr);
+
 class SmrmTree final : public Body {
  public:
   /// Resamples every branch at the common spacing (>= 3 atoms per branch), shares the junction atoms,
   /// fixes the root's first atom and every leaf's last atom. Throws InvalidInput naming the branch.
   explicit SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings = {});
+  /// The same tree with `surface` (closed, e.g. the union of tree_path_tubes) as its surface instead of
+  /// one tube per branch. Every vertex belongs to the branch whose rest tube it lies closest to (min over
+  /// branches of |distance to the branch's atom polyline - the interpolated atom radius|), rides on the
+  /// bracket (i, lambda) of its closest point there (§5.9) and follows both bracket atoms' frames,
+  /// blended linearly: p = (1 - lambda) (C_i + F_i o0) + lambda (C_i+1 + F_i+1 o1), with o0, o1 its
+  /// rest offsets in the two rest frames (exact at rest; no trigonometry per update). Throws
+  /// InvalidInput for an invalid or open mesh.
+  SmrmTree(const CenterlineTree& tree, const SmrmTreeSettings& settings, const SurfaceMesh& surface);
+  /// True for a tree built with its own (watertight) surface.
+  bool blended() const { return !blend_.empty(); }
 
   std::string kind() const override { return "smrm_tree"; }
   const Model& model() const override { return model_; }
@@ -84,7 +110,7 @@ class SmrmTree final : public Body {
   /// The surface nodes of a branch are [node_begin(b), node_begin(b + 1)).
   Index node_begin(Index branch) const { return node_begin_[static_cast<std::size_t>(branch)]; }
   Index node_branch(Index node) const;
-  Index node_atom(Index node) const;  // the tree atom a surface node rides on
+  Index node_atom(Index node) const;  // the tree atom a surface node rides on (the nearer one, blended)
 
   struct Workspace {
     std::vector<MatX3> atoms, surface;
@@ -110,6 +136,16 @@ class SmrmTree final : public Body {
   std::vector<Index> parent_;
   std::vector<Index> node_begin_;
   Index junctions_ = 0;
+  // blended surface: per branch its nodes (global indices) and their generic binding to the branch atoms
+  struct BlendBranch {
+    std::vector<Index> nodes;
+    SurfaceBinding binding;  // bracket (atom, lambda) of every node on the branch's rest atoms
+    MatX3 o0, o1;            // rest offsets in the rest frames of the bracket's two atoms
+  };
+  std::vector<BlendBranch> blend_;
+  std::vector<Index> blend_branch_, blend_local_;  // per node: its branch, its row in that branch
+  VecX blend_spoke_;                               // per node: rest distance to its centerline point
+  Index surface_rows(std::size_t branch) const;    // rows of ws.surface[branch]
   Model model_;
   MatX3 rest_surface_;
   MatX3i faces_;
