@@ -11,6 +11,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "accuracy_indentation.hpp"
 #include "accuracy_summary.hpp"
 #include "commands.hpp"
 #include "medspring/builders/output_folder.hpp"
@@ -375,6 +376,7 @@ std::string markdown(const json& j) {
       }
     }
   }
+  if (j.contains("indentation")) md << indentation_markdown(j["indentation"]);
   md << "\nFigures: figures/speed_accuracy.png (time per update against the mean held-out RMS error, FEM "
         "solve "
         "time for scale), figures/error_*.png (surface error maps).\n";
@@ -384,7 +386,8 @@ std::string markdown(const json& j) {
 }  // namespace
 
 int cmd_accuracy(const Args& args) {
-  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes"});
+  args.require_known(
+      {"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes", "indentation-only"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -403,8 +406,9 @@ int cmd_accuracy(const Args& args) {
             {"contact_radius_mm", st.radius},
             {"quick", st.quick},
             {"units", "mm, N, MPa; times in s (FEM) and us (updates)"}};
+  const bool indentation_only = args.flag("indentation-only");  // issue 18: only the sphere indentation
   json val = json::array();
-  for (int level = 1; level <= (st.quick ? 1 : 3); ++level) {
+  for (int level = 1; level <= (st.quick ? 1 : 3) && !indentation_only; ++level) {
     note(st, cat("validation level ", level));
     std::vector<fem::ValidationResult> rs = {fem::validate_uniaxial(level), fem::validate_cantilever(level)};
     if (!st.quick || level == 1)
@@ -423,7 +427,7 @@ int cmd_accuracy(const Args& args) {
 
   std::vector<Organ> organs = {phantom_organ()};
   FileLoader loader;
-  if (!st.quick) {
+  if (!st.quick || indentation_only) {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
     std::string why;
@@ -433,7 +437,24 @@ int cmd_accuracy(const Args& args) {
       j["notes"].push_back("real kidney left out: " + why);
   }
   json maps = json::object();
-  for (const auto& o : organs) j["organs"].push_back(run_organ(o, st, maps));
+  j["organs"] = json::array();
+  for (const auto& o : organs)
+    if (!indentation_only) j["organs"].push_back(run_organ(o, st, maps));
+  if (!st.quick || indentation_only) {  // a rigid sphere pressed into the organ (issue 18)
+    const Organ& o = organs.back();     // the real kidney when it could be built
+    const Frame f = principal_frame(o.surface.V);
+    IndentationOrgan io{o.name, o.surface, o.atoms,
+                        o.name == "real kidney" ? TissueOrgan::RealKidney : TissueOrgan::Phantom,
+                        o.surface.V.row(pick_sites(o.surface.V, f, {-0.45})[0]).transpose(), -f.e3,
+                        fem::SupportRule{-f.e3, 0.2 * f.thickness}};
+    IndentationSettings is;
+    is.material = st.material;
+    is.level = st.level;
+    is.note = [&](const std::string& m) { note(st, m); };
+    note(st, "indentation: Hertz validation");
+    j["indentation"]["hertz"] = hertz_validation_json(3);
+    j["indentation"]["organs"].push_back(indentation_study(io, is));
+  }
 
   const fs::path scripts = find_folder(std::nullopt, MEDSPRING_SOURCE_PAPER_SCRIPTS_DIR, "scripts",
                                        "figure scripts", "accuracy_plots.py");
@@ -452,7 +473,7 @@ int cmd_accuracy(const Args& args) {
     fs::remove(dir / "figures.log");
   });
   // The full run is kept as the latest for `medspring paper`'s summary (accuracy_summary.hpp).
-  if (!st.quick && !keep_latest_accuracy(j) && !args.flag("json"))
+  if (!st.quick && !indentation_only && !keep_latest_accuracy(j) && !args.flag("json"))
     std::cout << "accuracy: note: could not keep the run as " << latest_accuracy_path().string() << std::endl;
   if (args.flag("json"))
     std::cout << j.dump(1) << '\n';
