@@ -26,11 +26,11 @@ struct IndentationOrgan {
 
 struct IndentationSettings {
   fem::Material material = fem::Material::from_kpa(10, 0.45);
-  double radius = 12.0;                          // sphere radius, mm
+  double radius = 12.0;                            // sphere radius, mm
   std::vector<double> depths{1.0, 2.0, 3.0, 4.0};  // mm
-  int level = 1;                                 // FEM mesh level of the organ (1: the surface as is)
-  int hertz_level = 3;                           // level of the Hertz block validation (0: skip it)
-  std::function<void(const std::string&)> note;  // progress lines (may be empty)
+  int level = 1;                                   // FEM mesh level of the organ (1: the surface as is)
+  int hertz_level = 2;                             // level of the Hertz block validation (1..3)
+  std::function<void(const std::string&)> note;    // progress lines (may be empty)
 };
 
 /// The Hertz validation of the FEM indentation (fem::validate_hertz) as JSON rows.

@@ -386,8 +386,8 @@ std::string markdown(const json& j) {
 }  // namespace
 
 int cmd_accuracy(const Args& args) {
-  args.require_known(
-      {"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes", "indentation-only"});
+  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes",
+                      "indentation-only"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -443,16 +443,19 @@ int cmd_accuracy(const Args& args) {
   if (!st.quick || indentation_only) {  // a rigid sphere pressed into the organ (issue 18)
     const Organ& o = organs.back();     // the real kidney when it could be built
     const Frame f = principal_frame(o.surface.V);
-    IndentationOrgan io{o.name, o.surface, o.atoms,
+    IndentationOrgan io{o.name,
+                        o.surface,
+                        o.atoms,
                         o.name == "real kidney" ? TissueOrgan::RealKidney : TissueOrgan::Phantom,
-                        o.surface.V.row(pick_sites(o.surface.V, f, {-0.45})[0]).transpose(), -f.e3,
+                        o.surface.V.row(pick_sites(o.surface.V, f, {-0.45})[0]).transpose(),
+                        -f.e3,
                         fem::SupportRule{-f.e3, 0.2 * f.thickness}};
     IndentationSettings is;
     is.material = st.material;
     is.level = st.level;
     is.note = [&](const std::string& m) { note(st, m); };
     note(st, "indentation: Hertz validation");
-    j["indentation"]["hertz"] = hertz_validation_json(3);
+    j["indentation"]["hertz"] = hertz_validation_json(is.hertz_level);
     j["indentation"]["organs"].push_back(indentation_study(io, is));
   }
 

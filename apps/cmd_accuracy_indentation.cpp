@@ -31,6 +31,7 @@ namespace {
 
 struct Press {
   double force = 0, penetration = 0, area = 0, time_ms = 0;
+  double spread = 0, max_speed = 0;  // N: max - min of the force over the averaging window; mm/ms
   Index contacts = 0;
   bool at_rest = false;
 };
@@ -65,8 +66,18 @@ std::vector<Press> spring_press(const BodyPtr& body, double R, const Vec3& c0, c
         break;
       }
     }
+    // the force averaged over 200 ms more (a model that is not at rest yet may still oscillate a little)
+    double lo = INFINITY, hi = -INFINITY, sum = 0;
+    const int window = static_cast<int>(std::lround(200.0 / dt));
+    for (int k = 0; k < window; ++k) {
+      tools.update();
+      const double f = tools.contact().state(probe).force.dot(-d);
+      sum += f, lo = std::min(lo, f), hi = std::max(hi, f);
+    }
+    p.max_speed = sim.state().v.cwiseAbs().maxCoeff();
+    p.spread = hi - lo;
     const ToolState& st = tools.contact().state(probe);
-    p.force = st.force.dot(-d);
+    p.force = sum / window;
     p.penetration = st.penetration;
     p.area = st.area;
     p.contacts = st.contacts;
@@ -158,8 +169,7 @@ json indentation_study(const IndentationOrgan& o, const IndentationSettings& s) 
   json models = json::array();
   for (bool calibrated : {false, true}) {
     HybridSettings hs;
-    if (calibrated)
-      apply_tissue(TissueMaterial{s.material.E * 1e3, s.material.nu, ""}, o.calibration, hs);
+    if (calibrated) apply_tissue(TissueMaterial{s.material.E * 1e3, s.material.nu, ""}, o.calibration, hs);
     hs.fixed = support;
     const BodyPtr body = std::make_shared<HybridKidney>(o.surface, o.atoms, hs, o.name);
     note(cat(o.name, ": indentation, hybrid (Duffing) ", calibrated ? "calibrated" : "default"));
@@ -179,6 +189,8 @@ json indentation_study(const IndentationOrgan& o, const IndentationSettings& s) 
                       {"contacts", p.contacts},
                       {"area_mm2", p.area},
                       {"at_rest", p.at_rest},
+                      {"force_spread_N", p.spread},
+                      {"max_speed_mm_per_ms", p.max_speed},
                       {"time_ms", p.time_ms}});
     }
     models.push_back({{"kind", "hybrid (Duffing)"},
@@ -205,9 +217,12 @@ std::string indentation_markdown(const json& ind) {
   md << "\n## Force–indentation of a rigid sphere (issue 18)\n\n"
         "A frictionless rigid sphere pressed into the body. FEM: node-to-sphere contact with an active set "
         "(the contact nodes' displacement along the indentation imposed on the sphere, lateral motion free; "
-        "the force is the sum of CalculiX's reaction forces, fem/indentation.hpp). MedSpring: the sphere tool "
+        "the force is the sum of CalculiX's reaction forces, fem/indentation.hpp). MedSpring: the sphere "
+        "tool "
         "(docs/tools.md) moved to each depth at 0.02 mm/ms and held until the model is at rest (max |v| < "
-        "1e-5 mm/ms); the force is the reaction on the tool. Depth 0 = first touch of the surface.\n";
+        "1e-5 mm/ms, at most 6 s); the force is the reaction on the tool averaged over 200 ms more (a row "
+        "that did not come to rest gives the half spread of the force and the last max |v|). Depth 0 = "
+        "first touch of the surface.\n";
   if (ind.contains("hertz") && !ind["hertz"].empty()) {
     md << "\n### FEM indentation against Hertz (half-space)\n\nQuarter block 20 mm, E = 10 kPa, nu = 0.45, "
           "R = 10 mm; the far faces carry the Boussinesq field of the FEM's own force. Hertz: F = 4/3 E/(1 - "
@@ -216,22 +231,25 @@ std::string indentation_markdown(const json& ind) {
     for (const auto& v : ind["hertz"])
       md << "| " << v["name"].get<std::string>() << " | " << v["level"] << " | " << v["nodes"] << " | "
          << fmt(v["fem"].get<double>(), 4) << " | " << fmt(v["analytic"].get<double>(), 4) << " | "
-         << fmt(100 * v["rel_error"].get<double>(), 3) << " | " << fmt(v["solve_s"].get<double>(), 3) << " |\n";
+         << fmt(100 * v["rel_error"].get<double>(), 3) << " | " << fmt(v["solve_s"].get<double>(), 3)
+         << " |\n";
   }
   if (ind.contains("organs"))
     for (const auto& o : ind["organs"]) {
       md << "\n### " << o["organ"].get<std::string>() << ": sphere R = " << o["radius_mm"].get<double>()
          << " mm\n\nFEM: " << o["fem"]["nodes"] << " nodes, " << o["fem"]["elements"] << " C3D10 (level "
          << o["fem"]["level"] << "), CalculiX " << fmt(o["fem"]["total_solve_s"].get<double>(), 3)
-         << " s in all. Hertz-like: the Hertz law with the effective radius of the sphere and the organ's local "
+         << " s in all. Hertz-like: the Hertz law with the effective radius of the sphere and the organ's "
+            "local "
             "principal curvatures (";
       const auto& c = o["curvature"];
       md << fmt(c["k1_per_mm"].get<double>()) << ", " << fmt(c["k2_per_mm"].get<double>()) << " 1/mm";
       if (!c["R_effective_mm"].is_null()) md << ", R_e = " << fmt(c["R_effective_mm"].get<double>()) << " mm";
-      md << "), as if the organ were a half-space.\n\n| depth mm | FEM N | FEM contact nodes | Hertz-like N |";
+      md << "), as if the organ were a half-space.\n\n| depth mm | FEM N | FEM contact nodes | Hertz-like N "
+            "|";
       for (const auto& m : o["models"])
-        md << " " << m["kind"].get<std::string>() << (m["calibrated"].get<bool>() ? " calibrated" : " default")
-           << " N (error %) |";
+        md << " " << m["kind"].get<std::string>()
+           << (m["calibrated"].get<bool>() ? " calibrated" : " default") << " N (error %) |";
       md << "\n|---|---|---|---|";
       for (std::size_t k = 0; k < o["models"].size(); ++k) md << "---|";
       md << "\n";
@@ -242,15 +260,19 @@ std::string indentation_markdown(const json& ind) {
            << " | " << (o["hertz_N"].size() > i ? fmt(o["hertz_N"][i].get<double>(), 4) : "-") << " |";
         for (const auto& m : o["models"]) {
           const auto& p = m["points"][i];
-          md << " " << fmt(p["force_N"].get<double>(), 4) << " (" << fmt(p["error_pct"].get<double>(), 3) << ")"
-             << (p["at_rest"].get<bool>() ? "" : " not at rest") << " |";
+          md << " " << fmt(p["force_N"].get<double>(), 4) << " (" << fmt(p["error_pct"].get<double>(), 3)
+             << ")";
+          if (!p["at_rest"].get<bool>())
+            md << " not at rest: ±" << fmt(p["force_spread_N"].get<double>() / 2, 2) << " N, |v| "
+               << fmt(p["max_speed_mm_per_ms"].get<double>(), 2) << " mm/ms";
+          md << " |";
         }
         md << "\n";
       }
       md << "\nLog–log slope of F against depth (Hertz: 1.5): FEM " << fmt(o["fem"]["slope"].get<double>());
       for (const auto& m : o["models"])
-        md << ", " << m["kind"].get<std::string>() << (m["calibrated"].get<bool>() ? " calibrated " : " default ")
-           << fmt(m["slope"].get<double>());
+        md << ", " << m["kind"].get<std::string>()
+           << (m["calibrated"].get<bool>() ? " calibrated " : " default ") << fmt(m["slope"].get<double>());
       md << ".\n";
     }
   return md.str();

@@ -212,8 +212,10 @@ const std::vector<Command>& commands() {
        "  --quick        phantom only, 2 sites, 0.5 N, coarse validation (a smoke test)\n"
        "  --E-kPa, --nu  the tissue (Young's modulus in kPa, Poisson ratio < 0.5)\n"
        "  --radius       contact disk radius a, mm\n"
-       "  --level        FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)\n",
-       {"json", "force", "quick", "quiet"},
+       "  --level        FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)\n"
+       "  --indentation-only  only the force-indentation of a rigid sphere (issue 18; part of a full run):\n"
+       "                 Hertz validation of the FEM contact, then the real kidney: FEM vs the sphere tool\n",
+       {"json", "force", "quick", "quiet", "indentation-only"},
        cmd_accuracy},
       {"calibrate",
        "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface] [--linear] [--E-kPa 10]\n"

@@ -178,7 +178,8 @@ FrdData parse_frd(std::string_view text, const std::string& name) {
         parse_row(line, 3, lines, id, v);
         const auto it = row_of.find(id);
         if (it == row_of.end()) lines.fail(cat("node ", id, " is not in the node block"));
-        if (seen[it->second]) lines.fail(cat("node ", id, " repeated in the ", is_forc ? "FORC" : "DISP", " block"));
+        if (seen[it->second])
+          lines.fail(cat("node ", id, " repeated in the ", is_forc ? "FORC" : "DISP", " block"));
         seen[it->second] = 1;
         block.u.row(it->second) << v[0], v[1], v[2];
         ++rows;

@@ -17,10 +17,11 @@ namespace medspring::fem {
 namespace {
 
 void check_settings(const SphereIndentation& s) {
-  require(std::isfinite(s.radius) && s.radius > 0, "sphere indentation: radius must be > 0 mm (got ", s.radius,
-          ")");
+  require(std::isfinite(s.radius) && s.radius > 0, "sphere indentation: radius must be > 0 mm (got ",
+          s.radius, ")");
   require(s.touch_centre.allFinite(), "sphere indentation: touch_centre must be finite");
-  require(s.direction.allFinite() && s.direction.norm() > 1e-12, "sphere indentation: direction must be nonzero");
+  require(s.direction.allFinite() && s.direction.norm() > 1e-12,
+          "sphere indentation: direction must be nonzero");
   require(!s.depths.empty(), "sphere indentation: no depths");
   for (std::size_t i = 0; i < s.depths.size(); ++i) {
     require(std::isfinite(s.depths[i]) && s.depths[i] > 0, "sphere indentation: depths[", i, "] must be > 0");
@@ -127,7 +128,8 @@ std::vector<IndentationPoint> sphere_indentation(const FemProblem& base, const S
           a = 1;
           changed = true;
         } else if (a) {
-          moved = std::max(moved, std::hypot(X(i, 0) + u(i, 0) - lateral(i, 0), X(i, 1) + u(i, 1) - lateral(i, 1)));
+          moved = std::max(moved,
+                           std::hypot(X(i, 0) + u(i, 0) - lateral(i, 0), X(i, 1) + u(i, 1) - lateral(i, 1)));
         }
       }
       const bool force_settled =
@@ -144,7 +146,8 @@ std::vector<IndentationPoint> sphere_indentation(const FemProblem& base, const S
   return out;
 }
 
-Vec3 first_touch_centre(const MatX3& V, const MatX3i& F, double R, const Vec3& axis_point, const Vec3& direction) {
+Vec3 first_touch_centre(const MatX3& V, const MatX3i& F, double R, const Vec3& axis_point,
+                        const Vec3& direction) {
   require(std::isfinite(R) && R > 0, "first_touch_centre: radius must be > 0");
   require(direction.allFinite() && direction.norm() > 1e-12, "first_touch_centre: direction must be nonzero");
   const Vec3 d = direction.normalized();

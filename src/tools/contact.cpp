@@ -551,7 +551,8 @@ void ContactModel::restore_history(std::string_view bytes, const std::string& wh
   if (r.str("tag") != kHistoryTag) r.fail("not a contact history");
   const Index nv = static_cast<Index>(forces_.force.rows());
   const Index rows = static_cast<Index>(r.i64());
-  if (rows != nv) throw InvalidInput(cat(what, ": saved for a surface of ", rows, " nodes, this one has ", nv));
+  if (rows != nv)
+    throw InvalidInput(cat(what, ": saved for a surface of ", rows, " nodes, this one has ", nv));
   const bool have_prev = r.flag("have_prev");
   MatX3 prev(nv, 3);
   r.doubles(prev.data(), static_cast<Index>(prev.size()));

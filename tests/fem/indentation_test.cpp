@@ -1,6 +1,8 @@
 // Reaction forces from CalculiX and the rigid-sphere indentation of the FEM reference (issue 18,
 // fem/indentation.hpp): the FORC block of the .frd, force balance of the reactions, Hertz on a coarse
 // half-space block, the first-touch and curvature helpers, and bad settings.
+#include "medspring/fem/indentation.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +11,6 @@
 #include "medspring/core/error.hpp"
 #include "medspring/fem/calculix.hpp"
 #include "medspring/fem/frd.hpp"
-#include "medspring/fem/indentation.hpp"
 #include "medspring/fem/tet_mesh.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "test_support.hpp"

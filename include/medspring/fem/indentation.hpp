@@ -23,13 +23,13 @@
 namespace medspring::fem {
 
 struct SphereIndentation {
-  double radius = 5.0;                  // R, mm
-  Vec3 touch_centre = Vec3::Zero();     // sphere centre at depth 0 (first touch), mm
-  Vec3 direction = Vec3(0, 0, -1);      // unit: the sphere moves along it, into the tissue
-  std::vector<double> depths;           // indentation depths (mm), > 0, increasing
-  double symmetry_factor = 1.0;         // force multiplier (4 for a quarter model on two symmetry planes)
-  int max_iterations = 12;              // active-set iterations per depth
-  double tolerance = 1e-3;              // mm: inside the sphere by more than this = penetrating
+  double radius = 5.0;               // R, mm
+  Vec3 touch_centre = Vec3::Zero();  // sphere centre at depth 0 (first touch), mm
+  Vec3 direction = Vec3(0, 0, -1);   // unit: the sphere moves along it, into the tissue
+  std::vector<double> depths;        // indentation depths (mm), > 0, increasing
+  double symmetry_factor = 1.0;      // force multiplier (4 for a quarter model on two symmetry planes)
+  int max_iterations = 12;           // active-set iterations per depth
+  double tolerance = 1e-3;           // mm: inside the sphere by more than this = penetrating
   // Called before every solve with the problem about to be solved and the current force estimate
   // (N, the previous iteration's; 0 at first): e.g. far-field boundary values of a half-space model.
   // With it, an iteration also converges only when the force changed by < 0.1 %.
@@ -37,15 +37,15 @@ struct SphereIndentation {
 };
 
 struct IndentationPoint {
-  double depth = 0;           // mm
-  double force = 0;           // N: the pressing force on the sphere along `direction` (> 0 in contact)
+  double depth = 0;              // mm
+  double force = 0;              // N: the pressing force on the sphere along `direction` (> 0 in contact)
   Vec3 reaction = Vec3::Zero();  // N: total force of the tissue on the sphere (x symmetry_factor)
-  double contact_radius = 0;  // mm: largest distance of a contact node from the sphere's axis
+  double contact_radius = 0;     // mm: largest distance of a contact node from the sphere's axis
   Index contact_nodes = 0;
-  int iterations = 0;         // CalculiX solves for this depth
-  bool converged = false;     // the active set settled within max_iterations
-  double solve_seconds = 0;   // CalculiX wall time summed over the iterations
-  MatX3 u;                    // displacement of the last solve (#N x 3, mm, original frame)
+  int iterations = 0;        // CalculiX solves for this depth
+  bool converged = false;    // the active set settled within max_iterations
+  double solve_seconds = 0;  // CalculiX wall time summed over the iterations
+  MatX3 u;                   // displacement of the last solve (#N x 3, mm, original frame)
 };
 
 /// Force–indentation of a rigid frictionless sphere on `base` (mesh, material and supports; base's
@@ -64,7 +64,8 @@ double hertz_force(const Material& m, double R, double depth);
 /// towards the triangle surface (V, F): the highest position at which the sphere touches a triangle
 /// (exact on a face's interior; edges and corners sampled on a barycentric grid of 24 x 24). Throws
 /// InvalidInput if the axis misses.
-Vec3 first_touch_centre(const MatX3& V, const MatX3i& F, double R, const Vec3& axis_point, const Vec3& direction);
+Vec3 first_touch_centre(const MatX3& V, const MatX3i& F, double R, const Vec3& axis_point,
+                        const Vec3& direction);
 
 /// Principal curvatures (1/mm, positive for a convex surface seen from outside along -direction) of the
 /// surface at `point`: a quadric z = (a x^2 + 2 b xy + c y^2) / 2 fitted by least squares to the vertices
