@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "accuracy_indentation.hpp"
 #include "accuracy_summary.hpp"
 #include "commands.hpp"
 #include "medspring/builders/output_folder.hpp"
@@ -808,6 +809,7 @@ std::string markdown(const json& j) {
            << pct(c["max_pct"].get<double>()) << " | " << pct(c["lumen_rms_pct"].get<double>()) << " |\n";
       }
   }
+  if (j.contains("indentation")) md << indentation_markdown(j["indentation"]);
   md << "\nFigures: figures/speed_accuracy.png (time per update against the mean held-out RMS error, FEM "
         "solve "
         "time for scale), figures/error_*.png (surface error maps).\n";
@@ -819,7 +821,7 @@ std::string markdown(const json& j) {
 int cmd_accuracy(const Args& args) {
   args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes",
                       "kinds", "nodes", "no-validation", "forces", "organs", "vessel-E-kPa", "wall-ratio",
-                      "no-vessel", "vessel-only"});
+                      "no-vessel", "vessel-only", "indentation-only"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -842,8 +844,11 @@ int cmd_accuracy(const Args& args) {
   const bool vessel_only = args.flag("vessel-only");
   require(!(vessel_only && args.flag("no-vessel")),
           "accuracy: --vessel-only and --no-vessel exclude each other");
+  const bool indentation_only = args.flag("indentation-only");  // issue 18: only the sphere indentation
+  require(!(vessel_only && indentation_only), "accuracy: --vessel-only and --indentation-only exclude each other");
   json val = json::array();
-  for (int level = 1; level <= (args.flag("no-validation") || vessel_only ? 0 : st.quick ? 1 : 3); ++level) {
+  for (int level = 1; level <= (args.flag("no-validation") || vessel_only || indentation_only ? 0 : st.quick ? 1 : 3);
+       ++level) {
     note(st, cat("validation level ", level));
     std::vector<fem::ValidationResult> rs = {fem::validate_uniaxial(level), fem::validate_cantilever(level)};
     if (!st.quick || level == 1)
@@ -868,7 +873,7 @@ int cmd_accuracy(const Args& args) {
   std::vector<Organ> organs;
   if (!vessel_only && organ_list.find("phantom") != std::string::npos) organs.push_back(phantom_organ());
   FileLoader loader;
-  if (!st.quick && !vessel_only && organ_list.find("kidney") != std::string::npos) {
+  if ((!st.quick || indentation_only) && !vessel_only && organ_list.find("kidney") != std::string::npos) {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
     std::string why;
@@ -890,8 +895,9 @@ int cmd_accuracy(const Args& args) {
           "accuracy: --wall-ratio must be in (0, 1] (wall thickness / lumen radius)");
   json maps = json::object();
   j["organs"] = json::array();
-  for (const auto& o : organs) j["organs"].push_back(run_organ(o, st, maps));
-  if (!args.flag("no-vessel")) {
+  for (const auto& o : organs)
+    if (!indentation_only) j["organs"].push_back(run_organ(o, st, maps));
+  if (!args.flag("no-vessel") && !indentation_only) {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
     Scene vs = load_scene(scenes / "phantom" / "vessel_light_nonlinear.json");
@@ -912,6 +918,24 @@ int cmd_accuracy(const Args& args) {
     vs.model.smrm.wall.thickness_ratio = vms.thickness_ratio;
     j["vessels"].push_back(run_vessel(vs, vname, st, vessel_mat, vms, loader));
   }
+  if ((!st.quick || indentation_only) && !vessel_only && !organs.empty()) {  // a rigid sphere (issue 18)
+    const Organ& o = organs.back();  // the real kidney when it could be built
+    const Frame f = principal_frame(o.surface.V);
+    IndentationOrgan io{o.name,
+                        o.surface,
+                        o.atoms,
+                        o.name == "real kidney" ? TissueOrgan::RealKidney : TissueOrgan::Phantom,
+                        o.surface.V.row(pick_sites(o.surface.V, f, {-0.45})[0]).transpose(),
+                        -f.e3,
+                        fem::SupportRule{-f.e3, 0.2 * f.thickness}};
+    IndentationSettings is;
+    is.material = st.material;
+    is.level = st.level;
+    is.note = [&](const std::string& m) { note(st, m); };
+    note(st, "indentation: Hertz validation");
+    j["indentation"]["hertz"] = hertz_validation_json(is.hertz_level);
+    j["indentation"]["organs"].push_back(indentation_study(io, is));
+  }
 
   const fs::path scripts = find_folder(std::nullopt, MEDSPRING_SOURCE_PAPER_SCRIPTS_DIR, "scripts",
                                        "figure scripts", "accuracy_plots.py");
@@ -930,7 +954,7 @@ int cmd_accuracy(const Args& args) {
     fs::remove(dir / "figures.log");
   });
   // The full run is kept as the latest for `medspring paper`'s summary (accuracy_summary.hpp).
-  if (!st.quick && !vessel_only && !keep_latest_accuracy(j) && !args.flag("json"))
+  if (!st.quick && !vessel_only && !indentation_only && !keep_latest_accuracy(j) && !args.flag("json"))
     std::cout << "accuracy: note: could not keep the run as " << latest_accuracy_path().string() << std::endl;
   if (args.flag("json"))
     std::cout << j.dump(1) << '\n';

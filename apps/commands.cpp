@@ -238,8 +238,10 @@ const std::vector<Command>& commands() {
        "                 (VMR 0159; --quick: a 12-atom straight phantom) against the wall as a tube of\n"
        "                 tetrahedra, ends clamped, at 5 atoms x 0.05 / 0.5 N: centerline error\n"
        "  --wall-ratio   vessel wall thickness / lumen radius\n"
-       "  --no-vessel, --vessel-only  leave the vessel out / run only the vessel\n",
-       {"json", "force", "quick", "quiet", "no-validation", "no-vessel", "vessel-only"},
+       "  --no-vessel, --vessel-only  leave the vessel out / run only the vessel\n"
+       "  --indentation-only  only the force-indentation of a rigid sphere (issue 18; part of a full run):\n"
+       "                 Hertz validation of the FEM contact, then the real kidney: FEM vs the sphere tool\n",
+       {"json", "force", "quick", "quiet", "no-validation", "no-vessel", "vessel-only", "indentation-only"},
        cmd_accuracy},
       {"calibrate",
        "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"

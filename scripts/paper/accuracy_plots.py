@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Figures of `medspring accuracy` (docs/accuracy.md): reads DIR/accuracy.json and DIR/error_maps.json and
 writes DIR/figures/speed_accuracy.png, DIR/figures/error_<organ>_<params>.png and
-DIR/figures/force_displacement_<organ>.png (matplotlib, Agg)."""
+DIR/figures/force_displacement_<organ>.png and DIR/figures/force_indentation_<organ>.png (matplotlib, Agg)."""
 import json
 import pathlib
 import sys
@@ -97,6 +97,29 @@ def force_displacement(organ, out):
     return drawn
 
 
+def force_indentation(organ, out):
+    """Force against indentation depth of a rigid sphere (issue 18): the FEM (black), the Hertz-like estimate
+    (grey dotted) and MedSpring's sphere tool on each model (dashed: default, solid: calibrated)."""
+    depth = organ["depths_mm"]
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ax.plot([0.0] + depth, [0.0] + [p["force_N"] for p in organ["fem"]["points"]], "k-o", lw=2, ms=4,
+            label="FEM (CalculiX, rigid sphere)")
+    if organ["hertz_N"]:
+        ax.plot([0.0] + depth, [0.0] + organ["hertz_N"], color="grey", ls=":", label="Hertz, local curvature")
+    for i, m in enumerate(organ["models"]):
+        ax.plot([0.0] + depth, [0.0] + [p["force_N"] for p in m["points"]], "-" if m["calibrated"] else "--",
+                color="C%d" % i, marker=".",
+                label="MedSpring %s, %s" % (m["kind"], "calibrated" if m["calibrated"] else "default"))
+    ax.set_xlabel("indentation depth (mm)")
+    ax.set_ylabel("force on the sphere (N)")
+    ax.set_title("Sphere R = %g mm on the %s" % (organ["radius_mm"], organ["organ"]), fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+
+
 def error_map(m, out):
     V = np.array(m["V"]).reshape(-1, 3)
     F = np.array(m["F"]).reshape(-1, 3)
@@ -155,11 +178,14 @@ def main():
     acc = json.loads((d / "accuracy.json").read_text())
     maps = json.loads((d / "error_maps.json").read_text())
     (d / "figures").mkdir(exist_ok=True)
-    speed_accuracy(acc, d / "figures" / "speed_accuracy.png")
+    if acc["organs"]:
+        speed_accuracy(acc, d / "figures" / "speed_accuracy.png")
     for organ in acc["organs"]:
         force_displacement(organ, d / "figures" / ("force_displacement_" + organ["organ"].replace(" ", "_") + ".png"))
     for v in acc.get("vessels", []):
         vessel_force_displacement(v, d / "figures" / ("force_displacement_" + v["vessel"].split(" ")[0] + ".png"))
+    for organ in acc.get("indentation", {}).get("organs", []):
+        force_indentation(organ, d / "figures" / ("force_indentation_" + organ["organ"].replace(" ", "_") + ".png"))
     for name, m in maps.items():
         error_map(m, d / "figures" / ("error_" + name.replace(" ", "_") + ".png"))
 

@@ -109,7 +109,7 @@ std::string write_inp(const FemProblem& p, const FemSettings& s) {
       for (int d = 0; d < 3; ++d)
         if (l.force(d) != 0.0) o << l.node + 1 << ", " << d + 1 << ", " << l.force(d) << '\n';
   }
-  o << "*NODE FILE\nU\n*END STEP\n";
+  o << (s.reaction_forces ? "*NODE FILE\nU, RF\n*END STEP\n" : "*NODE FILE\nU\n*END STEP\n");
   return o.str();
 }
 
@@ -175,7 +175,14 @@ FemResult solve(const FemProblem& p, const FemSettings& s) {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(r.key));
   const fs::path cache_file = cache_folder(s) / (std::string(hex) + ".u");
-  if (s.use_cache && load_cache(cache_file, p.mesh.num_nodes(), r)) return r;
+  const Index n = p.mesh.num_nodes();
+  if (s.use_cache && load_cache(cache_file, s.reaction_forces ? 2 * n : n, r)) {
+    if (s.reaction_forces) {  // cached as [u; rf]
+      r.rf = r.u.bottomRows(n);
+      r.u = MatX3(r.u.topRows(n));
+    }
+    return r;
+  }
 
   const fs::path exe = s.executable.empty() ? detail::find_tool("ccx", "MEDSPRING_CCX",
                                                                 "install the Debian package calculix-ccx")
@@ -213,11 +220,19 @@ FemResult solve(const FemProblem& p, const FemSettings& s) {
   try {
     const FrdData frd = read_frd((dir.path() / "job.frd").string());
     r.u = last_displacement(frd, p.mesh.num_nodes(), 1.0, "job.frd");
+    if (s.reaction_forces) r.rf = last_reaction(frd, p.mesh.num_nodes(), 1.0, "job.frd");
   } catch (const IoError& e) {
     throw SolverError(
         cat("CalculiX did not reach the full load (", e.what(), "): ", detail::last_lines(log, 4)));
   }
-  if (s.use_cache) store_cache(cache_file, r);
+  if (s.use_cache && s.reaction_forces) {
+    FemResult both = r;
+    both.u = MatX3(2 * n, 3);
+    both.u << r.u, r.rf;
+    store_cache(cache_file, both);
+  } else if (s.use_cache) {
+    store_cache(cache_file, r);
+  }
   return r;
 }
 

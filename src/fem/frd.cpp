@@ -152,7 +152,8 @@ FrdData parse_frd(std::string_view text, const std::string& name) {
     if (key == "-4") {
       const auto t = tokens(line);
       if (t.size() < 3) lines.fail("bad result block header");
-      const bool is_disp = t[1] == "DISP";
+      const bool is_forc = t[1] == "FORC";  // reaction forces: like DISP, rows may be a subset
+      const bool is_disp = t[1] == "DISP" || is_forc;
       long long ncomp = 0;
       if (!parse_long(t[2], ncomp) || ncomp < 1 || ncomp > 64) lines.fail("bad component count");
       if (is_disp && !have_nodes) lines.fail("DISP block before the node block");
@@ -177,12 +178,15 @@ FrdData parse_frd(std::string_view text, const std::string& name) {
         parse_row(line, 3, lines, id, v);
         const auto it = row_of.find(id);
         if (it == row_of.end()) lines.fail(cat("node ", id, " is not in the node block"));
-        if (seen[it->second]) lines.fail(cat("node ", id, " repeated in the DISP block"));
+        if (seen[it->second])
+          lines.fail(cat("node ", id, " repeated in the ", is_forc ? "FORC" : "DISP", " block"));
         seen[it->second] = 1;
         block.u.row(it->second) << v[0], v[1], v[2];
         ++rows;
       }
-      if (is_disp) {
+      if (is_forc) {
+        out.forc.push_back(std::move(block));
+      } else if (is_disp) {
         if (rows != out.ids.size())
           lines.fail(cat("DISP block has ", rows, " rows for ", out.ids.size(), " nodes"));
         out.disp.push_back(std::move(block));
@@ -237,6 +241,19 @@ MatX3 last_displacement(const FrdData& frd, Index n, double expect_time, const s
     if (!have[static_cast<std::size_t>(i)])
       throw IoError(cat(name, ": node ", i + 1, " has no displacement"));
   return u;
+}
+
+MatX3 last_reaction(const FrdData& frd, Index n, double expect_time, const std::string& name) {
+  if (frd.forc.empty()) throw IoError(cat(name, ": no FORC block"));
+  const auto& b = frd.forc.back();
+  if (!(std::abs(b.time - expect_time) <= 1e-6))
+    throw IoError(cat(name, ": the last FORC block is at step time ", b.time, ", not ", expect_time));
+  MatX3 f = MatX3::Zero(n, 3);
+  for (std::size_t r = 0; r < frd.ids.size(); ++r) {
+    const Index id = frd.ids[r];
+    if (id >= 1 && id <= n) f.row(id - 1) = b.u.row(static_cast<Index>(r));
+  }
+  return f;
 }
 
 }  // namespace medspring::fem

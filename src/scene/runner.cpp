@@ -25,7 +25,13 @@ double median(std::vector<double> v) {
   return *mid;
 }
 
-constexpr char kTraceTag[] = "medspring-scene-trace-v1";
+constexpr char kTraceTag[] = "medspring-scene-trace-v1";   // read: runs without the tool section
+constexpr char kTraceTag2[] = "medspring-scene-trace-v2";  // written: + tool traces and contact history
+constexpr std::size_t kMaxHistory = std::size_t{1} << 30;
+
+std::vector<std::vector<double>*> tool_vectors(SceneTrace::ToolTrace& t) {
+  return {&t.fx, &t.fy, &t.fz, &t.tx, &t.ty, &t.tz, &t.area, &t.penetration, &t.grasp};
+}
 
 void put_vector(ByteWriter& w, const std::vector<double>& v) {
   w.u64(v.size());
@@ -38,10 +44,10 @@ std::vector<double> get_vector(ByteReader& r, const char* field) {
 }
 
 // The runner's part of a checkpoint: where the run is, its traces and per-update times so far.
-std::string encode_progress(const std::string& scene, long k, Index frames, const SceneTrace& t,
-                            const std::vector<double>& us) {
+std::string encode_progress(const std::string& scene, long k, Index frames, SceneTrace& t,
+                            const std::vector<double>& us, const ToolSimulation* tools) {
   ByteWriter w;
-  w.str(kTraceTag);
+  w.str(kTraceTag2);
   w.str(scene);
   w.i64(k);
   w.i64(frames);
@@ -51,6 +57,10 @@ std::string encode_progress(const std::string& scene, long k, Index frames, cons
   w.u64(t.atom_disp.size());
   for (const auto& v : t.atom_disp) put_vector(w, v);
   put_vector(w, std::vector<double>(us.begin(), us.begin() + k));
+  w.u64(t.tools.size());  // rigid tools (docs/tools.md): their traces and the contact's history
+  for (auto& tt : t.tools)
+    for (const auto* v : tool_vectors(tt)) put_vector(w, *v);
+  if (!t.tools.empty()) w.str(tools->save_history(), kMaxHistory);
   return std::move(w.bytes());
 }
 
@@ -62,8 +72,6 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   sim.set_loads(b.loads);
   std::optional<ToolSimulation> tools;  // scene.tools: rigid instruments (docs/tools.md)
   if (!scene.tools.empty()) {
-    require(hooks.resume == nullptr, scene.file.string(),
-            ": a run with tools cannot be resumed from a checkpoint");
     tools.emplace(sim, scene.contact);
     for (const SceneTool& t : scene.tools) {
       const Index k = tools->add_tool(t.tool, t.path.front().pose);
@@ -90,7 +98,8 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
     apply_checkpoint(*hooks.resume, sim, "resume");  // first: another model is the mismatch to name
     const std::string what = cat("resume: checkpoint of '", hooks.resume->model_name, "'");
     ByteReader r(hooks.resume->extra, what, "scene checkpoint");
-    if (hooks.resume->extra.empty() || r.str("tag") != kTraceTag)
+    const std::string tag = hooks.resume->extra.empty() ? std::string() : r.str("tag");
+    if (tag != kTraceTag && tag != kTraceTag2)
       throw InvalidInput(cat(what, ": it holds no scene run (saved by another program?)"));
     const std::string name = r.str("scene");
     if (name != scene.name)
@@ -104,12 +113,20 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
     if (r.u64() != tr.atom_disp.size()) r.fail("traced atoms differ from the scene's");
     for (auto& v : tr.atom_disp) v = get_vector(r, "atom trace");
     const std::vector<double> done = get_vector(r, "update times");
+    const std::uint64_t saved_tools = tag == kTraceTag2 ? r.u64() : 0;
+    if (saved_tools != tr.tools.size())
+      throw InvalidInput(cat(what, ": saved with ", saved_tools, " tools, the scene has ", tr.tools.size()));
+    for (auto& tt : tr.tools)
+      for (auto* v : tool_vectors(tt)) *v = get_vector(r, "tool trace");
+    if (!tr.tools.empty()) tools->restore_history(r.str("contact history", kMaxHistory), what);
     r.finish();
     bool sizes = k0 >= 0 && k0 <= n && frames0 >= 0 && done.size() == static_cast<std::size_t>(k0);
     for (const auto* v : {&tr.time, &tr.force, &tr.max_disp, &tr.local_contact, &tr.energy})
       sizes = sizes && v->size() == static_cast<std::size_t>(k0 + 1);
     for (const auto& v : tr.node_disp) sizes = sizes && v.size() == static_cast<std::size_t>(k0 + 1);
     for (const auto& v : tr.atom_disp) sizes = sizes && v.size() == static_cast<std::size_t>(k0 + 1);
+    for (auto& tt : tr.tools)
+      for (const auto* v : tool_vectors(tt)) sizes = sizes && v->size() == static_cast<std::size_t>(k0 + 1);
     if (!sizes) throw InvalidInput(cat(what, ": its traces do not match update ", k0, " of ", n));
     std::copy(done.begin(), done.end(), us.begin());
     res.first_update = k0 + 1;
@@ -181,7 +198,8 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   }
   auto checkpoint = [&](long k) {
     Checkpoint c = make_checkpoint(sim);
-    c.extra = encode_progress(scene.name, k, frames0 + static_cast<Index>(res.frames.size()), tr, us);
+    c.extra = encode_progress(scene.name, k, frames0 + static_cast<Index>(res.frames.size()), tr, us,
+                              tools ? &*tools : nullptr);
     hooks.on_checkpoint(c);
   };
   const long progress_every = std::max(1L, n / 100);

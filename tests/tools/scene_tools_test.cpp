@@ -4,11 +4,13 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 
 #include "medspring/core/error.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/runner.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/sim/checkpoint.hpp"
 
 namespace medspring {
 namespace {
@@ -109,6 +111,65 @@ TEST(SceneTools, GraspPullStretchesTheTissueAndReportsTheGraspForce) {
   EXPECT_EQ(grasp_after, 0.0);
   EXPECT_GT(r.summary.max_disp_peak_mm, 4.0);  // the pulled tissue stretched
   EXPECT_EQ(r.summary.warnings, 0u);
+}
+
+// A run with tools is checkpointed like any run: stopped while the grasper holds the tissue (and again
+// while the probe slides), resumed from the checkpoint, it gives the same traces bit for bit.
+TEST(SceneTools, RunsWithToolsResumeFromACheckpointBitForBit) {
+  for (const char* file : {"grasp_pull.json", "probe_press_slide.json"}) {
+    const Scene scene = load_scene(kExamples / file);
+    const BuiltScene b = build_scene(scene, nullptr);
+    const SceneResult full = run_scene(b);
+    std::optional<Checkpoint> saved;
+    RunHooks stop;
+    stop.stop_at = std::string(file) == "grasp_pull.json" ? 400.0 : 300.0;  // grasping / sliding
+    stop.on_checkpoint = [&](const Checkpoint& c) { saved = c; };
+    const SceneResult first = run_scene(b, stop);
+    ASSERT_TRUE(first.stopped) << file;
+    ASSERT_TRUE(saved.has_value()) << file;
+    // through the file format, as `medspring run --resume` does
+    const Checkpoint back = decode_checkpoint(encode_checkpoint(*saved), "test");
+    RunHooks resume;
+    resume.resume = &back;
+    const SceneResult rest = run_scene(b, resume);
+    ASSERT_EQ(rest.trace.tools.size(), 1u);
+    const auto& a = full.trace.tools[0];
+    const auto& c = rest.trace.tools[0];
+    ASSERT_EQ(c.fz.size(), a.fz.size()) << file;
+    EXPECT_EQ(c.fx, a.fx) << file;
+    EXPECT_EQ(c.fz, a.fz) << file;
+    EXPECT_EQ(c.tz, a.tz) << file;
+    EXPECT_EQ(c.penetration, a.penetration) << file;
+    EXPECT_EQ(c.grasp, a.grasp) << file;
+    EXPECT_EQ(rest.trace.max_disp, full.trace.max_disp) << file;
+    EXPECT_EQ(rest.summary.final_max_disp_mm, full.summary.final_max_disp_mm) << file;
+  }
+  // a checkpoint of a run with tools does not resume a scene whose tools differ
+  const Scene scene = load_scene(kExamples / "probe_press_slide.json");
+  std::optional<Checkpoint> saved;
+  RunHooks stop;
+  stop.stop_at = 100;
+  stop.on_checkpoint = [&](const Checkpoint& c) { saved = c; };
+  run_scene(build_scene(scene, nullptr), stop);
+  ASSERT_TRUE(saved.has_value());
+  Scene other = scene;
+  other.tools[0].tool.radius *= 2;
+  RunHooks resume;
+  resume.resume = &*saved;
+  try {
+    run_scene(build_scene(other, nullptr), resume);
+    ADD_FAILURE() << "resumed with another tool";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("tools[0] differs"), std::string::npos) << e.what();
+  }
+  Scene none = scene;
+  none.tools.clear();
+  try {
+    run_scene(build_scene(none, nullptr), resume);
+    ADD_FAILURE() << "resumed without the tools";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("saved with 1 tools"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

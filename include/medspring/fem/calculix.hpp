@@ -62,10 +62,13 @@ struct FemSettings {
   bool use_cache = true;   // look up / store results in cache_dir
   std::string cache_dir;   // default: $MEDSPRING_FEM_CACHE, else $XDG_CACHE_HOME or ~/.cache + /medspring/fem
   std::string executable;  // default: $MEDSPRING_CCX, then `ccx` on PATH
+  bool reaction_forces = false;  // also ask CalculiX for the nodal reaction forces (FemResult::rf)
 };
 
 struct FemResult {
   MatX3 u;                     // nodal displacements (#N x 3), mm
+  MatX3 rf;                    // nodal reaction forces (#N x 3), N, at supports and imposed values
+                               // (zero elsewhere); empty unless FemSettings::reaction_forces
   double solve_seconds = 0.0;  // wall time of the CalculiX run (the cached one's when from_cache)
   bool from_cache = false;
   std::uint64_t key = 0;  // cache key: FNV-1a 64 of the input deck

@@ -20,6 +20,8 @@ struct FrdData {
   std::vector<Index> ids;  // node ids (positive), in file order, unique
   MatX3 X;                 // node coordinates (#nodes x 3)
   std::vector<FrdDisplacementBlock> disp;
+  std::vector<FrdDisplacementBlock> forc;  // FORC blocks (reaction forces, *NODE FILE RF), N; nodes absent
+                                           // from a block get zero
 };
 
 /// Parses .frd text. `name` is used in the messages ("<name>: line 12: ...").
@@ -31,5 +33,9 @@ FrdData read_frd(const std::string& path);
 /// The last DISP block as displacements of nodes 1..n (row i = node id i+1). Throws IoError when there
 /// is no block, a node in 1..n is missing or the last block is not at step time `expect_time` (±1e-6).
 MatX3 last_displacement(const FrdData& frd, Index n, double expect_time, const std::string& name = "frd");
+
+/// The last FORC block (reaction forces, N) as forces on nodes 1..n (row i = node id i+1; a node absent
+/// from the block gets zero). Throws IoError when there is no block or it is not at `expect_time`.
+MatX3 last_reaction(const FrdData& frd, Index n, double expect_time, const std::string& name = "frd");
 
 }  // namespace medspring::fem

@@ -52,6 +52,7 @@ class OrganReference {
   const TetMesh& mesh() const { return problem_.mesh; }
   const std::vector<Index>& fixed_fem_nodes() const { return problem_.fixed; }
   const Material& material() const { return problem_.material; }
+  const FemProblem& problem() const { return problem_; }  // mesh, material and supports, no loads
 
  private:
   FemProblem problem_;

@@ -71,6 +71,13 @@ class ToolSimulation {
   /// Simulation::reset() and the contact's velocity history (tools keep their poses).
   void reset();
 
+  /// The contact's history for a checkpoint (ContactModel::save_history): restored into a
+  /// ToolSimulation with the same tools on the same model whose Simulation got the checkpoint, the
+  /// next update() repeats the saved run's bit for bit.
+  std::string save_history() const { return contact_.save_history(); }
+  void restore_history(std::string_view bytes, const std::string& what = "contact history") {
+    contact_.restore_history(bytes, what);
+  }
   const ContactModel& contact() const { return contact_; }
   Simulation& simulation() { return sim_; }
   const Simulation& simulation() const { return sim_; }

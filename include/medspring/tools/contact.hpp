@@ -23,6 +23,8 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "medspring/tools/surface_bvh.hpp"
@@ -109,6 +111,14 @@ class ContactModel {
   /// Drops the velocity history (after a reset of the body or a jump of a tool): the next update sees
   /// the surface and the tools at rest.
   void reset_history();
+  /// The state that carries over between updates, for a checkpoint: every tool's pose, opening, last
+  /// pose and grasp attachments, the augmented-Lagrangian multipliers and the last surface. After
+  /// restore_history() on a model built from the same surface with the same tools, the next update()
+  /// gives the same bits as the saved model's next update.
+  std::string save_history() const;
+  /// Throws IoError "<what>: ..." when the bytes are malformed, InvalidInput when they belong to another
+  /// surface or tool set (node count, tool kinds and sizes); the model is unchanged then.
+  void restore_history(std::string_view bytes, const std::string& what = "contact history");
 
   const SurfaceForces& forces() const { return forces_; }
   const std::vector<Contact>& contacts() const { return contacts_; }
