@@ -99,6 +99,26 @@ TEST(CliRun, SmallPhantomSceneWritesAParaViewSeriesTracesAndSummary) {
     EXPECT_EQ(e.path().filename().string().find(".result.tmp"), std::string::npos);
 }
 
+TEST(CliParams, InfoParamsIsTheCommittedTableAndRunSetChangesTheScene) {  // docs/parameters.md
+  const Result info = medspring("info --params");
+  ASSERT_EQ(info.rc, 0) << info.err;
+  EXPECT_EQ(info.out, slurp(fs::path(MEDSPRING_SOURCE_DIR) / "docs" / "parameters.md"));
+  const fs::path dir = testing::temp_dir("cli-set");
+  write(dir / "s.json", kSmallScene);
+  const Result ok =
+      medspring("run " + quote((dir / "s.json").string()) + " --out " + quote((dir / "out").string()) +
+                " --quiet --set integrator.dt=0.25,model.parameters.k_spoke=0.08");
+  ASSERT_EQ(ok.rc, 0) << ok.err;
+  const std::string scene = slurp(dir / "out" / "scene.json");  // the scene as run, defaults filled in
+  EXPECT_NE(scene.find("\"dt\": 0.25"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("\"k_spoke\": 0.08"), std::string::npos) << scene;
+  const Result bad = medspring("run " + quote((dir / "s.json").string()) + " --out " +
+                               quote((dir / "bad").string()) + " --set integrator.safety=2");
+  EXPECT_EQ(bad.rc, 1);
+  EXPECT_NE(bad.err.find("--set integrator.safety: must be in (0, 1] (got 2)"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
 TEST(CliRun, StoppedAndResumedRunGivesTheUninterruptedTraceBitForBit) {
   const fs::path dir = testing::temp_dir("cli-resume");
   write(dir / "small.json", kSmallScene);
