@@ -21,10 +21,11 @@ const std::vector<Command>& commands() {
        "reordered)\n"
        "medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
        "  the same from 1.2k to 3M nodes; writes DIR/scaling.json and the log-log plot DIR/scaling.png\n"
-       "medspring bench --gpu [--sizes N,N,..] [--batch B] [--cpu-max N] [--no-torch] [--out DIR] [--device I]\n"
-       "  the tube (default 1.2k, 120k, 1M, 16M nodes) on the GPU in fp64 and fp32, B hybrid kidneys in one\n"
-       "  batch, bandwidth against the measured copy bandwidth, the CPU engine and a PyTorch step in the same\n"
-       "  run (docs/gpu.md); DIR/gpu_bench.json and gpu_bench.png. Exits non-zero without a GPU\n",
+       "medspring bench --gpu [--sizes N,N,..] [--batch B] [--cpu-max N] [--no-torch] [--out DIR]\n"
+       "                [--device I]\n"
+       "  the tube (default 1.2k, 120k, 1M, 16M nodes) on the GPU in fp64 and fp32, B hybrid kidneys in\n"
+       "  one batch, bandwidth against the measured copy bandwidth, the CPU engine and a PyTorch step in\n"
+       "  the same run (docs/gpu.md); DIR/gpu_bench.json and gpu_bench.png. Exits non-zero without a GPU\n",
        {"json", "quick", "compare", "scaling", "no-bullet", "gpu", "no-torch"},
        cmd_bench},
       {"info",
