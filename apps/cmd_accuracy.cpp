@@ -247,8 +247,9 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
     std::stringstream ss(*k);
     std::string item;
     while (std::getline(ss, item, ',')) {
-      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing", cmd,
-              ": --kinds: unknown kind '", item, "' (expected surface, hybrid, volumetric, volumetric-duffing)");
+      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing",
+              cmd, ": --kinds: unknown kind '", item,
+              "' (expected surface, hybrid, volumetric, volumetric-duffing)");
       st.kinds.push_back(item);
     }
     require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
@@ -372,10 +373,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     kinds.push_back({"hybrid", false, true});
   }
   if (!st.kinds.empty())
-    std::erase_if(kinds, [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
-      const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing" : "");
-      return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
-    });
+    std::erase_if(
+        kinds, [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
+          const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing" : "");
+          return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
+        });
   o.E_kPa = st.material.E * 1e3;
   o.nu = st.material.nu;
   o.target_nodes = st.volumetric_nodes;
@@ -398,8 +400,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       if (calibrated) {
         note(st, cat(o.name, ": calibrating ", k.label()));
         if (k.base == "volumetric")
-          m = calibrate_volumetric([&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); },
-                                   training);
+          m = calibrate_volumetric(
+              [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, training);
         else
           m = fem::calibrate_multipliers(
               [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, k.families(),

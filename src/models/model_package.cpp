@@ -256,7 +256,8 @@ std::string encode_model_package(const ModelPackage& p) {
     for (Index t = 0; t < m.T.rows(); ++t)
       for (int c = 0; c < 4; ++c) w.i64(m.T(t, c));
     const VolumetricSettings& s = p.volumetric;
-    for (double v : {s.E_kPa, s.nu, s.density, s.beta, s.spring_scale, s.volume_scale}) w.f64(v);
+    for (double v : {s.E_kPa, s.nu, s.density, s.beta, s.spring_scale, s.volume_scale, s.min_mass_fraction})
+      w.f64(v);
     w.flag(s.return_k.has_value());
     w.f64(s.return_k.value_or(0.0));
     put_duffing(w, s.duffing);
@@ -361,7 +362,9 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
         m.T(t, c) = static_cast<Index>(i);
       }
     VolumetricSettings& s = p.volumetric;
-    for (double* v : {&s.E_kPa, &s.nu, &s.density, &s.beta, &s.spring_scale, &s.volume_scale}) *v = r.f64();
+    for (double* v :
+         {&s.E_kPa, &s.nu, &s.density, &s.beta, &s.spring_scale, &s.volume_scale, &s.min_mass_fraction})
+      *v = r.f64();
     const bool has_kr = r.flag("return_k");
     const double kr = r.f64();
     if (has_kr) s.return_k = kr;

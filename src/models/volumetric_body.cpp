@@ -167,6 +167,14 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
     }
     for (int k = 0; k < 4; ++k) mass[static_cast<std::size_t>(T(t, k))] += 0.25 * s.density * V;
   }
+  require(std::isfinite(s.min_mass_fraction) && s.min_mass_fraction >= 0 && s.min_mass_fraction <= 1, w,
+          ": min_mass_fraction must be in [0, 1]");
+  {
+    double total = 0;
+    for (double m : mass) total += m;
+    const double floor = s.min_mass_fraction * total / static_cast<double>(n);
+    for (double& m : mass) m = std::max(m, floor);
+  }
   ModelBuilder b(name);
   for (Index i = 0; i < n; ++i) {
     const double m = mass[static_cast<std::size_t>(i)];

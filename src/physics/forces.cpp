@@ -59,7 +59,7 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
     stiff = stiffening ? spring_forces<false, true>(m, X, Fo) : spring_forces<false, false>(m, X, Fo);
   if (m.bending.size() > 0) bending_forces(m.bending, x, f);
   if (m.volume.size() > 0) {
-    const double sv = add_volume_forces(m.volume, X, Fo);
+    const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
     if (stiffening) stiff = std::max(stiff, sv);
   }
   return stiff;

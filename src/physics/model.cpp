@@ -307,8 +307,8 @@ void require_state_in_reach(const Model& m, const MatX3& x, const MatX3& v, cons
   const double reach = kStateReach * (1.0 + size);
   for (Index i = 0; i < n; ++i) {
     const double d = (x.row(i) - m.x0.row(i)).stableNorm();
-    require(d <= reach, what, ": state.x: node ", i, " is ", d, " mm from its rest position (the model is ", size,
-            " mm across; at most ", reach, ")");
+    require(d <= reach, what, ": state.x: node ", i, " is ", d, " mm from its rest position (the model is ",
+            size, " mm across; at most ", reach, ")");
     const double s = v.row(i).stableNorm();
     require(s <= reach, what, ": state.v: node ", i, " moves at ", s, " mm/ms (at most ", reach, ")");
   }

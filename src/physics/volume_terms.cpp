@@ -55,7 +55,7 @@ double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const V
   return (p1 - p0).dot((p2 - p0).cross(p3 - p0)) / 6.0;
 }
 
-double add_volume_forces(const VolumeTerms& T, const double* x, double* f) {
+double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
   double stiff = 1.0;
   for (Index t = 0; t < T.size(); ++t) {
     const Tet q = corners(T, x, t);
@@ -71,6 +71,7 @@ double add_volume_forces(const VolumeTerms& T, const double* x, double* f) {
       f[i + 2] += s * g[k][2];
     }
     // curvature bound |g|^2 + |V - V0| |d^2V| against the rest |g0|^2 (|d^2V| <= 2 L_max / 6 per block)
+    if (!stiffening) continue;
     const double gg = g[0].squaredNorm() + g[1].squaredNorm() + g[2].squaredNorm() + g[3].squaredNorm();
     const double rest = T.G0[static_cast<std::size_t>(t)];
     const double cur = gg + std::abs(V - V0) * longest_edge(q) / 3.0 * 4.0;

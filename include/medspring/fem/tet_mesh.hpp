@@ -40,9 +40,10 @@ std::vector<double> graded(double a, double b, int n, double grading = 1.0);
 
 /// Settings of surface meshing with TetGen.
 struct TetgenSettings {
-  double max_volume = 0.0;      // mm^3, 0 = no volume constraint (-a)
-  double radius_edge = 1.6;     // quality bound (-q); 0 = none (fewest elements)
-  bool preserve_surface = false;  // -Y: no Steiner points on the surface (its vertices stay the first nodes)
+  double max_volume = 0.0;   // mm^3, 0 = no volume constraint (-a)
+  double radius_edge = 1.6;  // quality bound (-q); 0 = none (fewest elements)
+  /// -Y: no Steiner points on the surface (its vertices stay the first nodes); the volumetric kind.
+  bool preserve_surface = false;
   std::string executable = "";  // default: $MEDSPRING_TETGEN, then `tetgen` on PATH
 };
 

@@ -41,6 +41,9 @@ struct VolumetricSettings {
   double nu = 0.45;                // Poisson ratio, (-1, 0.5)
   double density = 1.05e-3;        // g/mm^3 (lumped: a quarter of each tetrahedron's mass per corner)
   double beta = 0.5;               // mass-proportional damping d = beta m, 1/ms
+  double min_mass_fraction = 0.5;  // mass scaling: every node weighs at least this fraction of the mean node
+                                   // mass (small elements would otherwise set a tiny stable step; statics
+                                   // unaffected)
   std::optional<double> return_k;  // N/mm per surface node; default: 0 with supports, else 0.02
   double spring_scale = 1.0;       // calibration multipliers of the spring and volume families
   double volume_scale = 1.0;

@@ -18,7 +18,8 @@ struct Warnings {
   std::uint64_t substeps_capped = 0;   // the bound asked for more than max_substeps
   std::uint64_t cg_not_converged = 0;  // implicit solves that hit the iteration limit
   std::uint64_t failed = 0;            // frames that could not be advanced at all (state restored)
-  std::uint64_t inverted_elements = 0;  // volume terms: tetrahedra inverted at a frame's end, summed over frames
+  /// Volume terms (issue 23): tetrahedra inverted at a frame's end, summed over frames.
+  std::uint64_t inverted_elements = 0;
   std::uint64_t total() const {
     return nonfinite + velocity_limit + unstable_refused + substeps_capped + cg_not_converged + failed +
            inverted_elements;

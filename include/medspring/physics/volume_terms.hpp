@@ -43,9 +43,10 @@ double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const V
 /// or degenerate (volume <= 1e-12 of its longest edge cubed).
 void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& what);
 
-/// Adds the volume forces -dE/dx to f (flat 3N arrays). Returns the stiffening of the terms (>= 1): the
-/// largest ratio of a term's current curvature bound to its rest one, for the stable step (§2.2).
-double add_volume_forces(const VolumeTerms& T, const double* x, double* f);
+/// Adds the volume forces -dE/dx to f (flat 3N arrays). With `stiffening`, returns the stiffening of the
+/// terms (>= 1): the largest ratio of a term's current curvature bound to its rest one, for the stable
+/// step (§2.2); without, returns 1 (skips the six edge lengths per term).
+double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening = true);
 /// Sum of the volume energies (mJ).
 double volume_energy(const VolumeTerms& T, const MatX3& x);
 /// Number of terms whose tetrahedron is inverted or flat (V <= 0) at x.

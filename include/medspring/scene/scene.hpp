@@ -81,8 +81,9 @@ struct SceneModel {
   HybridSettings hybrid;      // kind "hybrid" (nonlinear copied in by the parser)
   SurfaceBodyParams surface;  // kind "surface" (duffing.mode Linear when not nonlinear)
   SmrmSettings smrm;          // kind "smrm" (chain.nonlinear copied in by the parser)
-  VolumetricSettings volumetric;  // kind "volumetric" (E, nu from "material"; issue 23)
-  Index volumetric_nodes = 2000;  // kind "volumetric": node count aimed at ("parameters": {"nodes"})
+  /// Kind "volumetric" (issue 23): E, nu from "material"; the node count aimed at ("parameters": {"nodes"}).
+  VolumetricSettings volumetric;
+  Index volumetric_nodes = 2000;
   // "material": a preset name or {"E_kPa", "nu"} (or {"preset"}): resolved by the parser to the calibrated
   // stiffnesses of the kind (models/tissue.hpp) before "parameters", which override them.
   std::optional<TissueMaterial> material;
