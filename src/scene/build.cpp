@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "medspring/core/check.hpp"
+#include "medspring/core/memory.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/smrm_tree.hpp"
@@ -234,9 +235,13 @@ struct Builder {
           if (m.kind == ModelKind::Volumetric) return volumetric_body(kidney_phantom(), "kidney phantom");
           return hybrid_body(kidney_phantom(), kidney_phantom_atoms(m.atoms), "kidney phantom");
         }
-        if (s.phantom == "tube")
+        if (s.phantom == "tube") {
+          const double nodes = static_cast<double>(s.rings) * static_cast<double>(s.spokes);
+          require_index_count(2.0 * nodes, cat("tube: ", s.rings, " x ", s.spokes, " nodes: the face count"));
+          require_memory(kModelBuildBytesPerNode * nodes, cat("tube: a model of ", nodes, " nodes"));
           return surface_body(tube(s.rings, s.spokes, s.spacing, s.radius), "tube",
                               GridLayout{s.rings, s.spokes});
+        }
         return smrm_body(smrm_phantom(s.path, s.cross_section, m.smrm));
       case ModelSource::Type::Mesh: {
         const SurfaceMesh organ = read_organ_mesh();

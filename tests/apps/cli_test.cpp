@@ -354,7 +354,8 @@ TEST(CliTooLarge, ModelsBeyondMemoryFailWithOneLine) {
       R"({"model": {"kind": "surface", "source": {"phantom": {"name": "tube", "rings": 1000,
     "spokes": 1000}}}, "loads": [{"node": 5, "direction": [0, 0, -1], "magnitude": 0.5}], "duration": 5})";
   write(dir / "big.json", scene);
-  write(dir / "huge.json", replaced(scene, "\"rings\": 1000", "\"rings\": 100000"));
+  write(dir / "huge.json", replaced(replaced(scene, "\"rings\": 1000", "\"rings\": 100000"),
+                                    "\"spokes\": 1000", "\"spokes\": 50000"));
   ::setenv("MEDSPRING_MEMORY_LIMIT_MB", "100", 1);  // the 1M-node tube then needs more than the machine has
   const Result run =
       medspring("run " + quote((dir / "big.json").string()) + " --out " + quote((dir / "out").string()));
