@@ -45,7 +45,7 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
   ASSERT_EQ(j["organs"].size(), 1u);
   const auto& o = j["organs"][0];
   EXPECT_GT(o["fem"]["nodes"].get<int>(), 1000);
-  ASSERT_EQ(o["models"].size(), 12u);  // 6 kinds x (default, calibrated)
+  ASSERT_EQ(o["models"].size(), 16u);  // 8 kinds (6 + volumetric linear, Duffing) x (default, calibrated)
   for (const auto& m : o["models"]) {
     EXPECT_GT(m["update_us"].get<double>(), 0.0);
     for (const auto& c : m["cases"]) {
