@@ -22,7 +22,7 @@ def scene(material, nodes=600):
             "kind": "volumetric",
             "source": {"phantom": "kidney"},
             "material": material,
-            "parameters": {"nodes": nodes, "fixed": list(range(20))},
+            "parameters": {"nodes": nodes, "fixed": list(range(0, 458, 8))},  # supports spread over the surface
         },
         "loads": [{"node": 223, "direction": "inward_normal", "magnitude": 0.2, "t_ramp": 10}],
         "integrator": {"method": "implicit_euler", "dt": 1.0},
