@@ -823,9 +823,10 @@ std::string markdown(const json& j) {
 }  // namespace
 
 int cmd_accuracy(const Args& args) {
-  args.require_known({"out", "force", "quick", "quiet", "json", "E-kPa", "nu", "radius", "level", "scenes",
-                      "kinds", "nodes", "no-validation", "forces", "organs", "vessel-E-kPa", "wall-ratio",
-                      "no-vessel", "vessel-only", "indentation-only"});
+  args.require_known({"out",          "force",      "quick",         "quiet",       "json",
+                      "E-kPa",        "nu",         "radius",        "level",       "scenes",
+                      "kinds",        "nodes",      "no-validation", "forces",      "organs",
+                      "vessel-E-kPa", "wall-ratio", "no-vessel",     "vessel-only", "indentation-only"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -849,9 +850,12 @@ int cmd_accuracy(const Args& args) {
   require(!(vessel_only && args.flag("no-vessel")),
           "accuracy: --vessel-only and --no-vessel exclude each other");
   const bool indentation_only = args.flag("indentation-only");  // issue 18: only the sphere indentation
-  require(!(vessel_only && indentation_only), "accuracy: --vessel-only and --indentation-only exclude each other");
+  require(!(vessel_only && indentation_only),
+          "accuracy: --vessel-only and --indentation-only exclude each other");
   json val = json::array();
-  for (int level = 1; level <= (args.flag("no-validation") || vessel_only || indentation_only ? 0 : st.quick ? 1 : 3);
+  for (int level = 1; level <= (args.flag("no-validation") || vessel_only || indentation_only ? 0
+                                : st.quick                                                    ? 1
+                                                                                              : 3);
        ++level) {
     note(st, cat("validation level ", level));
     std::vector<fem::ValidationResult> rs = {fem::validate_uniaxial(level), fem::validate_cantilever(level)};

@@ -52,7 +52,8 @@ fs::path python_dir() {
 }  // namespace
 
 int cmd_study(const Args& args) {
-  args.require_known({"out", "scheduler", "workers", "resume", "yes", "quiet", "no-report", "scaling", "device"});
+  args.require_known(
+      {"out", "scheduler", "workers", "resume", "yes", "quiet", "no-report", "scaling", "device"});
   std::vector<std::string> argv = {MEDSPRING_PYTHON_EXECUTABLE, "-m", "medspring.study"};
   for (const auto& p : args.positional()) argv.push_back(p);
   for (const char* key : {"out", "scheduler", "workers", "scaling", "device"})

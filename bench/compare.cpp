@@ -87,7 +87,9 @@ Tube tube_model(const TubeSize& size, const std::string& order) {
 
 }  // namespace
 
-Model tube_model(const TubeSize& size) { return tube_model(size, "built").model; }
+Model tube_model(const TubeSize& size) {
+  return tube_model(size, "built").model;
+}
 
 namespace {
 
