@@ -1,276 +1,562 @@
+// Every medspring command and its options, declared once. CLI11's parser, `medspring COMMAND --help`,
+// the bash completion (`medspring completion bash`) and docs/cli.md (`medspring help --markdown`) are
+// built from these declarations; the command bodies read them through `Args` (cli.hpp).
+//
+// Adding an option (CONTRIBUTING.md): one line in the command's `options` below,
+//   {.name = "radius", .value = "R", .unit = "mm", .def = "8", .help = "contact disk radius a"},
+// (a flag: no .value), its use in cmd_<name>.cpp (`args.number("radius", 8.0)`, and the name in the
+// body's require_known list if it has one), then `medspring help --markdown > docs/cli.md`.
 #include "commands.hpp"
 
 namespace medspring::cli {
 
-const std::vector<Command>& commands() {
-  static const std::vector<Command> list = {
-      {"bench",
-       "usage: medspring bench [--filter TEXT] [--quick] [--samples N] [--json]\n\n"
-       "Times one update of every benchmark case (ALGORITHMS.md D-18): 200 warm-up updates, then N timed\n"
-       "updates (default 2000), single thread. Prints median, p99 and mean in microseconds, and ns per "
-       "spring.\n"
-       "  --filter TEXT  only cases whose name contains TEXT\n"
-       "  --quick        200 samples, no 1M-node case\n"
-       "  --json         {\"results\": [{\"name\", \"median_us\", \"p99_us\", \"mean_us\", \"nodes\", "
-       "\"springs\", ...}]}\n"
-       "medspring bench --compare [--threads N] [--quick] [--no-bullet] [--json]\n"
-       "  MedSpring (1 and N threads, default 2), the plain reference loop and Bullet btSoftBody on the\n"
-       "  same tube at 1.2k, 10k, 100k and 1M nodes (--quick: up to 100k), in one run (docs/performance.md)\n"
-       "  --sizes LIST   only these tubes (of 1.2k,10k,100k,1M,3M)\n"
-       "  --order O      node order of the tube: built (ring by ring), shuffled, rcm (shuffled, then "
-       "reordered)\n"
-       "medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
-       "  the same from 1.2k to 3M nodes; writes DIR/scaling.json and the log-log plot DIR/scaling.png\n"
-       "medspring bench --gpu [--sizes N,N,..] [--batch B] [--cpu-max N] [--no-torch] [--out DIR]\n"
-       "                [--device I]\n"
-       "  the tube (default 1.2k, 120k, 1M, 16M nodes) on the GPU in fp64 and fp32, B hybrid kidneys in\n"
-       "  one batch, bandwidth against the measured copy bandwidth, the CPU engine and a PyTorch step in\n"
-       "  the same run (docs/gpu.md); DIR/gpu_bench.json and gpu_bench.png. Exits non-zero without a GPU\n",
-       {"json", "quick", "compare", "scaling", "no-bullet", "gpu", "no-torch"},
-       cmd_bench},
-      {"info",
-       "usage: medspring info FILE [--unit mm|cm|m] [--radius-array NAME] [--json]\n"
-       "       medspring info --params\n\n"
-       "Summarises a mesh (.obj .stl .ply .vtp .vtk), a label volume (.nii .nii.gz .mha .mhd .nrrd) or a\n"
-       "centerline (.vtp .vtk polylines with a radius array): counts, bounds in mm, units, validity.\n"
-       "  --params  every declared parameter (name, unit, default, range, meaning) as docs/parameters.md\n",
-       {"json", "params"},
-       cmd_info},
-      {"demo",
-       "usage: medspring demo [--force N] [--json]\n\n"
-       "Presses and releases the bundled models (hybrid kidney phantom, surface tube) and prints the\n"
-       "contact displacement under the force, the time to return to rest and the cost per update.\n",
-       {"json"},
-       cmd_demo},
-      {"build",
-       "usage: medspring build kidney --mesh FILE [--unit mm|cm|m] [--close-holes N]\n"
-       "                              | --mask FILE [--label N]\n"
-       "                              [--nodes 458] [--atoms 42] [--path mst|dijkstra]\n"
-       "                              --out DIR [--json] [--force]\n"
-       "       medspring build centerline --mask FILE [--label N] | --mesh FILE [--unit mm|cm|m]\n"
-       "                                  [--atoms 40] [--path mst|dijkstra] --out DIR [--json] [--force]\n"
-       "       medspring build vessel --centerline FILE --unit mm|cm|m [--branch N | --branches all]\n"
-       "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE [--label N]\n"
-       "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
-       "                              --out DIR [--json] [--force]\n\n"
-       "Builds a simulation model from real anatomy (ALGORITHMS.md §3-4) and writes it as .vtp files.\n"
-       "  kidney      the hybrid kidney: balloon surface of exactly --nodes nodes fitted to the organ, the\n"
-       "              distance-mapping skeleton of the voxelised organ with --atoms atoms, spokes (D-9),\n"
-       "              parameters of §9. Writes surface.vtp, centerline.vtp (radius array\n"
-       "              MaximumInscribedSphereRadius), spokes.vtp and summary.json.\n"
-       "  centerline  the distance-mapping centerline with radii; ends cut by the volume border are open\n"
-       "              (§3.1); an open tube mesh is capped (§3.6). Writes centerline.vtp, curve.vtp,\n"
-       "              surface.vtp and summary.json.\n"
-       "  vessel      the SMRM vessel (§5, docs/vessels.md): atoms with radii, spokes, the rebuilt surface\n"
-       "              and its rest reconstruction error; from a mesh or segmentation the centerline of §3\n"
-       "              and spokes marched to the boundary, with the Hausdorff and mean distance of the\n"
-       "              rebuilt surface to the input. Bending from the wall (E --wall-e MPa, default 0.5) or\n"
-       "              --k-b N/mm (0 = the paper's chain). --branch: the polyline of a centerline file\n"
-       "              (default the longest); --branches all: every polyline, merged into a tree where\n"
-       "              they share their start (shared junction atoms, one tube per branch; its\n"
-       "              vessel.msm is of kind smrm_tree).\n"
-       "              --blend [--blend-spacing MM]: one watertight surface instead (the union of the\n"
-       "              closed path tubes, bound to the branch atoms; rings MM apart, default the atom\n"
-       "              spacing).\n"
-       "              Writes surface.vtp, atoms.vtp, spokes.vtp, vessel.msm and summary.json.\n"
-       "  --mesh FILE        closed organ surface (.obj .stl .ply .vtp .vtk); --unit: its length unit\n"
-       "  --close-holes N    close holes of up to N edges first (an open mesh is refused otherwise)\n"
-       "  --mask FILE        label volume (.nii .nii.gz .mha .mhd .nrrd); --label: the organ's label\n"
-       "                     (default: the only non-zero label). Several components: the largest is used.\n"
-       "  --path mst|dijkstra  skeleton path: maximum spanning tree of the distance map (D-7, default) or\n"
-       "                     the penalised shortest path (TEASAR-style; straighter in flat organs)\n"
-       "  --out DIR          output folder, written whole or not at all; a non-empty one needs --force\n"
-       "  --json             print the summary as JSON (counts, valence histogram, Hausdorff and mean\n"
-       "                     distance to the input in mm, atoms outside, spokes per atom, build time)\n",
-       {"json", "force", "blend"},
-       cmd_build},
-      {"run",
-       "usage: medspring run SCENE --out DIR [--force] [--quiet] [--json] [--static-curve]\n"
-       "                     [--checkpoint-every N] [--checkpoint FILE] [--stop-at MS] [--resume FILE]\n\n"
-       "Builds the model of a scene file (docs/scenes.md), runs it for the scene's duration and writes to "
-       "DIR:\n"
-       "  <name>.pvd + frames/<name>_NNNNN.vtp   ParaView series of the displayed surface; point data\n"
-       "                                        displacement, displacement_magnitude, local_displacement,\n"
-       "                                        local_displacement_magnitude, Normals (mm)\n"
-       "  <name>_atoms.pvd                      the centerline atoms (hybrid, smrm)\n"
-       "  trace.csv                             every update: force, max displacement, traced nodes/atoms\n"
-       "  summary.json, scene.json              results; the scene with every default filled in\n"
-       "The folder is written under a temporary name and renamed when complete; a bad scene writes nothing.\n"
-       "  --force         replace a non-empty DIR (refused otherwise)\n"
-       "  --quiet         no progress on stderr\n"
-       "  --json          print the summary as JSON on stdout\n"
-       "  --static-curve  also write static_curve.csv: static force-displacement of the first load\n"
-       "  --checkpoint-every N  save a checkpoint every N updates (docs/reliability.md): the simulation\n"
-       "                  and the traces so far, replaced atomically; default file DIR.mscp beside DIR\n"
-       "  --checkpoint FILE     where checkpoints go\n"
-       "  --stop-at MS    stop after the update reaching MS (writing a checkpoint and the partial results)\n"
-       "  --set P=V[,P=V] set declared parameters of the scene (docs/parameters.md), e.g.\n"
-       "                  --set integrator.dt=0.25,model.parameters.k_spoke=0.08\n"
-       "  --threads N     threads of the step (1..256; overrides the scene's integrator.threads;\n"
-       "                  models below 25 000 springs per thread use fewer, docs/performance.md)\n"
-       "  --resume FILE   continue the run saved in FILE (same scene): trace.csv and the summary's results\n"
-       "                  are those of an uninterrupted run bit for bit; frames are written from the resume\n"
-       "                  point on (earlier ones are in the interrupted run's folder)\n",
-       {"force", "quiet", "json", "static-curve"},
-       cmd_run},
-      {"paper",
-       "usage: medspring paper --out DIR [--force] [--quick] [--quiet] [--json] [--scenes DIR]\n\n"
-       "Reproduces the paper's experiments and writes one report: the kidney pushed and released (Fig. 9,\n"
-       "1.0 N and 0.2 N, linear and nonlinear), the vessel under a light and a strong force with and "
-       "without\n"
-       "local deformation (Fig. 10 A-F), and the per-update timings of Tables I and II (D-18: 200 warm-up +\n"
-       "2000 timed updates per case). Real anatomy from $MEDSPRING_DATA (the HuBMAP kidney, the VMR aorta\n"
-       "centerline) plus the procedural phantoms. DIR receives report.md, tables.json, figures/*.png (VTK\n"
-       "renders made under xvfb-run, matplotlib plots) and scenes/<name>/ with the .pvd series of every "
-       "run.\n"
-       "  --quick        phantoms only, fewer timed updates (a smoke test, well under a minute)\n"
-       "  --force        replace a non-empty DIR (refused otherwise); DIR is written whole or not at all\n"
-       "  --quiet        no progress on stderr\n"
-       "  --json         print the tables and per-scene results as JSON on stdout\n"
-       "  --scenes DIR   the bundled scene folder (default: the source tree's scenes/, then\n"
-       "                 <prefix>/share/medspring/scenes)\n"
-       "  --accuracy FILE  the accuracy.json summarised in the report (default: the latest full\n"
-       "                 `medspring accuracy` run, kept beside the FEM cache; CalculiX is never run here)\n",
-       {"force", "quick", "quiet", "json"},
-       cmd_paper},
-      {"haptics",
-       "usage: medspring haptics SCENE|MODEL --trajectory FILE [--node N] [--k-vc 0.1] [--b-vc 0.01]\n"
-       "                        [--f-max 3] [--local] [--linear] [--duration MS] [--out DIR [--force]] "
-       "[--json]\n\n"
-       "Runs the 1 kHz haptic loop (ALGORITHMS.md §2.5, docs/haptics.md) along a recorded tool path: every 1 "
-       "ms\n"
-       "tick F = k_vc (x_tool - x_c) + b_vc (v_tool - v_c), saturated to --f-max, acts on the contact node,\n"
-       "the model advances 1 ms and -F is the reaction for the device. Reports per-tick compute time "
-       "(median,\n"
-       "p99, max) and writes force_trace.csv (time, tool, contact, reaction, saturated, compute_us) to DIR.\n"
-       "  SCENE|MODEL     a scene file (docs/scenes.md; its loads are ignored) or kidney_phantom | tube |\n"
-       "                  vessel_phantom\n"
-       "  --trajectory    CSV rows time_ms, x, y, z (mm; optional header, # comments), linear in between\n"
-       "  --node N        contact surface node (default: the node nearest the first tool position)\n"
-       "  --local         local deformation on the contact patch (eq. 6)\n"
-       "  --linear        linear springs (model names only)\n"
-       "  --duration MS   run length (default: the last trajectory time)\n"
-       "  --tool SHAPE    a rigid tool instead of the node coupling (docs/tools.md): sphere:R,\n"
-       "                  capsule:R:L or grasper:R:L:DEG (mm); the tool sits at the device position, the\n"
-       "                  device gets the contact reaction (saturated to --f-max); the trajectory may carry\n"
-       "                  poses: time_ms, x, y, z[, qw, qx, qy, qz[, opening_deg]]\n"
-       "  --friction MU   Coulomb friction of the tool's contact (default 0)\n"
-       "  --threads N     threads of the step (1..256; small models use one, docs/performance.md)\n",
-       {"json", "force", "local", "linear"},
-       cmd_haptics},
-      {"export",
-       "usage: medspring export --web --out DIR [--force] [--quiet] [--json] [--scenes DIR]\n"
-       "       medspring export SCENE... --out DIR [--force] [--quiet] [--json]\n\n"
-       "Writes built models as model packages (.msm, docs/model_packages.md): the inputs of the engine's "
-       "constructors\n"
-       "(rest surface, atoms, spokes or spoke offsets, parameters), so the engine alone -- the browser "
-       "page's\n"
-       "WebAssembly build, a simulator without VTK/CGAL -- rebuilds the model exactly and can change its\n"
-       "tissue parameters. DIR also receives models.json (file, name, kind, sizes, parameters).\n"
-       "  --web     the browser page's set: the real kidney (hybrid, 458 + 42) and the real aorta (SMRM 40 "
-       "x\n"
-       "            30) from $MEDSPRING_DATA (skipped, with a note, where the data is absent), the kidney "
-       "and\n"
-       "            vessel phantoms and the plain mass-spring tube\n"
-       "  SCENE...  the model of each scene file (docs/scenes.md) as <scene name>.msm\n"
-       "  --force   replace a non-empty DIR (the folder is written whole or not at all)\n",
-       {"json", "force", "quiet", "web"},
-       cmd_export},
-      {"view",
-       "usage: medspring view [--port N] [--models DIR] [--web DIR] [--exit-after S] [--quiet]\n\n"
-       "Serves the browser page (docs/web.md) on http://127.0.0.1:N/ and prints the URL: the engine as\n"
-       "WebAssembly (web/dist/medspring.mjs, built by web/build.sh), three.js (web/node_modules, npm ci) "
-       "and\n"
-       "the model packages of DIR (medspring export --web --out DIR). One thread, GET/HEAD only, nothing\n"
-       "outside these folders. Stops on Ctrl-C / SIGTERM.\n"
-       "  --port N        port (default 8080; 0: any free port, the URL says which)\n"
-       "  --models DIR    folder with models.json and the .msm files, served as /models/ (default: "
-       "web/models\n"
-       "                  if present; without one the page offers the built-in phantoms)\n"
-       "  --web DIR       the page folder (default: the source tree's web/, then "
-       "<prefix>/share/medspring/web)\n"
-       "  --exit-after S  stop after S seconds (tests)\n"
-       "  --quiet         no request log on stderr\n",
-       {"quiet"},
-       cmd_view},
-      {"study",
-       "usage: medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N]\n"
-       "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]\n\n"
-       "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters\n"
-       "(grids, lists, seeded random or Latin-hypercube samples), every run a task on the engine in a\n"
-       "worker process; results stream into DIR/results.zarr and DIR/summary.csv, the report is\n"
-       "DIR/study.md.\n"
-       "  --scheduler ADDR  a running dask-scheduler (default: a local cluster of every core)\n"
-       "  --workers N       local worker processes (0: in this process, without Dask)\n"
-       "  --resume          complete the study already in DIR (redoes only the missing runs)\n"
-       "  --yes             run a study with more runs than its max_runs (default 100000)\n"
-       "  --scaling RUNS    also time RUNS runs on 1..N local workers for the report\n"
-       "Runs the Python package medspring.study (python3 -m medspring.study takes the same arguments).\n",
-       {"resume", "yes", "quiet", "no-report"},
-       cmd_study},
-      {"accuracy",
-       "usage: medspring accuracy --out DIR [--force] [--quick] [--quiet] [--json] [--E-kPa 10] [--nu 0.45]\n"
-       "                          [--radius 8] [--level 1] [--scenes DIR] [--vessel-E-kPa 500] [--wall-ratio "
-       "0.1]\n"
-       "                          [--no-vessel | --vessel-only]\n\n"
-       "Measures the spring models against an independent FEM reference (CalculiX, compressible "
-       "Neo-Hookean,\n"
-       "NLGEOM; docs/accuracy.md): first the FEM pipeline against closed forms (uniaxial stretch, "
-       "cantilever,\n"
-       "Boussinesq) at three refinements, then the kidney phantom and the real kidney under contact-disk "
-       "loads\n"
-       "of 0.2 / 0.5 / 1.0 N at 4 sites, support opposite the load: contact, RMS and max surface error of "
-       "the\n"
-       "surface and hybrid models (linear, Duffing, + local), default and calibrated (fitted on two sites "
-       "at\n"
-       "0.5 N, errors reported on every other case). Writes DIR/accuracy.md, accuracy.json, error_maps.json\n"
-       "and figures/*.png (matplotlib). Needs ccx (calculix-ccx) and tetgen; FEM results are cached\n"
-       "($MEDSPRING_FEM_CACHE, default ~/.cache/medspring/fem).\n"
-       "  --quick        phantom only, 2 sites, 0.5 N, coarse validation (a smoke test)\n"
-       "  --E-kPa, --nu  the tissue (Young's modulus in kPa, Poisson ratio < 0.5)\n"
-       "  --radius       contact disk radius a, mm\n"
-       "  --level        FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)\n"
-       "  --kinds LIST   model kinds to run: surface,hybrid,volumetric (default all; docs/volumetric.md)\n"
-       "  --nodes N      node count of the volumetric model (default 2000)\n"
-       "  --forces LIST  contact forces in N (default 0.2,0.5,1.0; training at 0.5 N or the smallest)\n"
-       "  --organs LIST  phantom,kidney (default both)\n"
-       "  --no-validation  skip the closed-form validation of the FEM pipeline\n"
-       "  --vessel-E-kPa the vessel wall (default: the SMRM's wall, 500 kPa); the SMRM of the paper's aorta\n"
-       "                 (VMR 0159; --quick: a 12-atom straight phantom) against the wall as a tube of\n"
-       "                 tetrahedra, ends clamped, at 5 atoms x 0.05 / 0.5 N: centerline error\n"
-       "  --wall-ratio   vessel wall thickness / lumen radius\n"
-       "  --no-vessel, --vessel-only  leave the vessel out / run only the vessel\n"
-       "  --indentation-only  only the force-indentation of a rigid sphere (issue 18; part of a full run):\n"
-       "                 Hertz validation of the FEM contact, then the real kidney: FEM vs the sphere tool\n",
-       {"json", "force", "quick", "quiet", "no-validation", "no-vessel", "vessel-only", "indentation-only"},
-       cmd_accuracy},
-      {"calibrate",
-       "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"
-       "                           [--E-kPa 10] [--nodes 2000]\n"
-       "                           [--nu 0.45] [--radius 8] [--json] [--quiet]\n\n"
-       "Fits the stiffness of each spring family (surface: k, k_r; hybrid: k_surf, k_spoke, k_cl, k_r; k_loc "
-       "=\n"
-       "k_surf) to the CalculiX FEM response of a tissue (E, nu) on training loads (two sites at 0.5 N), "
-       "and\n"
-       "reports the error on the held-out loads and sites (docs/accuracy.md). Prints the parameters in "
-       "N/mm.\n",
-       {"json", "quiet", "linear"},
-       cmd_calibrate},
+namespace {
+
+// Options several commands share, with the same meaning.
+const OptionSpec kJson{.name = "json", .help = "print the results as JSON on stdout"};
+const OptionSpec kQuiet{.name = "quiet", .help = "no progress on stderr"};
+const OptionSpec kForce{.name = "force", .help = "replace a non-empty DIR (refused otherwise)"};
+OptionSpec out_dir(const std::string& help) {
+  return {.name = "out", .value = "DIR", .help = help};
+}
+const OptionSpec kScenes{.name = "scenes",
+                         .value = "DIR",
+                         .def = "the source tree's scenes/, then <prefix>/share/medspring/scenes",
+                         .help = "the bundled scene folder"};
+const OptionSpec kUnit{.name = "unit", .value = "mm|cm|m", .help = "length unit of the input's coordinates"};
+const OptionSpec kLabel{.name = "label",
+                        .value = "N",
+                        .def = "the only non-zero label",
+                        .help = "the organ's label in the mask (several components: the largest is used)"};
+const OptionSpec kAtoms40{.name = "atoms", .value = "N", .def = "40", .help = "centerline atoms"};
+const OptionSpec kPath{.name = "path",
+                       .value = "mst|dijkstra",
+                       .def = "mst",
+                       .help =
+                           "skeleton path: maximum spanning tree of the distance map (D-7) or the penalised "
+                           "shortest path (TEASAR-style; straighter in flat organs)"};
+const OptionSpec kBuildOut{
+    .name = "out",
+    .value = "DIR",
+    .help = "output folder, written whole or not at all; a non-empty one needs --force"};
+const OptionSpec kBuildJson{.name = "json",
+                            .help =
+                                "print the summary as JSON (counts, valence histogram, Hausdorff and mean "
+                                "distance to the input in mm, atoms outside, spokes per atom, build time)"};
+const OptionSpec kMesh{
+    .name = "mesh", .value = "FILE", .help = "closed organ surface (.obj .stl .ply .vtp .vtk)"};
+const OptionSpec kMask{
+    .name = "mask", .value = "FILE", .help = "label volume (.nii .nii.gz .mha .mhd .nrrd)"};
+
+}  // namespace
+
+const std::vector<CommandSpec>& commands() {
+  static const std::vector<CommandSpec> list = {
+      {.name = "demo",
+       .summary = "press and release the bundled phantoms and real anatomy, print what happened",
+       .usage = "medspring demo [--force F] [--json]",
+       .about =
+           "Presses and releases the bundled models (hybrid kidney phantom, surface tube) and prints the\n"
+           "contact displacement under the force, the time to return to rest and the cost per update.",
+       .options = {{.name = "force", .value = "F", .unit = "N", .def = "1", .help = "the pressing force"},
+                   kJson},
+       .run = cmd_demo},
+      {.name = "bench",
+       .summary = "time one update of every model (median, p99; --json for scripts)",
+       .usage =
+           "medspring bench [--filter TEXT] [--quick] [--samples N] [--json]\n"
+           "       medspring bench --compare [--threads N] [--quick] [--no-bullet] [--sizes LIST] [--order "
+           "O] "
+           "[--json]\n"
+           "       medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
+           "       medspring bench --gpu [--sizes N,N,..] [--batch B] [--cpu-max N] [--no-torch] [--out DIR] "
+           "[--device I]",
+       .about =
+           "Times one update of every benchmark case (ALGORITHMS.md D-18): 200 warm-up updates, then N "
+           "timed\n"
+           "updates, single thread. Prints median, p99 and mean in microseconds, and ns per spring; --json:\n"
+           "{\"results\": [{\"name\", \"median_us\", \"p99_us\", \"mean_us\", \"nodes\", \"springs\", "
+           "...}]}.\n"
+           "--compare: MedSpring (1 and N threads), the plain reference loop and Bullet btSoftBody on the "
+           "same\n"
+           "tube at 1.2k, 10k, 100k and 1M nodes (--quick: up to 100k), in one run (docs/performance.md).\n"
+           "--scaling: the same from 1.2k to 3M nodes; writes DIR/scaling.json and the log-log plot\n"
+           "DIR/scaling.png.\n"
+           "--gpu: the tube (default 1.2k, 120k, 1M, 16M nodes) on the GPU in fp64 and fp32, B hybrid "
+           "kidneys\n"
+           "in one batch, bandwidth against the measured copy bandwidth, the CPU engine and a PyTorch step "
+           "in\n"
+           "the same run (docs/gpu.md); DIR/gpu_bench.json and gpu_bench.png. Exits non-zero without a GPU.\n"
+           "Each mode takes only its own options.",
+       .options =
+           {{.name = "filter", .value = "TEXT", .help = "only cases whose name contains TEXT"},
+            {.name = "quick", .help = "200 samples, no 1M-node case (--compare: up to 100k nodes)"},
+            {.name = "samples",
+             .value = "N",
+             .def = "2000; --compare 1000; --quick 200",
+             .help = "timed updates per case"},
+            {.name = "json", .help = "print the results as JSON on stdout"},
+            {.name = "compare", .help = "MedSpring against the plain loop and Bullet on the same tubes"},
+            {.name = "scaling", .help = "--compare from 1.2k to 3M nodes, with a log-log plot (needs --out)"},
+            {.name = "threads",
+             .value = "N",
+             .def = "2",
+             .help = "--compare/--scaling: threads of the second run"},
+            {.name = "no-bullet", .help = "--compare/--scaling: leave Bullet out"},
+            {.name = "sizes",
+             .value = "LIST",
+             .help = "--compare: only these tubes (of 1.2k,10k,100k,1M,3M); --gpu: node counts N,N,.."},
+            {.name = "order",
+             .value = "built|shuffled|rcm",
+             .def = "built",
+             .help = "--compare: node order of the tube: ring by ring, shuffled, or shuffled then reordered"},
+            {.name = "out",
+             .value = "DIR",
+             .help = "--scaling/--gpu: folder of the JSON results and the plot"},
+            {.name = "gpu", .help = "the GPU benchmark (docs/gpu.md)"},
+            {.name = "batch", .value = "B", .help = "--gpu: hybrid kidneys in one batch"},
+            {.name = "cpu-max",
+             .value = "N",
+             .help = "--gpu: largest tube also timed on the CPU engine (nodes)"},
+            {.name = "no-torch", .help = "--gpu: leave the PyTorch step out"},
+            {.name = "device", .value = "I", .def = "0", .help = "--gpu: CUDA device index"}},
+       .run = cmd_bench},
+      {.name = "info",
+       .summary = "summarise a mesh, volume or centerline file (counts, bounds, units, validity)",
+       .usage = "medspring info FILE [--unit mm|cm|m] [--radius-array NAME] [--json]\n"
+                "       medspring info --params",
+       .about =
+           "Summarises a mesh (.obj .stl .ply .vtp .vtk), a label volume (.nii .nii.gz .mha .mhd .nrrd) or "
+           "a\n"
+           "centerline (.vtp .vtk polylines with a radius array): counts, bounds in mm, units, validity.",
+       .positional = "FILE",
+       .options =
+           {kUnit,
+            {.name = "radius-array", .value = "NAME", .help = "the centerline's radius point array"},
+            kJson,
+            {.name = "params",
+             .help = "every declared parameter (name, unit, default, range, meaning) as docs/parameters.md"}},
+       .run = cmd_info},
+      {.name = "haptics",
+       .summary = "the 1 kHz haptic loop along a recorded tool path: tick times, force trace",
+       .usage =
+           "medspring haptics SCENE|MODEL --trajectory FILE [--node N] [--k-vc 0.1] [--b-vc 0.01]\n"
+           "                        [--f-max 3] [--local] [--linear] [--duration MS] [--out DIR [--force]] "
+           "[--json]",
+       .about =
+           "Runs the 1 kHz haptic loop (ALGORITHMS.md §2.5, docs/haptics.md) along a recorded tool path: "
+           "every 1 ms\n"
+           "tick F = k_vc (x_tool - x_c) + b_vc (v_tool - v_c), saturated to --f-max, acts on the contact "
+           "node,\n"
+           "the model advances 1 ms and -F is the reaction for the device. Reports per-tick compute time "
+           "(median,\n"
+           "p99, max) and writes force_trace.csv (time, tool, contact, reaction, saturated, compute_us) to "
+           "DIR.\n"
+           "SCENE|MODEL is a scene file (docs/scenes.md; its loads are ignored) or kidney_phantom | tube |\n"
+           "vessel_phantom.",
+       .positional = "SCENE|MODEL",
+       .options =
+           {{.name = "trajectory",
+             .value = "FILE",
+             .help = "CSV rows time_ms, x, y, z (mm; optional header, # comments), linear in between"},
+            {.name = "node",
+             .value = "N",
+             .def = "the node nearest the first tool position",
+             .help = "contact surface node"},
+            {.name = "k-vc", .value = "K", .unit = "N/mm", .def = "0.1", .help = "coupling stiffness"},
+            {.name = "b-vc", .value = "B", .unit = "N ms/mm", .def = "0.01", .help = "coupling damping"},
+            {.name = "f-max", .value = "F", .unit = "N", .def = "3", .help = "device maximum force"},
+            {.name = "local", .help = "local deformation on the contact patch (eq. 6)"},
+            {.name = "linear", .help = "linear springs (model names only)"},
+            {.name = "duration",
+             .value = "MS",
+             .unit = "ms",
+             .def = "the last trajectory time",
+             .help = "run length"},
+            {.name = "tool",
+             .value = "SHAPE",
+             .unit = "mm",
+             .help = "a rigid tool instead of the node coupling (docs/tools.md): sphere:R, capsule:R:L or "
+                     "grasper:R:L:DEG; the device gets the contact reaction; the trajectory may carry poses "
+                     "time_ms, x, y, z[, qw, qx, qy, qz[, opening_deg]]"},
+            {.name = "friction", .value = "MU", .def = "0", .help = "Coulomb friction of the tool's contact"},
+            {.name = "threads",
+             .value = "N",
+             .def = "1",
+             .help = "threads of the step (1..256; small models use one, docs/performance.md)"},
+            {.name = "out", .value = "DIR", .help = "write force_trace.csv to DIR"},
+            kForce,
+            kJson},
+       .run = cmd_haptics},
+      {.name = "export",
+       .summary = "write built models as packages the engine alone (and the web page) rebuilds",
+       .usage = "medspring export --web --out DIR [--force] [--quiet] [--json] [--scenes DIR]\n"
+                "       medspring export SCENE... --out DIR [--force] [--quiet] [--json]",
+       .about = "Writes built models as model packages (.msm, docs/model_packages.md): the inputs of the "
+                "engine's\n"
+                "constructors (rest surface, atoms, spokes or spoke offsets, parameters), so the engine "
+                "alone -- the\n"
+                "browser page's WebAssembly build, a simulator without VTK/CGAL -- rebuilds the model "
+                "exactly and can\n"
+                "change its tissue parameters. DIR also receives models.json (file, name, kind, sizes, "
+                "parameters).\n"
+                "SCENE...: the model of each scene file (docs/scenes.md) as <scene name>.msm.",
+       .positional = "SCENE",
+       .options = {{.name = "web",
+                    .help =
+                        "the browser page's set: the real kidney (hybrid, 458 + 42) and aorta (SMRM 40 x 30) "
+                        "from $MEDSPRING_DATA (skipped, with a note, where absent), the kidney and vessel "
+                        "phantoms and the plain mass-spring tube"},
+                   out_dir("output folder (written whole or not at all)"),
+                   kForce,
+                   kQuiet,
+                   kJson,
+                   kScenes},
+       .run = cmd_export},
+      {.name = "view",
+       .summary = "serve the browser page on 127.0.0.1: poke the models with the mouse (docs/web.md)",
+       .usage = "medspring view [--port N] [--models DIR] [--web DIR] [--exit-after S] [--quiet]",
+       .about =
+           "Serves the browser page (docs/web.md) on http://127.0.0.1:N/ and prints the URL: the engine as\n"
+           "WebAssembly (web/dist/medspring.mjs, built by web/build.sh), three.js (web/node_modules, npm ci) "
+           "and\n"
+           "the model packages of DIR (medspring export --web --out DIR). One thread, GET/HEAD only, "
+           "nothing\n"
+           "outside these folders. Stops on Ctrl-C / SIGTERM.",
+       .options = {{.name = "port",
+                    .value = "N",
+                    .def = "8080",
+                    .help = "port (0: any free port, the URL says which)"},
+                   {.name = "models",
+                    .value = "DIR",
+                    .def = "web/models if present",
+                    .help = "folder with models.json and the .msm files, served as /models/ (without one the "
+                            "page offers the built-in phantoms)"},
+                   {.name = "web",
+                    .value = "DIR",
+                    .def = "the source tree's web/, then <prefix>/share/medspring/web",
+                    .help = "the page folder"},
+                   {.name = "exit-after", .value = "S", .unit = "s", .help = "stop after S seconds (tests)"},
+                   {.name = "quiet", .help = "no request log on stderr"}},
+       .run = cmd_view},
+      {.name = "build",
+       .summary = "build a model from real anatomy: build kidney | centerline | vessel (--help)",
+       .usage = "medspring build kidney|centerline|vessel [options]   (medspring build KIND --help)",
+       .about =
+           "Builds a simulation model from real anatomy (ALGORITHMS.md §3-4) and writes it as .vtp files.",
+       .subcommands =
+           {{.name = "kidney",
+             .summary = "the hybrid kidney: balloon surface, distance-mapping skeleton, spokes (D-9)",
+             .usage = "medspring build kidney --mesh FILE [--unit mm|cm|m] [--close-holes N]\n"
+                      "                              | --mask FILE [--label N]\n"
+                      "                              [--nodes 458] [--atoms 42] [--path mst|dijkstra]\n"
+                      "                              --out DIR [--json] [--force]",
+             .about = "The hybrid kidney: balloon surface of exactly --nodes nodes fitted to the organ, the\n"
+                      "distance-mapping skeleton of the voxelised organ with --atoms atoms, spokes (D-9),\n"
+                      "parameters of §9. Writes surface.vtp, centerline.vtp (radius array\n"
+                      "MaximumInscribedSphereRadius), spokes.vtp and summary.json.",
+             .options = {kMesh,
+                         kUnit,
+                         {.name = "close-holes",
+                          .value = "N",
+                          .help = "close holes of up to N edges first (an open mesh is refused otherwise)"},
+                         kMask,
+                         kLabel,
+                         {.name = "nodes", .value = "N", .def = "458", .help = "surface nodes"},
+                         {.name = "atoms", .value = "N", .def = "42", .help = "centerline atoms"},
+                         kPath,
+                         kBuildOut,
+                         kBuildJson,
+                         kForce}},
+            {.name = "centerline",
+             .summary = "the distance-mapping centerline with radii",
+             .usage =
+                 "medspring build centerline --mask FILE [--label N] | --mesh FILE [--unit mm|cm|m]\n"
+                 "                                  [--atoms 40] [--path mst|dijkstra] --out DIR [--json] "
+                 "[--force]",
+             .about =
+                 "The distance-mapping centerline with radii; ends cut by the volume border are open "
+                 "(§3.1);\n"
+                 "an open tube mesh is capped (§3.6). Writes centerline.vtp, curve.vtp, surface.vtp and\n"
+                 "summary.json.",
+             .options = {kMask, kLabel, kMesh, kUnit, kAtoms40, kPath, kBuildOut, kBuildJson, kForce}},
+            {.name = "vessel",
+             .summary = "the SMRM vessel (§5, docs/vessels.md): atoms, spokes, the rebuilt surface",
+             .usage =
+                 "medspring build vessel --centerline FILE --unit mm|cm|m [--branch N | --branches all]\n"
+                 "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE "
+                 "[--label "
+                 "N]\n"
+                 "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
+                 "                              --out DIR [--json] [--force]",
+             .about = "The SMRM vessel (§5, docs/vessels.md): atoms with radii, spokes, the rebuilt surface "
+                      "and its rest\n"
+                      "reconstruction error; from a mesh or segmentation the centerline of §3 and spokes "
+                      "marched to the\n"
+                      "boundary, with the Hausdorff and mean distance of the rebuilt surface to the input. "
+                      "Writes\n"
+                      "surface.vtp, atoms.vtp, spokes.vtp, vessel.msm and summary.json.",
+             .options =
+                 {{.name = "centerline",
+                   .value = "FILE",
+                   .help = "centerline polylines (.vtp .vtk) with a radius array; needs --unit"},
+                  {.name = "branch",
+                   .value = "N",
+                   .def = "the longest",
+                   .help = "the polyline of the centerline file to use"},
+                  {.name = "branches",
+                   .value = "all",
+                   .help = "every polyline, merged into a tree where they share their start (shared "
+                           "junction atoms, one tube per branch; its vessel.msm is of kind smrm_tree)"},
+                  {.name = "blend",
+                   .help = "with --branches all: one watertight surface (the union of the closed path tubes, "
+                           "bound to the branch atoms)"},
+                  {.name = "blend-spacing",
+                   .value = "MM",
+                   .unit = "mm",
+                   .def = "the atom spacing",
+                   .help = "--blend: distance of the surface's rings"},
+                  kMesh,
+                  {.name = "segmentation", .value = "FILE", .help = "label volume of the vessel"},
+                  {.name = "mask", .value = "FILE", .help = "same as --segmentation"},
+                  kLabel,
+                  kUnit,
+                  kAtoms40,
+                  {.name = "spokes", .value = "N", .def = "30", .help = "spokes per atom"},
+                  {.name = "k-b",
+                   .value = "K",
+                   .unit = "N/mm",
+                   .help = "bending stiffness of the chain (0 = the paper's chain)"},
+                  {.name = "wall-e",
+                   .value = "E",
+                   .unit = "MPa",
+                   .def = "0.5",
+                   .help = "bending from the wall's Young's modulus"},
+                  kBuildOut,
+                  kBuildJson,
+                  kForce}}},
+       .run = cmd_build},
+      {.name = "study",
+       .summary = "parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md",
+       .usage = "medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N]\n"
+                "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]",
+       .about =
+           "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters\n"
+           "(grids, lists, seeded random or Latin-hypercube samples), every run a task on the engine in a\n"
+           "worker process; results stream into DIR/results.zarr and DIR/summary.csv, the report is\n"
+           "DIR/study.md. Runs the Python package medspring.study (python3 -m medspring.study takes the\n"
+           "same arguments).",
+       .positional = "STUDY",
+       .options =
+           {out_dir("the study's folder"),
+            {.name = "scheduler",
+             .value = "ADDR",
+             .def = "a local cluster of every core",
+             .help = "a running dask-scheduler (tcp://HOST:PORT)"},
+            {.name = "workers",
+             .value = "N",
+             .help = "local worker processes (0: in this process, without Dask)"},
+            {.name = "resume", .help = "complete the study already in DIR (redoes only the missing runs)"},
+            {.name = "yes", .help = "run a study with more runs than its max_runs (default 100000)"},
+            kQuiet,
+            {.name = "no-report", .help = "do not write study.md"},
+            {.name = "scaling",
+             .value = "RUNS",
+             .help = "also time RUNS runs on 1..N local workers for the report"},
+            {.name = "device", .value = "DEV", .help = "where the runs step (passed to medspring.study)"}},
+       .run = cmd_study},
+      {.name = "run",
+       .summary = "run a scene file (docs/scenes.md): ParaView series, traces, summary",
+       .usage =
+           "medspring run SCENE --out DIR [--force] [--quiet] [--json] [--static-curve]\n"
+           "                     [--checkpoint-every N] [--checkpoint FILE] [--stop-at MS] [--resume FILE]\n"
+           "                     [--set P=V[,P=V]] [--threads N]",
+       .about =
+           "Builds the model of a scene file (docs/scenes.md), runs it for the scene's duration and writes "
+           "to "
+           "DIR:\n"
+           "  <name>.pvd + frames/<name>_NNNNN.vtp   ParaView series of the displayed surface; point data\n"
+           "                                        displacement, displacement_magnitude, "
+           "local_displacement,\n"
+           "                                        local_displacement_magnitude, Normals (mm)\n"
+           "  <name>_atoms.pvd                      the centerline atoms (hybrid, smrm)\n"
+           "  trace.csv                             every update: force, max displacement, traced "
+           "nodes/atoms\n"
+           "  summary.json, scene.json              results; the scene with every default filled in\n"
+           "The folder is written under a temporary name and renamed when complete; a bad scene writes "
+           "nothing.",
+       .positional = "SCENE",
+       .options = {out_dir("output folder"),
+                   kForce,
+                   kQuiet,
+                   {.name = "json", .help = "print the summary as JSON on stdout"},
+                   {.name = "static-curve",
+                    .help = "also write static_curve.csv: static force-displacement of the first load"},
+                   {.name = "checkpoint-every",
+                    .value = "N",
+                    .help = "save a checkpoint every N updates (docs/reliability.md): the simulation and the "
+                            "traces so far, replaced atomically"},
+                   {.name = "checkpoint",
+                    .value = "FILE",
+                    .def = "DIR.mscp beside DIR",
+                    .help = "where checkpoints go"},
+                   {.name = "stop-at",
+                    .value = "MS",
+                    .unit = "ms",
+                    .help =
+                        "stop after the update reaching MS (writing a checkpoint and the partial results)"},
+                   {.name = "set",
+                    .value = "P=V[,P=V]",
+                    .help = "set declared parameters of the scene (docs/parameters.md), e.g. "
+                            "--set integrator.dt=0.25,model.parameters.k_spoke=0.08"},
+                   {.name = "threads",
+                    .value = "N",
+                    .def = "the scene's integrator.threads",
+                    .help = "threads of the step (1..256; models below 25 000 springs per thread use fewer, "
+                            "docs/performance.md)"},
+                   {.name = "resume",
+                    .value = "FILE",
+                    .help =
+                        "continue the run saved in FILE (same scene): trace.csv and the summary's results "
+                        "are those of an uninterrupted run bit for bit; frames are written from the resume "
+                        "point on"}},
+       .run = cmd_run},
+      {.name = "accuracy",
+       .summary = "spring models against a CalculiX FEM reference: tables, error maps, calibration",
+       .usage =
+           "medspring accuracy --out DIR [--force] [--quick] [--quiet] [--json] [--E-kPa 10] [--nu 0.45]\n"
+           "                          [--radius 8] [--level 1] [--scenes DIR] [--vessel-E-kPa 500] "
+           "[--wall-ratio 0.1]\n"
+           "                          [--no-vessel | --vessel-only]",
+       .about =
+           "Measures the spring models against an independent FEM reference (CalculiX, compressible "
+           "Neo-Hookean,\n"
+           "NLGEOM; docs/accuracy.md): first the FEM pipeline against closed forms (uniaxial stretch, "
+           "cantilever,\n"
+           "Boussinesq) at three refinements, then the kidney phantom and the real kidney under contact-disk "
+           "loads\n"
+           "of 0.2 / 0.5 / 1.0 N at 4 sites, support opposite the load: contact, RMS and max surface error "
+           "of the\n"
+           "surface and hybrid models (linear, Duffing, + local), default and calibrated (fitted on two "
+           "sites at\n"
+           "0.5 N, errors reported on every other case). Writes DIR/accuracy.md, accuracy.json, "
+           "error_maps.json\n"
+           "and figures/*.png (matplotlib). Needs ccx (calculix-ccx) and tetgen; FEM results are cached\n"
+           "($MEDSPRING_FEM_CACHE, default ~/.cache/medspring/fem).",
+       .options =
+           {out_dir("output folder (written whole or not at all)"),
+            kForce,
+            {.name = "quick", .help = "phantom only, 2 sites, 0.5 N, coarse validation (a smoke test)"},
+            kQuiet,
+            kJson,
+            {.name = "E-kPa",
+             .value = "E",
+             .unit = "kPa",
+             .def = "10",
+             .help = "the tissue's Young's modulus"},
+            {.name = "nu", .value = "NU", .def = "0.45", .help = "the tissue's Poisson ratio (< 0.5)"},
+            {.name = "radius", .value = "A", .unit = "mm", .def = "8", .help = "contact disk radius a"},
+            {.name = "level",
+             .value = "1|2|3",
+             .def = "1",
+             .help = "FEM refinement of the tables: 1 (the model's surface), 2, 3 (surface subdivided)"},
+            kScenes,
+            {.name = "kinds",
+             .value = "LIST",
+             .def = "all",
+             .help = "model kinds to run: surface,hybrid,volumetric (docs/volumetric.md)"},
+            {.name = "nodes", .value = "N", .def = "2000", .help = "node count of the volumetric model"},
+            {.name = "no-validation", .help = "skip the closed-form validation of the FEM pipeline"},
+            {.name = "forces",
+             .value = "LIST",
+             .unit = "N",
+             .def = "0.2,0.5,1.0",
+             .help = "contact forces (training at 0.5 N or the smallest)"},
+            {.name = "organs", .value = "LIST", .def = "phantom,kidney", .help = "organs: phantom,kidney"},
+            {.name = "vessel-E-kPa",
+             .value = "E",
+             .unit = "kPa",
+             .def = "the SMRM's wall, 500",
+             .help = "the vessel wall; the SMRM of the paper's aorta (VMR 0159; --quick: a 12-atom "
+                     "phantom) against the wall as a tube of tetrahedra, ends clamped, at 5 atoms x "
+                     "0.05 / 0.5 N: centerline error"},
+            {.name = "wall-ratio",
+             .value = "R",
+             .def = "the SMRM's, 0.1",
+             .help = "vessel wall thickness / lumen radius"},
+            {.name = "no-vessel", .help = "leave the vessel out"},
+            {.name = "vessel-only", .help = "run only the vessel"},
+            {.name = "indentation-only",
+             .help = "only the force-indentation of a rigid sphere (issue 18; part of a full run): Hertz "
+                     "validation of the FEM contact, then the real kidney: FEM vs the sphere tool"}},
+       .run = cmd_accuracy},
+      {.name = "calibrate",
+       .summary = "fit spring stiffnesses to a tissue (E, nu) on FEM responses; held-out errors",
+       .usage = "medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"
+                "                           [--E-kPa 10] [--nodes 2000] [--nu 0.45] [--radius 8] [--json] "
+                "[--quiet]",
+       .about =
+           "Fits the stiffness of each spring family (surface: k, k_r; hybrid: k_surf, k_spoke, k_cl, k_r;\n"
+           "k_loc = k_surf) to the CalculiX FEM response of a tissue (E, nu) on training loads (two sites "
+           "at\n"
+           "0.5 N), and reports the error on the held-out loads and sites (docs/accuracy.md). Prints the\n"
+           "parameters in N/mm.",
+       .options =
+           {{.name = "organ", .value = "phantom|kidney", .def = "phantom", .help = "the organ"},
+            {.name = "kind", .value = "hybrid|surface|volumetric", .def = "hybrid", .help = "the model kind"},
+            {.name = "linear", .help = "linear springs (default Duffing)"},
+            {.name = "E-kPa",
+             .value = "E",
+             .unit = "kPa",
+             .def = "10",
+             .help = "the tissue's Young's modulus"},
+            {.name = "nu", .value = "NU", .def = "0.45", .help = "the tissue's Poisson ratio (< 0.5)"},
+            {.name = "radius", .value = "A", .unit = "mm", .def = "8", .help = "contact disk radius a"},
+            {.name = "nodes", .value = "N", .def = "2000", .help = "node count of the volumetric model"},
+            kScenes,
+            kJson,
+            kQuiet},
+       .run = cmd_calibrate},
+      {.name = "paper",
+       .summary = "reproduce the paper: Fig. 9, Fig. 10 A-F, Tables I-II -> report.md, figures, tables.json",
+       .usage = "medspring paper --out DIR [--force] [--quick] [--quiet] [--json] [--scenes DIR] [--accuracy "
+                "FILE]",
+       .about = "Reproduces the paper's experiments and writes one report: the kidney pushed and released "
+                "(Fig. 9,\n"
+                "1.0 N and 0.2 N, linear and nonlinear), the vessel under a light and a strong force with "
+                "and without\n"
+                "local deformation (Fig. 10 A-F), and the per-update timings of Tables I and II (D-18: 200 "
+                "warm-up +\n"
+                "2000 timed updates per case). Real anatomy from $MEDSPRING_DATA (the HuBMAP kidney, the VMR "
+                "aorta\n"
+                "centerline) plus the procedural phantoms. DIR receives report.md, tables.json, "
+                "figures/*.png (VTK\n"
+                "renders made under xvfb-run, matplotlib plots) and scenes/<name>/ with the .pvd series of "
+                "every run.",
+       .options = {out_dir("the report's folder, written whole or not at all"),
+                   {.name = "quick",
+                    .help = "phantoms only, fewer timed updates (a smoke test, well under a minute)"},
+                   kForce,
+                   kQuiet,
+                   {.name = "json", .help = "print the tables and per-scene results as JSON on stdout"},
+                   kScenes,
+                   {.name = "accuracy",
+                    .value = "FILE",
+                    .def = "the latest full `medspring accuracy` run, kept beside the FEM cache",
+                    .help = "the accuracy.json summarised in the report (CalculiX is never run here)"}},
+       .run = cmd_paper},
+      {.name = "completion",
+       .summary = "the bash completion script (the build installs it)",
+       .usage = "medspring completion bash [--out FILE]",
+       .about =
+           "Prints the bash completion script generated from these declarations (the build writes it to\n"
+           "build/apps/medspring.bash and installs it as share/bash-completion/completions/medspring).",
+       .positional = "SHELL",
+       .options = {{.name = "out", .value = "FILE", .def = "stdout", .help = "write the script to FILE"}},
+       .run = cmd_completion,
+       .hidden = true},
   };
   return list;
-}
-
-void extra_usage(std::ostream& os) {
-  os << "  haptics  the 1 kHz haptic loop along a recorded tool path: tick times, force trace\n";
-  os << "  export   write built models as packages the engine alone (and the web page) rebuilds\n";
-  os << "  view     serve the browser page on 127.0.0.1: poke the models with the mouse (docs/web.md)\n";
-  os << "  build    build a model from real anatomy: build kidney | centerline | vessel (--help)\n";
-  os << "  study    parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md\n";
-  os << "  run      run a scene file (docs/scenes.md): ParaView series, traces, summary\n";
-  os << "  accuracy spring models against a CalculiX FEM reference: tables, error maps, calibration\n";
-  os << "  calibrate fit spring stiffnesses to a tissue (E, nu) on FEM responses; held-out errors\n";
-  os << "  paper    reproduce the paper: Fig. 9, Fig. 10 A-F, Tables I-II -> report.md, figures, "
-        "tables.json\n";
 }
 
 }  // namespace medspring::cli

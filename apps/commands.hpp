@@ -1,7 +1,7 @@
-// The registry of medspring subcommands. Each command lives in its own cmd_<name>.cpp.
+// The registry of medspring subcommands. Each command lives in its own cmd_<name>.cpp; its options are
+// declared once in commands.cpp (CONTRIBUTING.md, "Add a command-line option").
 #pragma once
 
-#include <ostream>
 #include <string>
 #include <vector>
 
@@ -9,16 +9,8 @@
 
 namespace medspring::cli {
 
-struct Command {
-  std::string name;
-  std::string help;                // full --help text
-  std::vector<std::string> flags;  // options that take no value
-  int (*run)(const Args&);
-};
-
-const std::vector<Command>& commands();
-/// Lines for commands registered beyond the built-in three (usage text).
-void extra_usage(std::ostream& os);
+/// Every command with its declared options, in the order `medspring --help` lists them.
+const std::vector<CommandSpec>& commands();
 
 // Built-in commands
 int cmd_bench(const Args& args);
@@ -33,5 +25,6 @@ int cmd_view(const Args& args);     // cmd_view.cpp
 int cmd_study(const Args& args);    // cmd_study.cpp
 int cmd_accuracy(const Args& args);
 int cmd_calibrate(const Args& args);
+int cmd_completion(const Args& args);  // cmd_completion.cpp
 
 }  // namespace medspring::cli

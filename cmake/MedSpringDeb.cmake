@@ -32,7 +32,8 @@ list(JOIN MEDSPRING_DEB_RECOMMENDS ", " CPACK_DEBIAN_DEV_PACKAGE_RECOMMENDS)
 set(CPACK_DEBIAN_CLI_PACKAGE_NAME medspring)
 set(CPACK_DEBIAN_CLI_PACKAGE_SECTION science)
 set(CPACK_COMPONENT_CLI_DESCRIPTION "MedSpring command line: real-time soft-tissue simulation
- demo, bench, info, build, run, paper, haptics, export and view, with the bundled scenes.")
+ demo, bench, info, build, run, paper, haptics, export, view, study, accuracy and calibrate,
+ with the bundled scenes and bash completion.")
 set(CPACK_DEBIAN_CLI_PACKAGE_SHLIBDEPS ON)  # Depends: from dpkg-shlibdeps (VTK, CGAL's gmp/mpfr, libstdc++)
 # `medspring paper` renders its figures with python3-vtk9 and matplotlib under xvfb-run.
 set(CPACK_DEBIAN_CLI_PACKAGE_RECOMMENDS "python3, python3-vtk9, python3-matplotlib, xvfb, xauth")

@@ -8,6 +8,7 @@ PACKAGES=(
   libvtk9-dev                        # io: mesh/image formats, isosurfaces, rendering
   libcgal-dev libgmp-dev libmpfr-dev # meshing: isotropic remeshing
   nlohmann-json3-dev                 # CLI and scenes: JSON
+  libcli11-dev                       # CLI: the medspring command line (CLI11, header-only)
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-matplotlib
   xvfb xauth                         # offscreen rendering of the report figures (VTK under Xvfb)

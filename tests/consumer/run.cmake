@@ -143,6 +143,7 @@ elseif(STEP STREQUAL "deb")
   endif()
   run("dpkg-deb -c medspring" ok "\\./usr/bin/medspring\n.*\\./usr/share/medspring/scenes/phantom/kidney_1\\.0N_nonlinear\\.json"
     dpkg-deb -c "${cli}")
+  expect("\\./usr/share/bash-completion/completions/medspring\n")  # generated from apps/commands.cpp
   if(last_output MATCHES "usr/include/|\\.a\n")
     message(FATAL_ERROR "the medspring package holds headers or libraries:\n${last_output}")
   endif()
