@@ -27,13 +27,13 @@ void Args::check_declared(const std::string& name) const {
                                "\"Add a command-line option\")"));
 }
 
+// A name not declared for this command cannot have been given: get/flag say so (shared helpers such as
+// build's organ_source read options of several kinds). require_known checks the declarations.
 bool Args::flag(const std::string& name) const {
-  check_declared(name);
   return flags_.count(name) > 0;
 }
 
 std::optional<std::string> Args::get(const std::string& name) const {
-  check_declared(name);
   auto it = values_.find(name);
   if (it == values_.end()) return std::nullopt;
   return it->second;

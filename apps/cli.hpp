@@ -47,7 +47,8 @@ class UsageError : public InvalidInput {
 };
 
 /// The parsed command line of one (sub)command, read by the command's body: positional arguments,
-/// --key value options, --flags. Backed by CLI11's parse results; only declared names may be read.
+/// --key value options, --flags. Backed by CLI11's parse results (an option not declared for the
+/// command reads as not given).
 class Args {
  public:
   Args(std::string command, std::set<std::string> declared, std::vector<std::string> positional,
