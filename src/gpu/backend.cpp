@@ -41,9 +41,21 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   }
   const auto un = static_cast<std::size_t>(n);
   const auto uB = static_cast<std::size_t>(B);
+  // The kernel, and the table's row order for it (load balance, RowOrder): balanced over the block's
+  // threads for one block per model, heavy rows in warps of their own for the grid kernel.
+  kernel = kernel_for(o, B, n, dev);
+  per_block = kernel == Options::Kernel::PerBlock;
+  block_threads = std::min(kBlockThreads, std::max(32, (n + 31) / 32 * 32));
+  const RowOrder order = per_block ? RowOrder::Balanced : RowOrder::HeavyLast;
+  if (per_block)
+    check(prepare_block_frame<R>(block_shared_bytes<R>(n)), "allocating shared memory for the block kernel");
   // Topology from model 0, parameters from every model.
-  const SpringTableArrays<R> T0 = make_spring_table<R>(m0);
+  const SpringTableArrays<R> T0 = make_spring_table<R>(m0, order, block_threads);
   entries = T0.entries();
+  if (!T0.row_node.empty()) {
+    row_node.allocate(T0.row_node.size(), "allocating the spring table");
+    row_node.upload(T0.row_node.data(), T0.row_node.size(), 0, "uploading the spring table");
+  }
   slice_begin.allocate(T0.slice_begin.size(), "allocating the spring table");
   slice_begin.upload(T0.slice_begin.data(), T0.slice_begin.size(), 0, "uploading the spring table");
   slice_width.allocate(T0.slice_width.size(), "allocating the spring table");
@@ -65,7 +77,8 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     if (b > 0) require_same_topology(m0, m, b);
     soft = soft || m.has_soft_springs;
     const bool same = b > 0 && &m == &m0;  // a batch of one model: its arrays once
-    const SpringTableArrays<R> T = b == 0 || same ? SpringTableArrays<R>{} : make_spring_table<R>(m);
+    const SpringTableArrays<R> T =
+        b == 0 || same ? SpringTableArrays<R>{} : make_spring_table<R>(m, order, block_threads);
     const SpringTableArrays<R>& Tb = b == 0 || same ? T0 : T;
     const auto ub = static_cast<std::size_t>(b);
     L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
@@ -101,8 +114,8 @@ Backend<R>::~Backend() {
   if (stream) cudaStreamSynchronize(stream);
   if (copy_stream) cudaStreamSynchronize(copy_stream);
   for (int w = 0; w < 2; ++w) {
-    if (staged[w]) cudaEventDestroy(staged[w]);
-    if (copied[w]) cudaEventDestroy(copied[w]);
+    for (cudaEvent_t e : {staged[w], copied[w], node_staged[w], node_copied[w]})
+      if (e) cudaEventDestroy(e);
   }
   if (stream) cudaStreamDestroy(stream);
   if (copy_stream) cudaStreamDestroy(copy_stream);
@@ -226,12 +239,74 @@ bool Backend<R>::poll_positions(int b, MatX3& out) {
 }
 
 template <class R>
+void Backend<R>::request_node(int b, Index node) {
+  require(b >= 0 && b < B, "gpu::Engine::request_node: model ", b, " out of range (batch of ", B, ")");
+  require(node >= 0 && node < n, "gpu::Engine::request_node: node ", node, " out of range (", n, " nodes)");
+  if (!node_staging.p) {
+    node_staging.allocate(6, "allocating the node readback");
+    node_host.allocate(6, "allocating pinned memory for the node readback");
+    for (int w = 0; w < 2; ++w) {
+      check(cudaEventCreateWithFlags(&node_staged[w], cudaEventDisableTiming), "creating an event");
+      check(cudaEventCreateWithFlags(&node_copied[w], cudaEventDisableTiming), "creating an event");
+    }
+  }
+  const int w = node_next;
+  // As request_positions, for 3 reals: staged on the compute stream (ordered after the substeps issued
+  // so far, before the buffer is written again), copied to pinned memory on the copy stream.
+  if (node_requested[w]) check(cudaStreamWaitEvent(stream, node_copied[w], 0), "ordering the node readback");
+  const std::size_t at =
+      (static_cast<std::size_t>(b) * static_cast<std::size_t>(n) + static_cast<std::size_t>(node)) * 3;
+  check(cudaMemcpyAsync(node_staging.p + 3 * w, xb[cur].p + at, 3 * sizeof(R), cudaMemcpyDeviceToDevice,
+                        stream),
+        "staging the node readback");
+  check(cudaEventRecord(node_staged[w], stream), "ordering the node readback");
+  check(cudaStreamWaitEvent(copy_stream, node_staged[w], 0), "ordering the node readback");
+  check(cudaMemcpyAsync(node_host.p + 3 * w, node_staging.p + 3 * w, 3 * sizeof(R), cudaMemcpyDeviceToHost,
+                        copy_stream),
+        "reading back the node");
+  check(cudaEventRecord(node_copied[w], copy_stream), "ordering the node readback");
+  node_requested[w] = true;
+  node_seq[w] = next_seq++;
+  node_next = 1 - w;
+}
+
+template <class R>
+bool Backend<R>::poll_node(Vec3& out) {
+  int best = -1;
+  for (int w = 0; w < 2; ++w) {
+    if (!node_requested[w] || node_seq[w] <= node_seen) continue;
+    const cudaError_t e = cudaEventQuery(node_copied[w]);
+    if (e == cudaErrorNotReady) continue;
+    check(e, "reading back the node");
+    if (best < 0 || node_seq[w] > node_seq[best]) best = w;
+  }
+  if (best < 0) return false;
+  const R* p = node_host.p + 3 * best;
+  out = Vec3(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
+  node_seen = node_seq[best];
+  return true;
+}
+
+template <class R>
+Engine::DeviceState Backend<R>::device_state() {
+  check(cudaStreamSynchronize(stream), "finishing the work in flight");
+  Engine::DeviceState d;
+  d.x = xb[cur].p;
+  d.v = vb[cur].p;
+  d.batch = B;
+  d.nodes = n;
+  d.precision = precision;
+  d.device = device.index;
+  return d;
+}
+
+template <class R>
 std::size_t Backend<R>::device_bytes() const {
   std::size_t total = 0;
   for (const DeviceArray<R>* a :
        {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &xb[0], &xb[1], &vb[0], &vb[1]})
     total += a->n * sizeof(R);
-  total += fixed.n + (load_slot.n + slice_begin.n + slice_width.n + other.n) * sizeof(int);
+  total += fixed.n + (load_slot.n + row_node.n + slice_begin.n + slice_width.n + other.n) * sizeof(int);
   return total;
 }
 

@@ -26,6 +26,7 @@ struct Engine::Impl {
   std::vector<const Model*> models;
   StepSettings settings;
   Options options;
+  Options::Kernel kernel = Options::Kernel::Grid;
   double t = 0, stiffening = 1.0;
   std::uint64_t frames = 0, substeps = 0;
   Warnings warnings;
@@ -36,6 +37,9 @@ struct Engine::Impl {
   virtual MatX3 fetch(int b, bool velocities) = 0;
   virtual void request_positions() = 0;
   virtual bool poll_positions(int b, MatX3& out) = 0;
+  virtual void request_node(int b, Index node) = 0;
+  virtual bool poll_node(Vec3& out) = 0;
+  virtual Engine::DeviceState device_state() = 0;
   virtual std::size_t device_bytes() const = 0;
   virtual double time_substeps(int count, int repeats) = 0;
 };
@@ -48,12 +52,14 @@ struct Backend final : Engine::Impl {
   Index n = 0;
   std::size_t entries = 0;
   bool soft = false;
+  bool per_block = false;  // Options::Kernel::PerBlock (kernel_for): one block per model
+  int block_threads = 0;   // its block size
   cudaStream_t stream = nullptr, copy_stream = nullptr;
 
   // Model arrays (node arrays and spring parameters per model, topology shared).
   DeviceArray<R> x0, mass, damping, kr, L0, k, kp, ik;
   DeviceArray<unsigned char> fixed;
-  DeviceArray<int> load_slot, slice_begin, slice_width, other;
+  DeviceArray<int> load_slot, row_node, slice_begin, slice_width, other;
   // State: ping-pong buffers, `cur` holds the current positions and velocities.
   DeviceArray<R> xb[2], vb[2];
   int cur = 0;
@@ -81,6 +87,13 @@ struct Backend final : Engine::Impl {
   std::vector<std::uint64_t> seen;
   bool requested[2]{false, false};
   int next_snap = 0;
+  // The haptic read of one node: 3 reals per request, double-buffered the same way.
+  DeviceArray<R> node_staging;  // 2 x 3
+  PinnedArray<R> node_host;     // 2 x 3
+  cudaEvent_t node_staged[2]{}, node_copied[2]{};
+  std::uint64_t node_seq[2]{0, 0}, node_seen = 0;
+  bool node_requested[2]{false, false};
+  int node_next = 0;
 
   Backend(const std::vector<const Model*>& ms, const StepSettings& s, const Options& o,
           const DeviceInfo& dev);
@@ -94,10 +107,15 @@ struct Backend final : Engine::Impl {
   // Enqueues a batch of `left` substeps of h from the current buffers (no host work, capturable).
   void enqueue(long left, double h, int rollbacks);
   void run_batch(long left, double h, int rollbacks);
+  // The block kernel's arguments for `count` substeps from buffer `parity` (into the other buffer).
+  detail::BlockArgs<R> block_args(int parity, int count, R h, int stiff_mode, bool guard);
   StepStatus step() override;
   MatX3 fetch(int b, bool velocities) override;
   void request_positions() override;
   bool poll_positions(int b, MatX3& out) override;
+  void request_node(int b, Index node) override;
+  bool poll_node(Vec3& out) override;
+  Engine::DeviceState device_state() override;
   double time_substeps(int count, int repeats) override;
   std::size_t device_bytes() const override;
 };

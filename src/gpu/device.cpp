@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "launch.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/gpu/engine.hpp"
 
@@ -83,6 +84,7 @@ DeviceInfo require_device(int index) {
   d.minor = prop.minor;
   d.multiprocessors = prop.multiProcessorCount;
   d.memory_bytes = prop.totalGlobalMem;
+  d.shared_per_block = prop.sharedMemPerBlockOptin;
   d.driver_version = driver;
   d.runtime_version = runtime;
   return d;
@@ -103,6 +105,25 @@ void require_supported(const std::string& kind, bool local_overlay, bool tools) 
         cat("GPU: the local deformation overlay is not ported to the GPU path; use ", kCpuAlternative));
   if (tools)
     throw GpuError(cat("GPU: tools (contact) are not ported to the GPU path; use ", kCpuAlternative));
+}
+
+Options::Kernel kernel_for(const Options& options, int batch, Index nodes, const DeviceInfo& device) {
+  // The block kernel's static shared memory (the stiffening reduction) beside the state.
+  const std::size_t need =
+      (options.precision == Precision::Double ? detail::block_shared_bytes<double>(nodes)
+                                              : detail::block_shared_bytes<float>(nodes)) +
+      32 * sizeof(double);
+  const bool fits = need <= device.shared_per_block;
+  if (options.kernel == Options::Kernel::Grid) return Options::Kernel::Grid;
+  if (options.kernel == Options::Kernel::PerBlock) {
+    if (!fits)
+      throw GpuError(cat("GPU: one block per model needs ", need, " bytes of shared memory for a model of ",
+                         nodes, " nodes (", to_string(options.precision), "); the device (", device.name,
+                         ") allows ", device.shared_per_block, " per block: use the grid kernel (Auto)"));
+    return Options::Kernel::PerBlock;
+  }
+  return fits && (batch >= device.multiprocessors || nodes <= 1024) ? Options::Kernel::PerBlock
+                                                                    : Options::Kernel::Grid;
 }
 
 double measured_copy_bandwidth(std::size_t bytes, int repeats, int device) {

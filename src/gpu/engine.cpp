@@ -43,6 +43,9 @@ Engine::~Engine() = default;
 int Engine::batch() const {
   return static_cast<int>(impl_->models.size());
 }
+Options::Kernel Engine::kernel() const {
+  return impl_->kernel;
+}
 Index Engine::nodes() const {
   return impl_->models[0]->num_nodes();
 }
@@ -72,6 +75,15 @@ void Engine::request_positions() {
 }
 bool Engine::poll_positions(int b, MatX3& out) {
   return impl_->poll_positions(b, out);
+}
+void Engine::request_node(int b, Index node) {
+  impl_->request_node(b, node);
+}
+bool Engine::poll_node(Vec3& out) {
+  return impl_->poll_node(out);
+}
+Engine::DeviceState Engine::device_state() {
+  return impl_->device_state();
 }
 double Engine::time() const {
   return impl_->t;

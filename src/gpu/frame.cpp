@@ -15,7 +15,7 @@ template <class R>
 detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   detail::SubstepArgs<R> A;
   A.nodes = {static_cast<int>(n), x0.p, mass.p, damping.p, kr.p, fixed.p, load_slot.p};
-  A.table = {static_cast<int>(n), slice_begin.p, slice_width.p, other.p, L0.p, k.p, kp.p, ik.p};
+  A.table = {static_cast<int>(n), row_node.p, slice_begin.p, slice_width.p, other.p, L0.p, k.p, kp.p, ik.p};
   A.node_stride = n;
   A.entry_stride = static_cast<long long>(entries);
   A.batch = B;
@@ -38,7 +38,22 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   return A;
 }
 
-// Enqueues a batch of `left` substeps of h from the current buffers (no host work, capturable).
+template <class R>
+detail::BlockArgs<R> Backend<R>::block_args(int parity, int count, R h, int stiff_mode, bool guard) {
+  detail::BlockArgs<R> A;
+  A.s = args(parity, 0, h, stiff_mode != 0);
+  A.s.guard = guard;
+  A.s.stiff_bits = stiff_dev.p;
+  A.load_substep_stride = static_cast<long long>(B) * 3 * rows;
+  A.count = count;
+  A.stiff_mode = stiff_mode;
+  A.threads = block_threads;
+  return A;
+}
+
+// Enqueues a batch of `left` substeps of h from the current buffers (no host work, capturable). The
+// grid kernel: one launch per substep, ping-pong between the buffers; the block kernel: one launch,
+// into the other buffer.
 template <class R>
 void Backend<R>::enqueue(long left, double h, int rollbacks) {
   check(cudaMemcpyAsync(scalars_dev.p, scalars_host_init.p, sizeof(detail::FrameScalars),
@@ -48,10 +63,17 @@ void Backend<R>::enqueue(long left, double h, int rollbacks) {
         "resetting the stiffening slots");
   check(cudaMemcpyAsync(rows_dev.p, rows_host.p, row_count(left) * sizeof(R), cudaMemcpyHostToDevice, stream),
         "uploading the load table");
-  for (long kk = 0; kk < left; ++kk) {
-    const bool stiff = kk == left - 1 || rollbacks == settings.max_rollbacks;
-    check(detail::launch_substep(args(cur, kk, static_cast<R>(h), stiff), options.block, stream),
-          "launching the substep kernel");
+  if (per_block) {
+    const int mode = rollbacks == settings.max_rollbacks ? 2 : 1;
+    check(detail::launch_block_frame(
+              block_args(cur, static_cast<int>(left), static_cast<R>(h), mode, settings.guard), stream),
+          "launching the block kernel");
+  } else {
+    for (long kk = 0; kk < left; ++kk) {
+      const bool stiff = kk == left - 1 || rollbacks == settings.max_rollbacks;
+      check(detail::launch_substep(args(cur, kk, static_cast<R>(h), stiff), options.block, stream),
+            "launching the substep kernel");
+    }
   }
   check(cudaMemcpyAsync(scalars_host.p, scalars_dev.p, sizeof(detail::FrameScalars), cudaMemcpyDeviceToHost,
                         stream),
@@ -143,7 +165,19 @@ StepStatus Backend<R>::step() {
         stiffening = std::max(1.0, v);
         break;
       }
-    cur = (cur + static_cast<int>(done & 1)) & 1;
+    if (!per_block) {
+      cur = (cur + static_cast<int>(done & 1)) & 1;
+    } else if (!failed) {
+      cur = 1 - cur;
+    } else if (done > 0) {
+      // The block kernel's models ran on past the first failure (each stops at its own): its output is
+      // discarded and the `done` substeps before the failure re-run from the intact buffer, guard off
+      // (the same arithmetic on the same input: the same states, bit for bit).
+      check(detail::launch_block_frame(block_args(cur, static_cast<int>(done), static_cast<R>(h), 0, false),
+                                       stream),
+            "launching the block kernel");
+      cur = 1 - cur;
+    }
     for (long kk = 0; kk < done; ++kk) tt += h;
     status.substeps += static_cast<int>(done);
     substeps += static_cast<std::uint64_t>(done);
@@ -191,7 +225,17 @@ double Backend<R>::time_substeps(int count, int repeats) {
         "resetting the frame scalars");
   cudaGraph_t g = nullptr;
   check(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal), "capturing a CUDA graph");
-  for (int kk = 0; kk < count; ++kk) {
+  for (int half = 0; per_block && half < 2; ++half) {  // two launches of count / 2: back to buffer cur
+    detail::BlockArgs<R> A = block_args((cur + half) & 1, count / 2, static_cast<R>(h), 0, false);
+    A.load_substep_stride = 0;  // the same loads for every substep
+    const cudaError_t e = detail::launch_block_frame(A, stream);
+    if (e != cudaSuccess) {
+      cudaStreamEndCapture(stream, &g);
+      if (g) cudaGraphDestroy(g);
+      check(e, "launching the block kernel");
+    }
+  }
+  for (int kk = 0; !per_block && kk < count; ++kk) {
     detail::SubstepArgs<R> A = args(cur, kk, static_cast<R>(h), false);
     A.loads = rows_dev.p;  // the same loads for every substep
     A.substep = 0;         // no guard skipping between substeps

@@ -6,8 +6,42 @@
 
 namespace medspring {
 
+std::vector<int> table_row_order(const std::vector<int>& degree, RowOrder order, int threads) {
+  const auto n = static_cast<int>(degree.size());
+  if (order == RowOrder::Nodes || n == 0) return {};
+  std::vector<int> rows(static_cast<std::size_t>(n));
+  for (int a = 0; a < n; ++a) rows[static_cast<std::size_t>(a)] = a;
+  auto heavier = [&](int a, int b) {
+    return degree[static_cast<std::size_t>(a)] > degree[static_cast<std::size_t>(b)];
+  };
+  if (order == RowOrder::HeavyLast) {
+    std::vector<int> sorted = degree;
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    const int median = sorted[static_cast<std::size_t>(n / 2)];
+    auto heavy = [&](int a) {
+      const int d = degree[static_cast<std::size_t>(a)];
+      return d > kHeavyDegree && d > 2 * median;
+    };
+    auto mid = std::stable_partition(rows.begin(), rows.end(), [&](int a) { return !heavy(a); });
+    std::stable_sort(mid, rows.end(), heavier);
+    return rows;
+  }
+  require(threads >= 1, "table_row_order: Balanced needs threads >= 1 (got ", threads, ")");
+  std::stable_sort(rows.begin(), rows.end(), heavier);
+  // Snake deal: sorted row i goes to round j = i / threads, thread t = i % threads (reversed for odd j);
+  // thread t's rows are t, t + threads, ...: table row j * threads + t.
+  std::vector<int> out(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const int j = i / threads, t = i % threads;
+    const int in_round = std::min(threads, n - j * threads);
+    const int slot = j % 2 == 0 ? t : in_round - 1 - t;
+    out[static_cast<std::size_t>(j * threads + slot)] = rows[static_cast<std::size_t>(i)];
+  }
+  return out;
+}
+
 template <class R>
-SpringTableArrays<R> make_spring_table(const Model& m) {
+SpringTableArrays<R> make_spring_table(const Model& m, RowOrder order, int threads) {
   require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
   require(m.bending.size() == 0, m.name, ": the spring table has no bending terms (", m.bending.size(),
           " in the model); step it with the CPU engine");
@@ -19,14 +53,20 @@ SpringTableArrays<R> make_spring_table(const Model& m) {
   }
   SpringTableArrays<R> T;
   T.nodes = n;
+  T.row_node = table_row_order(degree, order, threads);
+  std::vector<int> node_row(static_cast<std::size_t>(n));  // inverse of row_node
+  for (Index r = 0; r < n; ++r)
+    node_row[static_cast<std::size_t>(T.row_node.empty() ? r : T.row_node[static_cast<std::size_t>(r)])] =
+        static_cast<int>(r);
+  auto node_of = [&](Index r) { return T.row_node.empty() ? r : T.row_node[static_cast<std::size_t>(r)]; };
   const Index slices = (n + hd::kSlice - 1) / hd::kSlice;
   T.slice_begin.resize(static_cast<std::size_t>(slices));
   T.slice_width.resize(static_cast<std::size_t>(slices));
   long long total = 0;
   for (Index sl = 0; sl < slices; ++sl) {
     int w = 0;
-    for (Index a = sl * hd::kSlice; a < std::min<Index>(n, (sl + 1) * hd::kSlice); ++a)
-      w = std::max(w, degree[static_cast<std::size_t>(a)]);
+    for (Index r = sl * hd::kSlice; r < std::min<Index>(n, (sl + 1) * hd::kSlice); ++r)
+      w = std::max(w, degree[static_cast<std::size_t>(node_of(r))]);
     T.slice_begin[static_cast<std::size_t>(sl)] = static_cast<int>(total);
     T.slice_width[static_cast<std::size_t>(sl)] = w;
     total += static_cast<long long>(w) * hd::kSlice;
@@ -38,20 +78,21 @@ SpringTableArrays<R> make_spring_table(const Model& m) {
   T.k.assign(E, R(0));
   T.kp.assign(E, R(0));
   T.ik.assign(E, R(0));
-  // Padding entries point at their own node (zero length: skipped). Rows past n point at node n - 1.
+  // Padding entries point at their row's own node (zero length: skipped). Rows past n: the last row's.
   for (Index sl = 0; sl < slices; ++sl)
     for (int lane = 0; lane < hd::kSlice; ++lane) {
-      const Index a = std::min<Index>(sl * hd::kSlice + lane, n - 1);
+      const Index a = node_of(std::min<Index>(sl * hd::kSlice + lane, n - 1));
       for (int j = 0; j < T.slice_width[static_cast<std::size_t>(sl)]; ++j)
         T.other[static_cast<std::size_t>(T.slice_begin[static_cast<std::size_t>(sl)] + j * hd::kSlice +
                                          lane)] = a;
     }
   std::vector<int> fill(static_cast<std::size_t>(n), 0);
   auto put = [&](Index a, Index b, Index s) {
-    const Index sl = a / hd::kSlice;
+    const Index r = node_row[static_cast<std::size_t>(a)];
+    const Index sl = r / hd::kSlice;
     const auto e =
         static_cast<std::size_t>(T.slice_begin[static_cast<std::size_t>(sl)] +
-                                 fill[static_cast<std::size_t>(a)]++ * hd::kSlice + (a - sl * hd::kSlice));
+                                 fill[static_cast<std::size_t>(a)]++ * hd::kSlice + (r - sl * hd::kSlice));
     const auto us = static_cast<std::size_t>(s);
     T.other[e] = b;
     T.L0[e] = static_cast<R>(m.springs.L0[us]);
@@ -88,8 +129,8 @@ NodeArrayData<R> make_node_arrays(const Model& m) {
   return N;
 }
 
-template SpringTableArrays<double> make_spring_table<double>(const Model&);
-template SpringTableArrays<float> make_spring_table<float>(const Model&);
+template SpringTableArrays<double> make_spring_table<double>(const Model&, RowOrder, int);
+template SpringTableArrays<float> make_spring_table<float>(const Model&, RowOrder, int);
 template NodeArrayData<double> make_node_arrays<double>(const Model&);
 template NodeArrayData<float> make_node_arrays<float>(const Model&);
 
