@@ -176,15 +176,16 @@ double compare_block(const Model& m, const std::vector<PointLoad>& loads, int fr
   StepSettings s;
   State st = make_state(m, s);
   testing::BlockStepper<R> blk(m, loads, threads);
-  double worst = 0;
+  double worst = 0, peak = 0;
   for (int f = 0; f < frames; ++f) {
     EXPECT_EQ(step(m, st, s, &loads).code, StepCode::Ok) << "frame " << f;
     blk.frame(s);
     worst = std::max({worst, relative_difference(blk.x, st.x), relative_difference(blk.v, st.v)});
+    peak = std::max(peak, (st.x - m.x0).cwiseAbs().maxCoeff());
   }
   EXPECT_EQ(blk.substeps, static_cast<long>(st.substeps));
   EXPECT_EQ(blk.failures, 0);
-  EXPECT_GT((st.x - m.x0).cwiseAbs().maxCoeff(), 0.05);  // the load moved the model (mm)
+  EXPECT_GT(peak, 0.05);  // the load moved the model (mm): not a trivial match
   ::testing::Test::RecordProperty(
       sizeof(R) == 8 ? "block_max_relative_difference_fp64" : "block_max_relative_difference_fp32",
       (std::ostringstream() << std::scientific << worst).str());
