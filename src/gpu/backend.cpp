@@ -148,8 +148,12 @@ template <class R>
 void Backend<R>::set_loads(int b, const std::vector<PointLoad>& L) {
   require(b >= 0 && b < B, "gpu::Engine::set_loads: model ", b, " out of range (batch of ", B, ")");
   LoadSlots S = make_load_slots(L, n);
-  check(cudaStreamSynchronize(stream), "finishing the work in flight");
   const auto ub = static_cast<std::size_t>(b);
+  if (S.nodes == slots[ub].nodes) {  // the same loaded nodes (a haptic tick): only the forces change,
+    loads[ub] = L;                   // which the host's load table of the next frame picks up
+    return;
+  }
+  check(cudaStreamSynchronize(stream), "finishing the work in flight");
   loads[ub] = L;
   slots[ub] = std::move(S);
   load_slot.upload(slots[ub].slot.data(), static_cast<std::size_t>(n), ub * static_cast<std::size_t>(n),

@@ -52,6 +52,9 @@ Index Engine::nodes() const {
 const DeviceInfo& Engine::device() const {
   return impl_->device;
 }
+const StepSettings& Engine::settings() const {
+  return impl_->settings;
+}
 Precision Engine::precision() const {
   return impl_->precision;
 }

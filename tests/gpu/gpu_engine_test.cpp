@@ -9,6 +9,7 @@
 
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/gpu/engine.hpp"
+#include "medspring/gpu/haptics.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/physics/integrators.hpp"
 
@@ -309,6 +310,29 @@ TEST(GpuEngine, HapticNodeReadDeliversTheContactNode) {
   EXPECT_FALSE(e.poll_node(got));
   EXPECT_THROW(e.request_node(2, 0), InvalidInput);
   EXPECT_THROW(e.request_node(0, 500), InvalidInput);
+}
+
+TEST(GpuEngine, HapticLoopPressesTheContactNodeThroughTheNodeRead) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  gpu::Engine e({&m}, StepSettings{});
+  const Index c = 223;
+  gpu::HapticLoop loop(e, 0, c);
+  const Vec3 x0 = m.x0.row(c).transpose();
+  const Vec3 tool = x0 + Vec3(0, 0, -3.0);  // 3 mm into the tissue
+  MatX3 before = e.positions(0);
+  for (int k = 0; k < 200; ++k) {
+    const long stale = loop.stale_ticks();
+    const Vec3 reaction = loop.tick(tool);
+    EXPECT_TRUE(reaction.allFinite());
+    EXPECT_LE(reaction.norm(), HapticSettings{}.f_max * (1 + 1e-12));
+    if (loop.stale_ticks() == stale)  // the read of this tick was the previous tick's end state
+      EXPECT_EQ((loop.last().contact - before.row(c).transpose()).norm(), 0.0) << "tick " << k;
+    before = e.positions(0);
+  }
+  EXPECT_LT(before(c, 2) - x0.z(), -0.5);  // pulled towards the tool
+  EXPECT_THROW(gpu::HapticLoop(e, 1, c), InvalidInput);
 }
 
 TEST(GpuEngine, AsyncReadbackDeliversTheRequestedPositions) {

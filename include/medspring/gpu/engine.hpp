@@ -92,6 +92,7 @@ class Engine {
   Options::Kernel kernel() const;  // Grid or PerBlock (kernel_for)
   const DeviceInfo& device() const;
   Precision precision() const;
+  const StepSettings& settings() const;
 
   /// Loads of model b, held until changed; evaluated at the start of every substep as step() does.
   void set_loads(int b, const std::vector<PointLoad>& loads);
