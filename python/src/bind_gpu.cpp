@@ -252,9 +252,10 @@ void bind_gpu(py::module_& parent) {
           },
           "The newest finished request_node() read as a (3,) array, or None (never waits).")
       .def(
-          "__dlpack__", [](py::object self, py::object /*stream*/) { return dlpack(self, false); },
-          "stream"_a = py::none(),
-          "DLPack capsule of the device positions (B, N, 3), zero-copy; valid until the next step().")
+          "__dlpack__", [](py::object self, py::args, py::kwargs) { return dlpack(self, false); },
+          "DLPack capsule of the device positions (B, N, 3), zero-copy, after the engine's work has finished "
+          "(stream, max_version, ... accepted: a legacy 'dltensor' capsule is returned); valid until the "
+          "next step().")
       .def("__dlpack_device__",
            [](const PyEngine& p) { return py::make_tuple(kDLCUDA, p.e->device().index); })
       .def(
