@@ -41,16 +41,44 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   }
   const auto un = static_cast<std::size_t>(n);
   const auto uB = static_cast<std::size_t>(B);
-  // The kernel, and the table's row order for it (load balance, RowOrder): balanced over the block's
-  // threads for one block per model, heavy rows in warps of their own for the grid kernel.
+  // The kernel, and the table for it (load balance, docs/gpu.md): heavy rows split into chunks and all
+  // rows dealt by size over the block's threads for one block per model (make_split_table); heavy rows
+  // in warps of their own for the grid kernel (RowOrder::HeavyLast).
   kernel = kernel_for(o, B, n, dev);
   per_block = kernel == Options::Kernel::PerBlock;
   block_threads = std::min(kBlockThreads, std::max(32, (n + 31) / 32 * 32));
-  const RowOrder order = per_block ? RowOrder::Balanced : RowOrder::HeavyLast;
-  if (per_block)
-    check(prepare_block_frame<R>(block_shared_bytes<R>(n)), "allocating shared memory for the block kernel");
+  SplitTableArrays<R> S0;
+  if (per_block) {
+    S0 = make_split_table<R>(m0, block_threads);
+    const std::size_t bytes = block_shared_bytes<R>(n, S0.parts());
+    if (bytes + 32 * sizeof(double) > dev.shared_per_block) {  // the chunks' slots did not fit after all
+      if (o.kernel == Options::Kernel::PerBlock)
+        throw GpuError(cat("GPU: one block per model needs ", bytes + 32 * sizeof(double),
+                           " bytes of shared memory for '", m0.name, "'; the device allows ",
+                           dev.shared_per_block, " per block: use the grid kernel (Auto)"));
+      per_block = false;
+      kernel = Options::Kernel::Grid;
+    }
+  }
+  if (per_block) {
+    parts = S0.parts();
+    check(prepare_block_frame<R>(block_shared_bytes<R>(n, parts)),
+          "allocating shared memory for the block kernel");
+    split_rows = static_cast<int>(S0.part.size());
+    split_heavy = static_cast<int>(S0.heavy_node.size());
+    part.allocate(S0.part.size(), "allocating the spring table");
+    part.upload(S0.part.data(), S0.part.size(), 0, "uploading the spring table");
+    heavy_node.allocate(S0.heavy_node.size(), "allocating the spring table");
+    heavy_node.upload(S0.heavy_node.data(), S0.heavy_node.size(), 0, "uploading the spring table");
+    part_begin.allocate(S0.part_begin.size(), "allocating the spring table");
+    part_begin.upload(S0.part_begin.data(), S0.part_begin.size(), 0, "uploading the spring table");
+  }
+  auto table_of = [&](const Model& m) {
+    return per_block ? make_split_table<R>(m, block_threads).table
+                     : make_spring_table<R>(m, RowOrder::HeavyLast);
+  };
   // Topology from model 0, parameters from every model.
-  const SpringTableArrays<R> T0 = make_spring_table<R>(m0, order, block_threads);
+  const SpringTableArrays<R> T0 = per_block ? std::move(S0.table) : table_of(m0);
   entries = T0.entries();
   if (!T0.row_node.empty()) {
     row_node.allocate(T0.row_node.size(), "allocating the spring table");
@@ -77,8 +105,7 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     if (b > 0) require_same_topology(m0, m, b);
     soft = soft || m.has_soft_springs;
     const bool same = b > 0 && &m == &m0;  // a batch of one model: its arrays once
-    const SpringTableArrays<R> T =
-        b == 0 || same ? SpringTableArrays<R>{} : make_spring_table<R>(m, order, block_threads);
+    const SpringTableArrays<R> T = b == 0 || same ? SpringTableArrays<R>{} : table_of(m);
     const SpringTableArrays<R>& Tb = b == 0 || same ? T0 : T;
     const auto ub = static_cast<std::size_t>(b);
     L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
@@ -310,7 +337,9 @@ std::size_t Backend<R>::device_bytes() const {
   for (const DeviceArray<R>* a :
        {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &xb[0], &xb[1], &vb[0], &vb[1]})
     total += a->n * sizeof(R);
-  total += fixed.n + (load_slot.n + row_node.n + slice_begin.n + slice_width.n + other.n) * sizeof(int);
+  total += fixed.n + (load_slot.n + row_node.n + slice_begin.n + slice_width.n + other.n + part.n +
+                      heavy_node.n + part_begin.n) *
+                         sizeof(int);
   return total;
 }
 

@@ -60,6 +60,9 @@ struct Backend final : Engine::Impl {
   DeviceArray<R> x0, mass, damping, kr, L0, k, kp, ik;
   DeviceArray<unsigned char> fixed;
   DeviceArray<int> load_slot, row_node, slice_begin, slice_width, other;
+  // The block kernel's split rows (hd::SplitRows): chunk slot per row, split nodes, their slots.
+  DeviceArray<int> part, heavy_node, part_begin;
+  int split_rows = 0, split_heavy = 0, parts = 0;
   // State: ping-pong buffers, `cur` holds the current positions and velocities.
   DeviceArray<R> xb[2], vb[2];
   int cur = 0;

@@ -48,6 +48,8 @@ detail::BlockArgs<R> Backend<R>::block_args(int parity, int count, R h, int stif
   A.count = count;
   A.stiff_mode = stiff_mode;
   A.threads = block_threads;
+  A.split = {split_rows, part.p, split_heavy, heavy_node.p, part_begin.p};
+  A.parts = parts;
   return A;
 }
 

@@ -1,7 +1,8 @@
 // The substep kernels. Grid kernel: one thread per table row gathers its node's return spring, load and
 // springs (hd::node_substep, the same code the CPU-side test runs) and advances the node, one launch per
 // substep. Block kernel: one block per model runs a frame's substeps with the model's state in shared
-// memory (hd::block_rows). No atomics on forces; the stiffening max and the guard are reduced per block.
+// memory (hd::split_phase1 / split_phase2: hd::node_substep per node, heavy nodes split). No atomics on
+// forces; the stiffening max and the guard are reduced per block.
 #include <climits>
 
 #include "launch.hpp"
@@ -74,13 +75,14 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
 
 // One block per model: `count` substeps with the model's state in shared memory (launch.hpp).
 template <class R, bool Soft>
-__global__ void __launch_bounds__(kBlockThreads, 3) block_frame_kernel(BlockArgs<R> A) {
+__global__ void __launch_bounds__(kBlockThreads, 2) block_frame_kernel(BlockArgs<R> A) {
   extern __shared__ double shared_raw[];  // double: aligned for R = double and float
   __shared__ double warp_max[32];
   const int n = A.s.nodes.nodes, b = blockIdx.x, t = threadIdx.x, threads = blockDim.x;
   R* xa = reinterpret_cast<R*>(shared_raw);  // positions read by the substep
   R* xb = xa + 3 * n;                        // positions written by it (then swapped)
   R* vs = xb + 3 * n;
+  R* parts = vs + 3 * n;  // partial forces of the split rows' chunks
   hd::NodeArrays<R> N;
   hd::SpringTable<R> T;
   model_arrays(A.s, b, N, T);
@@ -94,9 +96,15 @@ __global__ void __launch_bounds__(kBlockThreads, 3) block_frame_kernel(BlockArgs
     const R* loads = A.s.loads + A.load_substep_stride * kk + 3ll * A.s.load_rows * b;
     const bool stiff_now = A.stiff_mode == 2 || (A.stiff_mode == 1 && kk == A.count - 1);
     R stiff = R(1);
-    const int code =
-        stiff_now ? hd::block_rows<Soft, true>(N, T, t, threads, A.s.h, A.s.vmax2, loads, xa, vs, xb, stiff)
-                  : hd::block_rows<Soft, false>(N, T, t, threads, A.s.h, A.s.vmax2, loads, xa, vs, xb, stiff);
+    int code = stiff_now ? hd::split_phase1<Soft, true>(N, T, A.split, t, threads, A.s.h, A.s.vmax2, loads,
+                                                        xa, vs, xb, parts, stiff)
+                         : hd::split_phase1<Soft, false>(N, T, A.split, t, threads, A.s.h, A.s.vmax2, loads,
+                                                         xa, vs, xb, parts, stiff);
+    if (A.split.heavy > 0) {  // the split nodes, once their chunks' sums are in
+      __syncthreads();
+      const int c = hd::split_phase2(N, A.split, t, threads, A.s.h, A.s.vmax2, loads, xa, vs, xb, parts);
+      code = c > code ? c : code;
+    }
     if (stiff_now) block_max_into(static_cast<double>(stiff), warp_max, A.s.stiff_bits + kk);
     // One barrier: the substep's writes are visible to the next, and the block agrees on the guard.
     const bool guard = A.s.guard;
@@ -146,7 +154,7 @@ cudaError_t prepare_block_frame(std::size_t bytes) {
 
 template <class R>
 cudaError_t launch_block_frame(const BlockArgs<R>& A, cudaStream_t stream) {
-  const std::size_t bytes = block_shared_bytes<R>(A.s.nodes.nodes);
+  const std::size_t bytes = block_shared_bytes<R>(A.s.nodes.nodes, A.parts);
   const dim3 grid(static_cast<unsigned>(A.s.batch));
   if (A.s.soft)
     block_frame_kernel<R, true><<<grid, A.threads, bytes, stream>>>(A);

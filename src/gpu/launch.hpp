@@ -7,6 +7,7 @@
 #include <cstddef>
 
 #include "medspring/physics/kernels.hpp"
+#include "medspring/physics/kernels_split.hpp"
 
 namespace medspring::gpu::detail {
 
@@ -55,13 +56,16 @@ struct BlockArgs {
   int count = 1;                      // substeps
   int stiff_mode = 1;                 // stiffening into stiff_bits[kk]: 0 never, 1 last substep, 2 every one
   int threads = 256;                  // block size (<= kBlockThreads, a multiple of 32)
+  hd::SplitRows split;                // the table's rows: whole nodes and chunks of heavy ones
+  int parts = 0;                      // partial-force slots (split.part_begin[split.heavy])
 };
 inline constexpr int kBlockThreads = 256;
 
-/// Shared memory of one block for a model of n nodes: two position buffers and the velocities.
+/// Shared memory of one block for a model of n nodes: two position buffers, the velocities, and the
+/// partial forces of the split rows.
 template <class R>
-constexpr std::size_t block_shared_bytes(long long n) {
-  return static_cast<std::size_t>(9 * n) * sizeof(R);
+constexpr std::size_t block_shared_bytes(long long n, long long parts = 0) {
+  return static_cast<std::size_t>(9 * n + 3 * parts) * sizeof(R);
 }
 
 /// Raises the kernels' dynamic shared memory limit to `bytes` (needed above 48 KiB; outside graph capture).

@@ -82,6 +82,61 @@ TEST(HybridGather, OneBlockPerModelAlgorithmEqualsTheEngineStep) {
   ::testing::Test::RecordProperty("block_vs_grid_gather", (std::ostringstream() << to_gather).str());
 }
 
+// Heavy rows split across threads (kernels_split.hpp): the atoms' spokes in chunks of at most 17 springs
+// (the mean work of a thread), partial sums combined in spring order after a barrier. The summation order
+// of an atom's force changes (chunk sums), so the match with step() is to rounding.
+TEST(HybridGather, SplitHeavyRowsEqualTheEngineStepAndShortenTheCriticalPath) {
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  PointLoad L;
+  L.node = 223;
+  L.force = Vec3(0, 0, -1.0);
+  L.t_ramp = 10.0;
+  L.t_release = 150.0;
+  const std::vector<PointLoad> loads{L};
+  StepSettings s;
+  State st = make_state(m, s);
+  const int threads = 256;
+  testing::SplitStepper<double> sp(m, loads, threads);
+  double worst = 0, peak = 0;
+  for (int f = 0; f < 600; ++f) {
+    ASSERT_TRUE(step(m, st, s, &loads).ok());
+    sp.frame(s);
+    worst =
+        std::max({worst, testing::relative_difference(sp.x, st.x), testing::relative_difference(sp.v, st.v)});
+    peak = std::max(peak, (st.x - m.x0).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(peak, 1.0);
+  EXPECT_LE(worst, 1e-12);
+  EXPECT_EQ(sp.substeps, static_cast<long>(st.substeps));
+  EXPECT_EQ(sp.failures, 0);
+  EXPECT_NEAR(sp.stiffening, st.stiffening, 1e-9 * st.stiffening);
+  // Every spring end exactly once; the split nodes are the heavy ones.
+  const SplitTableArrays<double>& S = sp.S;
+  long real = 0;
+  for (std::size_t e = 0; e < S.table.entries(); ++e) real += S.table.k[e] != 0.0;
+  EXPECT_EQ(real, 2L * m.num_springs());
+  EXPECT_EQ(S.chunk, 17);
+  // Critical path: the most springs one thread gathers in phase 1, plus the slots it sums in phase 2.
+  std::vector<int> work(threads, 0);
+  for (std::size_t r = 0; r < S.part.size(); ++r) {
+    const int sl = static_cast<int>(r) / hd::kSlice;
+    int e = S.table.slice_begin[static_cast<std::size_t>(sl)] + static_cast<int>(r) % hd::kSlice, springs = 0;
+    for (int j = 0; j < S.table.slice_width[static_cast<std::size_t>(sl)]; ++j, e += hd::kSlice)
+      springs += S.table.k[static_cast<std::size_t>(e)] != 0.0;
+    work[r % threads] += springs;
+  }
+  for (std::size_t k = 0; k < S.heavy_node.size(); ++k)
+    work[k % threads] += S.part_begin[k + 1] - S.part_begin[k];
+  const int critical = *std::max_element(work.begin(), work.end());
+  EXPECT_LE(critical, 2 * S.chunk + 8);  // against 80 without splitting
+  ::testing::Test::RecordProperty("max_relative_difference", (std::ostringstream() << worst).str());
+  ::testing::Test::RecordProperty("split_nodes", std::to_string(S.heavy_node.size()));
+  ::testing::Test::RecordProperty("parts", std::to_string(S.parts()));
+  ::testing::Test::RecordProperty("rows", std::to_string(S.part.size()));
+  ::testing::Test::RecordProperty("critical_springs", std::to_string(critical));
+}
+
 // Load balance of the atoms' spokes (docs/gpu.md): the work of a thread is the springs it gathers.
 struct Balance {
   double entries_per_end = 0;  // table entries (with padding) per spring end

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "medspring/physics/kernels.hpp"
+#include "medspring/physics/kernels_split.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/physics/model.hpp"
 
@@ -54,6 +55,24 @@ inline constexpr int kHeavyDegree = 16;
 /// terms).
 template <class R>
 SpringTableArrays<R> make_spring_table(const Model& model, RowOrder order = RowOrder::Nodes, int threads = 0);
+
+/// The one-block-per-model kernel's table with heavy rows split (hd::SplitRows, kernels_split.hpp): a node
+/// of more than `chunk` springs becomes ceil(degree / chunk) rows of consecutive springs (in spring
+/// order); all rows are dealt by size to `threads` threads in snake order as RowOrder::Balanced.
+/// chunk <= 0: ceil(2 springs / threads), at least 8 (the mean work of a thread).
+template <class R>
+struct SplitTableArrays {
+  SpringTableArrays<R> table;  // table.row_node: the node of each row (rows = table.row_node.size())
+  std::vector<int> part, heavy_node, part_begin;
+  int chunk = 0;
+  int parts() const { return part_begin.empty() ? 0 : part_begin.back(); }
+  hd::SplitRows view() const {
+    return {static_cast<int>(part.size()), part.data(), static_cast<int>(heavy_node.size()),
+            heavy_node.data(), part_begin.data()};
+  }
+};
+template <class R>
+SplitTableArrays<R> make_split_table(const Model& model, int threads, int chunk = 0);
 
 /// The row order alone (node of each row; empty for RowOrder::Nodes) from the node degrees.
 std::vector<int> table_row_order(const std::vector<int>& degree, RowOrder order, int threads);
