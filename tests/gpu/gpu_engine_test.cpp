@@ -266,7 +266,7 @@ TEST(GpuEngine, OneBlockPerModelBatchOfKidneysEachFollowsItsOwnCpuRun) {
   for (int b = 0; b < B; ++b) {
     EXPECT_LE(rel(e.positions(b), cpu[static_cast<std::size_t>(b)].x), 1e-12) << b;
     EXPECT_LE(rel(e.velocities(b), cpu[static_cast<std::size_t>(b)].v), 1e-12) << b;
-    EXPECT_LE(rel(e.positions(b), g.positions(b)), 1e-13) << b;
+    EXPECT_LE(rel(e.positions(b), g.positions(b)), 1e-12) << b;  // split rows: chunk sums
   }
 }
 
