@@ -327,8 +327,9 @@ TEST(GpuEngine, HapticLoopPressesTheContactNodeThroughTheNodeRead) {
     const Vec3 reaction = loop.tick(tool);
     EXPECT_TRUE(reaction.allFinite());
     EXPECT_LE(reaction.norm(), HapticSettings{}.f_max * (1 + 1e-12));
-    if (loop.stale_ticks() == stale)  // the read of this tick was the previous tick's end state
+    if (loop.stale_ticks() == stale) {  // the read of this tick was the previous tick's end state
       EXPECT_EQ((loop.last().contact - before.row(c).transpose()).norm(), 0.0) << "tick " << k;
+    }
     before = e.positions(0);
   }
   EXPECT_LT(before(c, 2) - x0.z(), -0.5);  // pulled towards the tool
