@@ -27,7 +27,11 @@ compile() {
   "$nvcc" --version | tail -2
   "$nvcc" -std=c++17 -O3 -gencode=arch=compute_90,code=sm_90 -I"$root/include" -I"$root/src/gpu" \
     -Xptxas -v -c "$root/src/gpu/kernels.cu" -o "$out/kernels.o" 2> "$out/ptxas.txt"
-  grep -E "registers|stack frame" "$out/ptxas.txt" | sed 's/^ *//' | paste - - | sort | uniq -c | head -20
+  # One line per kernel: name (template arguments: real type f/d, soft law, stiffening) and resources.
+  awk '/Compiling entry function/ { match($0, /(block_frame_kernel|substep_kernel)I[fd](Lb[01]E)+/); k = substr($0, RSTART, RLENGTH) }
+       /bytes stack frame/ { match($0, /[0-9]+ bytes stack frame.*/); st = substr($0, RSTART) }
+       /Used [0-9]+ registers/ { match($0, /Used [0-9]+ registers.*/); printf "  %-26s %s; %s\n", k, substr($0, RSTART), st }' \
+    "$out/ptxas.txt" | tee "$out/resources.txt"
   if command -v "$(dirname "$nvcc")/cuobjdump" >/dev/null; then
     "$(dirname "$nvcc")/cuobjdump" -sass "$out/kernels.o" > "$out/kernels.sass"
     echo "SASS: $(grep -c '' "$out/kernels.sass") lines in $out/kernels.sass (LDL/STL: $(grep -cE 'LDL|STL' "$out/kernels.sass" || true))"
@@ -79,8 +83,8 @@ EOF
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${args[@]}" > "$out/configure.log"
   grep -E "MedSpring: CUDA|Eigen|GTest" "$out/configure.log" || true
   [ -z "${GPU_CHECK_CONFIGURE_ONLY:-}" ] || return 0
-  cmake --build "$build" --target gpu_tests physics_tests medspring_gpu_bench
-  ctest --test-dir "$build" -R 'HdKernels|SpringTable' --output-on-failure
+  cmake --build "$build" --target gpu_tests physics_tests hybrid_gather_tests medspring_gpu_bench
+  ctest --test-dir "$build" -R 'HdKernels|SpringTable|HybridGather' --output-on-failure
   ctest --test-dir "$build" -L gpu --output-on-failure --timeout 1800
   "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" ${GPU_BENCH_ARGS:-}
 }

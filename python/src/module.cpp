@@ -69,6 +69,9 @@ void bind_fem(py::module_& m);  // bind_fem.cpp
 #ifdef MEDSPRING_PYTHON_WITH_PAPER
 void bind_paper(py::module_& m);  // bind_paper.cpp
 #endif
+#ifdef MEDSPRING_PYTHON_WITH_GPU
+void bind_gpu(py::module_& m);  // bind_gpu.cpp
+#endif
 }  // namespace medspring::python
 
 PYBIND11_MODULE(_medspring, m) {
@@ -108,5 +111,11 @@ PYBIND11_MODULE(_medspring, m) {
   m.attr("has_paper") = true;
 #else
   m.attr("has_paper") = false;
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_GPU
+  bind_gpu(m);
+  m.attr("has_gpu") = true;
+#else
+  m.attr("has_gpu") = false;
 #endif
 }

@@ -1,6 +1,8 @@
-// The fused substep kernel: one thread per node gathers its return spring, load and springs
-// (hd::node_substep, the same code the CPU-side test runs) and advances the node. No atomics on forces;
-// the stiffening max and the guard's flags are reduced per block.
+// The substep kernels. Grid kernel: one thread per table row gathers its node's return spring, load and
+// springs (hd::node_substep, the same code the CPU-side test runs) and advances the node, one launch per
+// substep. Block kernel: one block per model runs a frame's substeps with the model's state in shared
+// memory (hd::split_phase1 / split_phase2: hd::node_substep per node, heavy nodes split). No atomics on
+// forces; the stiffening max and the guard are reduced per block.
 #include <climits>
 
 #include "launch.hpp"
@@ -14,29 +16,51 @@ __device__ inline void max_bits(unsigned long long* target, double v) {
   atomicMax(target, static_cast<unsigned long long>(__double_as_longlong(v)));
 }
 
+// Model b's arrays: node arrays and spring parameters at their per-model strides (topology shared).
+template <class R>
+__device__ inline void model_arrays(const SubstepArgs<R>& A, int b, hd::NodeArrays<R>& N,
+                                    hd::SpringTable<R>& T) {
+  N = A.nodes;
+  const long long ns = A.node_stride * b;
+  N.x0 += 3 * ns;
+  N.mass += ns;
+  N.damping += ns;
+  N.kr += ns;
+  N.fixed += ns;
+  N.load_slot += ns;
+  T = A.table;
+  const long long es = A.entry_stride * b;
+  T.L0 += es;
+  T.k += es;
+  T.kp += es;
+  T.ik += es;
+}
+
+// Block-wide max of the threads' stiffening into *target (every thread of the block must call it).
+__device__ inline void block_max_into(double s, double* warp_max, unsigned long long* target) {
+  for (int o = 16; o > 0; o >>= 1) s = fmax(s, __shfl_xor_sync(0xffffffffu, s, o));
+  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+  if (lane == 0) warp_max[warp] = s;
+  __syncthreads();
+  if (warp == 0) {
+    s = lane < static_cast<int>((blockDim.x + 31) >> 5) ? warp_max[lane] : 0.0;
+    for (int o = 16; o > 0; o >>= 1) s = fmax(s, __shfl_xor_sync(0xffffffffu, s, o));
+    if (lane == 0) max_bits(target, s);
+  }
+}
+
 template <class R, bool Soft, bool Stiff>
 __global__ void substep_kernel(SubstepArgs<R> A) {
   if (A.scalars->fail_first < A.substep) return;  // an earlier substep failed: buffers left as they were
   const int b = blockIdx.y;
-  const int a = blockIdx.x * blockDim.x + threadIdx.x;
+  const int r = blockIdx.x * blockDim.x + threadIdx.x;  // table row
   R stiff = R(1);
-  if (a < A.nodes.nodes) {
-    hd::NodeArrays<R> N = A.nodes;
-    const long long ns = A.node_stride * b;
-    N.x0 += 3 * ns;
-    N.mass += ns;
-    N.damping += ns;
-    N.kr += ns;
-    N.fixed += ns;
-    N.load_slot += ns;
-    hd::SpringTable<R> T = A.table;
-    const long long es = A.entry_stride * b;
-    T.L0 += es;
-    T.k += es;
-    T.kp += es;
-    T.ik += es;
+  if (r < A.nodes.nodes) {
+    hd::NodeArrays<R> N;
+    hd::SpringTable<R> T;
+    model_arrays(A, b, N, T);
     const long long off = 3ll * A.nodes.nodes * b;
-    const int code = hd::node_substep<Soft, Stiff>(N, T, a, A.h, A.vmax2, A.loads + 3ll * A.load_rows * b,
+    const int code = hd::node_substep<Soft, Stiff>(N, T, r, A.h, A.vmax2, A.loads + 3ll * A.load_rows * b,
                                                    A.x + off, A.v + off, A.xo + off, A.vo + off, stiff);
     if (code != hd::kNodeOk && A.guard) {
       atomicMin(&A.scalars->fail_first, A.substep);
@@ -44,17 +68,61 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
     }
   }
   if constexpr (Stiff) {
-    double s = static_cast<double>(stiff);
-    for (int o = 16; o > 0; o >>= 1) s = fmax(s, __shfl_xor_sync(0xffffffffu, s, o));
     __shared__ double warp_max[32];
-    const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
-    if (lane == 0) warp_max[warp] = s;
-    __syncthreads();
-    if (warp == 0) {
-      s = lane < static_cast<int>((blockDim.x + 31) >> 5) ? warp_max[lane] : 0.0;
-      for (int o = 16; o > 0; o >>= 1) s = fmax(s, __shfl_xor_sync(0xffffffffu, s, o));
-      if (lane == 0) max_bits(A.stiff_bits, s);
+    block_max_into(static_cast<double>(stiff), warp_max, A.stiff_bits);
+  }
+}
+
+// One block per model: `count` substeps with the model's state in shared memory (launch.hpp).
+template <class R, bool Soft>
+__global__ void __launch_bounds__(kBlockThreads, 2) block_frame_kernel(BlockArgs<R> A) {
+  extern __shared__ double shared_raw[];  // double: aligned for R = double and float
+  __shared__ double warp_max[32];
+  const int n = A.s.nodes.nodes, b = blockIdx.x, t = threadIdx.x, threads = blockDim.x;
+  R* xa = reinterpret_cast<R*>(shared_raw);  // positions read by the substep
+  R* xb = xa + 3 * n;                        // positions written by it (then swapped)
+  R* vs = xb + 3 * n;
+  R* parts = vs + 3 * n;  // partial forces of the split rows' chunks
+  hd::NodeArrays<R> N;
+  hd::SpringTable<R> T;
+  model_arrays(A.s, b, N, T);
+  const long long off = 3ll * n * b;
+  for (int q = t; q < 3 * n; q += threads) {
+    xa[q] = A.s.x[off + q];
+    vs[q] = A.s.v[off + q];
+  }
+  __syncthreads();
+  for (int kk = 0; kk < A.count; ++kk) {
+    const R* loads = A.s.loads + A.load_substep_stride * kk + 3ll * A.s.load_rows * b;
+    const bool stiff_now = A.stiff_mode == 2 || (A.stiff_mode == 1 && kk == A.count - 1);
+    R stiff = R(1);
+    int code = stiff_now ? hd::split_phase1<Soft, true>(N, T, A.split, t, threads, A.s.h, A.s.vmax2, loads,
+                                                        xa, vs, xb, parts, stiff)
+                         : hd::split_phase1<Soft, false>(N, T, A.split, t, threads, A.s.h, A.s.vmax2, loads,
+                                                         xa, vs, xb, parts, stiff);
+    if (A.split.heavy > 0) {  // the split nodes, once their chunks' sums are in
+      __syncthreads();
+      const int c = hd::split_phase2(N, A.split, t, threads, A.s.h, A.s.vmax2, loads, xa, vs, xb, parts);
+      code = c > code ? c : code;
     }
+    if (stiff_now) block_max_into(static_cast<double>(stiff), warp_max, A.s.stiff_bits + kk);
+    // One barrier: the substep's writes are visible to the next, and the block agrees on the guard.
+    const bool guard = A.s.guard;
+    if (__syncthreads_or(guard && code != hd::kNodeOk)) {
+      const bool nonfinite = __syncthreads_or(code == hd::kNodeNonFinite);
+      if (t == 0) {
+        atomicMin(&A.s.scalars->fail_first, kk);
+        atomicMax(&A.s.scalars->fail_code, nonfinite ? hd::kNodeNonFinite : hd::kNodeTooFast);
+      }
+      return;  // the host discards this launch's output and re-runs the substeps before kk
+    }
+    R* const swap = xa;
+    xa = xb;
+    xb = swap;
+  }
+  for (int q = t; q < 3 * n; q += threads) {
+    A.s.xo[off + q] = xa[q];
+    A.s.vo[off + q] = vs[q];
   }
 }
 
@@ -74,7 +142,32 @@ cudaError_t launch_substep(const SubstepArgs<R>& A, int block, cudaStream_t stre
   return A.stiff ? launch<R, false, true>(A, block, stream) : launch<R, false, false>(A, block, stream);
 }
 
+template <class R>
+cudaError_t prepare_block_frame(std::size_t bytes) {
+  const int b = static_cast<int>(bytes);
+  cudaError_t e =
+      cudaFuncSetAttribute(block_frame_kernel<R, false>, cudaFuncAttributeMaxDynamicSharedMemorySize, b);
+  if (e == cudaSuccess)
+    e = cudaFuncSetAttribute(block_frame_kernel<R, true>, cudaFuncAttributeMaxDynamicSharedMemorySize, b);
+  return e;
+}
+
+template <class R>
+cudaError_t launch_block_frame(const BlockArgs<R>& A, cudaStream_t stream) {
+  const std::size_t bytes = block_shared_bytes<R>(A.s.nodes.nodes, A.parts);
+  const dim3 grid(static_cast<unsigned>(A.s.batch));
+  if (A.s.soft)
+    block_frame_kernel<R, true><<<grid, A.threads, bytes, stream>>>(A);
+  else
+    block_frame_kernel<R, false><<<grid, A.threads, bytes, stream>>>(A);
+  return cudaGetLastError();
+}
+
 template cudaError_t launch_substep<double>(const SubstepArgs<double>&, int, cudaStream_t);
 template cudaError_t launch_substep<float>(const SubstepArgs<float>&, int, cudaStream_t);
+template cudaError_t prepare_block_frame<double>(std::size_t);
+template cudaError_t prepare_block_frame<float>(std::size_t);
+template cudaError_t launch_block_frame<double>(const BlockArgs<double>&, cudaStream_t);
+template cudaError_t launch_block_frame<float>(const BlockArgs<float>&, cudaStream_t);
 
 }  // namespace medspring::gpu::detail

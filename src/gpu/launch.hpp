@@ -4,7 +4,10 @@
 
 #include <cuda_runtime_api.h>
 
+#include <cstddef>
+
 #include "medspring/physics/kernels.hpp"
+#include "medspring/physics/kernels_split.hpp"
 
 namespace medspring::gpu::detail {
 
@@ -39,5 +42,37 @@ struct SubstepArgs {
 
 template <class R>
 cudaError_t launch_substep(const SubstepArgs<R>& args, int block, cudaStream_t stream);
+
+/// The one-block-per-model kernel (docs/gpu.md): block b runs `count` substeps of model b with its
+/// positions (two buffers) and velocities in shared memory, reading s.x, s.v once and writing s.xo, s.vo
+/// (distinct from s.x, s.v) once at the end. The table's rows are dealt to the block's threads (thread t:
+/// rows t, t + threads, ...; RowOrder::Balanced). Guard: a model whose substep kk trips stops there and
+/// records kk (fail_first, atomicMin); then no block's output may be used: the host re-runs the
+/// substeps before the failure with the guard off (they give the same result, bit for bit).
+template <class R>
+struct BlockArgs {
+  SubstepArgs<R> s;                   // as the grid kernel; s.loads: substep 0's table; s.stiff_bits: slot 0
+  long long load_substep_stride = 0;  // elements between consecutive substeps' load tables
+  int count = 1;                      // substeps
+  int stiff_mode = 1;                 // stiffening into stiff_bits[kk]: 0 never, 1 last substep, 2 every one
+  int threads = 256;                  // block size (<= kBlockThreads, a multiple of 32)
+  hd::SplitRows split;                // the table's rows: whole nodes and chunks of heavy ones
+  int parts = 0;                      // partial-force slots (split.part_begin[split.heavy])
+};
+inline constexpr int kBlockThreads = 256;
+
+/// Shared memory of one block for a model of n nodes: two position buffers, the velocities, and the
+/// partial forces of the split rows.
+template <class R>
+constexpr std::size_t block_shared_bytes(long long n, long long parts = 0) {
+  return static_cast<std::size_t>(9 * n + 3 * parts) * sizeof(R);
+}
+
+/// Raises the kernels' dynamic shared memory limit to `bytes` (needed above 48 KiB; outside graph capture).
+template <class R>
+cudaError_t prepare_block_frame(std::size_t bytes);
+
+template <class R>
+cudaError_t launch_block_frame(const BlockArgs<R>& args, cudaStream_t stream);
 
 }  // namespace medspring::gpu::detail

@@ -6,8 +6,42 @@
 
 namespace medspring {
 
+std::vector<int> table_row_order(const std::vector<int>& degree, RowOrder order, int threads) {
+  const auto n = static_cast<int>(degree.size());
+  if (order == RowOrder::Nodes || n == 0) return {};
+  std::vector<int> rows(static_cast<std::size_t>(n));
+  for (int a = 0; a < n; ++a) rows[static_cast<std::size_t>(a)] = a;
+  auto heavier = [&](int a, int b) {
+    return degree[static_cast<std::size_t>(a)] > degree[static_cast<std::size_t>(b)];
+  };
+  if (order == RowOrder::HeavyLast) {
+    std::vector<int> sorted = degree;
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    const int median = sorted[static_cast<std::size_t>(n / 2)];
+    auto heavy = [&](int a) {
+      const int d = degree[static_cast<std::size_t>(a)];
+      return d > kHeavyDegree && d > 2 * median;
+    };
+    auto mid = std::stable_partition(rows.begin(), rows.end(), [&](int a) { return !heavy(a); });
+    std::stable_sort(mid, rows.end(), heavier);
+    return rows;
+  }
+  require(threads >= 1, "table_row_order: Balanced needs threads >= 1 (got ", threads, ")");
+  std::stable_sort(rows.begin(), rows.end(), heavier);
+  // Snake deal: sorted row i goes to round j = i / threads, thread t = i % threads (reversed for odd j);
+  // thread t's rows are t, t + threads, ...: table row j * threads + t.
+  std::vector<int> out(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const int j = i / threads, t = i % threads;
+    const int in_round = std::min(threads, n - j * threads);
+    const int slot = j % 2 == 0 ? t : in_round - 1 - t;
+    out[static_cast<std::size_t>(j * threads + slot)] = rows[static_cast<std::size_t>(i)];
+  }
+  return out;
+}
+
 template <class R>
-SpringTableArrays<R> make_spring_table(const Model& m) {
+SpringTableArrays<R> make_spring_table(const Model& m, RowOrder order, int threads) {
   require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
   require(m.bending.size() == 0, m.name, ": the spring table has no bending terms (", m.bending.size(),
           " in the model); step it with the CPU engine");
@@ -19,14 +53,20 @@ SpringTableArrays<R> make_spring_table(const Model& m) {
   }
   SpringTableArrays<R> T;
   T.nodes = n;
+  T.row_node = table_row_order(degree, order, threads);
+  std::vector<int> node_row(static_cast<std::size_t>(n));  // inverse of row_node
+  for (Index r = 0; r < n; ++r)
+    node_row[static_cast<std::size_t>(T.row_node.empty() ? r : T.row_node[static_cast<std::size_t>(r)])] =
+        static_cast<int>(r);
+  auto node_of = [&](Index r) { return T.row_node.empty() ? r : T.row_node[static_cast<std::size_t>(r)]; };
   const Index slices = (n + hd::kSlice - 1) / hd::kSlice;
   T.slice_begin.resize(static_cast<std::size_t>(slices));
   T.slice_width.resize(static_cast<std::size_t>(slices));
   long long total = 0;
   for (Index sl = 0; sl < slices; ++sl) {
     int w = 0;
-    for (Index a = sl * hd::kSlice; a < std::min<Index>(n, (sl + 1) * hd::kSlice); ++a)
-      w = std::max(w, degree[static_cast<std::size_t>(a)]);
+    for (Index r = sl * hd::kSlice; r < std::min<Index>(n, (sl + 1) * hd::kSlice); ++r)
+      w = std::max(w, degree[static_cast<std::size_t>(node_of(r))]);
     T.slice_begin[static_cast<std::size_t>(sl)] = static_cast<int>(total);
     T.slice_width[static_cast<std::size_t>(sl)] = w;
     total += static_cast<long long>(w) * hd::kSlice;
@@ -38,20 +78,21 @@ SpringTableArrays<R> make_spring_table(const Model& m) {
   T.k.assign(E, R(0));
   T.kp.assign(E, R(0));
   T.ik.assign(E, R(0));
-  // Padding entries point at their own node (zero length: skipped). Rows past n point at node n - 1.
+  // Padding entries point at their row's own node (zero length: skipped). Rows past n: the last row's.
   for (Index sl = 0; sl < slices; ++sl)
     for (int lane = 0; lane < hd::kSlice; ++lane) {
-      const Index a = std::min<Index>(sl * hd::kSlice + lane, n - 1);
+      const Index a = node_of(std::min<Index>(sl * hd::kSlice + lane, n - 1));
       for (int j = 0; j < T.slice_width[static_cast<std::size_t>(sl)]; ++j)
         T.other[static_cast<std::size_t>(T.slice_begin[static_cast<std::size_t>(sl)] + j * hd::kSlice +
                                          lane)] = a;
     }
   std::vector<int> fill(static_cast<std::size_t>(n), 0);
   auto put = [&](Index a, Index b, Index s) {
-    const Index sl = a / hd::kSlice;
+    const Index r = node_row[static_cast<std::size_t>(a)];
+    const Index sl = r / hd::kSlice;
     const auto e =
         static_cast<std::size_t>(T.slice_begin[static_cast<std::size_t>(sl)] +
-                                 fill[static_cast<std::size_t>(a)]++ * hd::kSlice + (a - sl * hd::kSlice));
+                                 fill[static_cast<std::size_t>(a)]++ * hd::kSlice + (r - sl * hd::kSlice));
     const auto us = static_cast<std::size_t>(s);
     T.other[e] = b;
     T.L0[e] = static_cast<R>(m.springs.L0[us]);
@@ -66,6 +107,111 @@ SpringTableArrays<R> make_spring_table(const Model& m) {
   }
   return T;
 }
+
+template <class R>
+SplitTableArrays<R> make_split_table(const Model& m, int threads, int chunk) {
+  require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
+  require(m.bending.size() == 0, m.name, ": the spring table has no bending terms (", m.bending.size(),
+          " in the model); step it with the CPU engine");
+  require(threads >= 1, "make_split_table: threads must be >= 1 (got ", threads, ")");
+  const Index n = m.num_nodes(), ns = m.num_springs();
+  if (chunk <= 0)
+    chunk = std::max(8, static_cast<int>((2 * static_cast<long long>(ns) + threads - 1) / threads));
+  // Each node's springs in spring order: (other end, spring).
+  std::vector<int> degree(static_cast<std::size_t>(n), 0), start(static_cast<std::size_t>(n) + 1, 0);
+  for (Index s = 0; s < ns; ++s) {
+    ++degree[static_cast<std::size_t>(m.springs.i[static_cast<std::size_t>(s)])];
+    ++degree[static_cast<std::size_t>(m.springs.j[static_cast<std::size_t>(s)])];
+  }
+  for (Index a = 0; a < n; ++a)
+    start[static_cast<std::size_t>(a) + 1] =
+        start[static_cast<std::size_t>(a)] + degree[static_cast<std::size_t>(a)];
+  std::vector<int> other(static_cast<std::size_t>(2 * ns)), spring(static_cast<std::size_t>(2 * ns));
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (Index s = 0; s < ns; ++s) {
+    const int a = m.springs.i[static_cast<std::size_t>(s)], b = m.springs.j[static_cast<std::size_t>(s)];
+    other[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)])] = b;
+    spring[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = s;
+    other[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)])] = a;
+    spring[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)]++)] = s;
+  }
+  // Rows: (node, first entry, end entry, slot); a heavy node's chunks get consecutive slots.
+  struct Row {
+    int node, begin, end, part;
+  };
+  std::vector<Row> rows;
+  SplitTableArrays<R> out;
+  out.chunk = chunk;
+  out.part_begin.push_back(0);
+  for (Index a = 0; a < n; ++a) {
+    const int b0 = start[static_cast<std::size_t>(a)], d = degree[static_cast<std::size_t>(a)];
+    if (d <= chunk) {
+      rows.push_back({static_cast<int>(a), b0, b0 + d, -1});
+      continue;
+    }
+    out.heavy_node.push_back(static_cast<int>(a));
+    for (int c = 0; c < d; c += chunk)
+      rows.push_back(
+          {static_cast<int>(a), b0 + c, b0 + std::min(d, c + chunk), out.part_begin.back() + c / chunk});
+    out.part_begin.push_back(out.part_begin.back() + (d + chunk - 1) / chunk);
+  }
+  std::vector<int> sizes(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) sizes[r] = rows[r].end - rows[r].begin;
+  const std::vector<int> order = table_row_order(sizes, RowOrder::Balanced, threads);
+  const auto R_ = static_cast<Index>(rows.size());
+  SpringTableArrays<R>& T = out.table;
+  T.nodes = n;
+  T.row_node.resize(rows.size());
+  out.part.resize(rows.size());
+  for (Index r = 0; r < R_; ++r) {
+    const Row& row = rows[static_cast<std::size_t>(order[static_cast<std::size_t>(r)])];
+    T.row_node[static_cast<std::size_t>(r)] = row.node;
+    out.part[static_cast<std::size_t>(r)] = row.part;
+  }
+  const Index slices = (R_ + hd::kSlice - 1) / hd::kSlice;
+  T.slice_begin.resize(static_cast<std::size_t>(slices));
+  T.slice_width.resize(static_cast<std::size_t>(slices));
+  long long total = 0;
+  for (Index sl = 0; sl < slices; ++sl) {
+    int w = 0;
+    for (Index r = sl * hd::kSlice; r < std::min<Index>(R_, (sl + 1) * hd::kSlice); ++r)
+      w = std::max(w, sizes[static_cast<std::size_t>(order[static_cast<std::size_t>(r)])]);
+    T.slice_begin[static_cast<std::size_t>(sl)] = static_cast<int>(total);
+    T.slice_width[static_cast<std::size_t>(sl)] = w;
+    total += static_cast<long long>(w) * hd::kSlice;
+  }
+  require(total < (1ll << 31), m.name, ": spring table of ", total, " entries exceeds 2^31");
+  const auto E = static_cast<std::size_t>(total);
+  T.other.assign(E, 0);
+  T.L0.assign(E, R(0));
+  T.k.assign(E, R(0));
+  T.kp.assign(E, R(0));
+  T.ik.assign(E, R(0));
+  for (Index sl = 0; sl < slices; ++sl)
+    for (int lane = 0; lane < hd::kSlice; ++lane) {
+      const Index r = sl * hd::kSlice + lane;
+      const Row& row =
+          rows[static_cast<std::size_t>(order[static_cast<std::size_t>(std::min<Index>(r, R_ - 1))])];
+      const int w = T.slice_width[static_cast<std::size_t>(sl)];
+      for (int j = 0; j < w; ++j) {
+        const auto e =
+            static_cast<std::size_t>(T.slice_begin[static_cast<std::size_t>(sl)] + j * hd::kSlice + lane);
+        T.other[e] = row.node;  // padding: the row's own node (zero length: skipped)
+        if (r >= R_ || row.begin + j >= row.end) continue;
+        const auto q = static_cast<std::size_t>(row.begin + j);
+        const auto us = static_cast<std::size_t>(spring[q]);
+        T.other[e] = other[q];
+        T.L0[e] = static_cast<R>(m.springs.L0[us]);
+        T.k[e] = static_cast<R>(m.springs.k[us]);
+        T.kp[e] = static_cast<R>(m.springs.kp[us]);
+        T.ik[e] = static_cast<R>(m.inv_k[spring[q]]);
+      }
+    }
+  return out;
+}
+
+template SplitTableArrays<double> make_split_table<double>(const Model&, int, int);
+template SplitTableArrays<float> make_split_table<float>(const Model&, int, int);
 
 template <class R>
 NodeArrayData<R> make_node_arrays(const Model& m) {
@@ -88,8 +234,8 @@ NodeArrayData<R> make_node_arrays(const Model& m) {
   return N;
 }
 
-template SpringTableArrays<double> make_spring_table<double>(const Model&);
-template SpringTableArrays<float> make_spring_table<float>(const Model&);
+template SpringTableArrays<double> make_spring_table<double>(const Model&, RowOrder, int);
+template SpringTableArrays<float> make_spring_table<float>(const Model&, RowOrder, int);
 template NodeArrayData<double> make_node_arrays<double>(const Model&);
 template NodeArrayData<float> make_node_arrays<float>(const Model&);
 

@@ -9,6 +9,7 @@
 
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/gpu/engine.hpp"
+#include "medspring/gpu/haptics.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/physics/integrators.hpp"
 
@@ -126,6 +127,34 @@ TEST(GpuErrors, BendingTermsAndTheImplicitIntegratorAreRefusedBeforeAnyDeviceWor
   EXPECT_THROW(gpu::parse_precision("fp16"), InvalidInput);
 }
 
+TEST(GpuKernelChoice, SmallModelBatchesRunOneBlockPerModelLargeModelsTheGrid) {
+  gpu::DeviceInfo h100;  // the properties an H100 SXM reports
+  h100.name = "H100 (assumed)";
+  h100.multiprocessors = 132;
+  h100.shared_per_block = 232448;
+  gpu::Options o;
+  using K = gpu::Options::Kernel;
+  // The case: 8,448 models of 500 nodes, fp64: 36 KB of state per block.
+  EXPECT_EQ(gpu::kernel_for(o, 8448, 500, h100), K::PerBlock);
+  EXPECT_EQ(gpu::kernel_for(o, 1, 500, h100), K::PerBlock);  // small: one launch per frame
+  EXPECT_EQ(gpu::kernel_for(o, 1, 1200, h100), K::Grid);     // one block would hold the card back
+  EXPECT_EQ(gpu::kernel_for(o, 2048, 3000, h100), K::PerBlock);
+  EXPECT_EQ(gpu::kernel_for(o, 1, 1000000, h100), K::Grid);
+  EXPECT_EQ(gpu::kernel_for(o, 4096, 4000, h100), K::Grid);  // 288 KB: does not fit
+  o.precision = gpu::Precision::Float;
+  EXPECT_EQ(gpu::kernel_for(o, 4096, 4000, h100), K::PerBlock);  // 144 KB in fp32
+  o.kernel = K::Grid;
+  EXPECT_EQ(gpu::kernel_for(o, 8448, 500, h100), K::Grid);
+  o.kernel = K::PerBlock;
+  o.precision = gpu::Precision::Double;
+  try {
+    gpu::kernel_for(o, 4096, 4000, h100);
+    ADD_FAILURE() << "a 4000-node fp64 model accepted in one block";
+  } catch (const gpu::GpuError& e) {
+    EXPECT_NE(std::string(e.what()).find("shared memory"), std::string::npos) << e.what();
+  }
+}
+
 // --- CPU agreement (need a device) -------------------------------------------------------------------
 
 TEST(GpuEngine, HybridKidneyFp64AgreesWithTheCpuOver10kSteps) {
@@ -203,6 +232,108 @@ TEST(GpuEngine, BatchOfKidneysEachFollowsItsOwnCpuRun) {
     EXPECT_EQ(e.step().substeps, subs);
   }
   for (int b = 0; b < B; ++b) EXPECT_LE(rel(e.positions(b), cpu[static_cast<std::size_t>(b)].x), 1e-12) << b;
+}
+
+// One block per model (shared-memory state, a frame per launch) against the CPU and the grid kernel.
+TEST(GpuEngine, OneBlockPerModelBatchOfKidneysEachFollowsItsOwnCpuRun) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  const int B = 4;
+  StepSettings s;
+  gpu::Options block, grid;
+  block.kernel = gpu::Options::Kernel::PerBlock;
+  grid.kernel = gpu::Options::Kernel::Grid;
+  gpu::Engine e({&m, &m, &m, &m}, s, block), g({&m, &m, &m, &m}, s, grid);
+  ASSERT_EQ(e.kernel(), gpu::Options::Kernel::PerBlock);
+  std::vector<State> cpu(B, make_state(m, s));
+  std::vector<std::vector<PointLoad>> loads;
+  for (int b = 0; b < B; ++b) {
+    loads.push_back(press(50 + 100 * b, Vec3(0, 0.1 * b, -0.2 - 0.2 * b)));
+    e.set_loads(b, loads.back());
+    g.set_loads(b, loads.back());
+  }
+  for (int f = 0; f < 2000; ++f) {
+    int subs = -1;
+    for (int b = 0; b < B; ++b) {
+      const StepStatus st = step(m, cpu[static_cast<std::size_t>(b)], s, &loads[static_cast<std::size_t>(b)]);
+      if (subs < 0) subs = st.substeps;
+      ASSERT_EQ(st.substeps, subs) << "frame " << f;
+    }
+    EXPECT_EQ(e.step().substeps, subs);
+    g.step();
+  }
+  for (int b = 0; b < B; ++b) {
+    EXPECT_LE(rel(e.positions(b), cpu[static_cast<std::size_t>(b)].x), 1e-12) << b;
+    EXPECT_LE(rel(e.velocities(b), cpu[static_cast<std::size_t>(b)].v), 1e-12) << b;
+    EXPECT_LE(rel(e.positions(b), g.positions(b)), 1e-12) << b;  // split rows: chunk sums
+  }
+}
+
+TEST(GpuEngine, OneBlockPerModelGuardRollsBackLikeTheCpu) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  const auto loads = press(223, Vec3(0, 0, -2000.0), 1e9);
+  StepSettings s;
+  State st = make_state(m, s);
+  gpu::Options o;
+  o.kernel = gpu::Options::Kernel::PerBlock;
+  gpu::Engine e({&m}, s, o);
+  e.set_loads(0, loads);
+  for (int f = 0; f < 30; ++f) {
+    const StepStatus a = step(m, st, s, &loads);
+    const StepStatus b = e.step();
+    ASSERT_EQ(static_cast<int>(a.code), static_cast<int>(b.code)) << "frame " << f;
+  }
+  EXPECT_GT(st.warnings.rollbacks, 0u);
+  EXPECT_EQ(e.warnings().rollbacks, st.warnings.rollbacks);
+  EXPECT_LE(rel(e.positions(0), st.x), 1e-9);
+}
+
+TEST(GpuEngine, HapticNodeReadDeliversTheContactNode) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  gpu::Engine e({&kidney.model(), &kidney.model()}, StepSettings{});
+  e.set_loads(1, press(223, Vec3(0, 0, -1.0)));
+  for (int f = 0; f < 50; ++f) e.step();
+  const MatX3 expected = e.positions(1);
+  e.request_node(1, 223);
+  Vec3 got;
+  bool ok = false;
+  for (int i = 0; i < 2000 && !ok; ++i) {
+    ok = e.poll_node(got);
+    if (!ok) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(ok);
+  EXPECT_EQ((got - expected.row(223).transpose()).norm(), 0.0);
+  EXPECT_FALSE(e.poll_node(got));
+  EXPECT_THROW(e.request_node(2, 0), InvalidInput);
+  EXPECT_THROW(e.request_node(0, 500), InvalidInput);
+}
+
+TEST(GpuEngine, HapticLoopPressesTheContactNodeThroughTheNodeRead) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  gpu::Engine e({&m}, StepSettings{});
+  const Index c = 223;
+  gpu::HapticLoop loop(e, 0, c);
+  const Vec3 x0 = m.x0.row(c).transpose();
+  const Vec3 tool = x0 + Vec3(0, 0, -3.0);  // 3 mm into the tissue
+  MatX3 before = e.positions(0);
+  for (int k = 0; k < 200; ++k) {
+    const long stale = loop.stale_ticks();
+    const Vec3 reaction = loop.tick(tool);
+    EXPECT_TRUE(reaction.allFinite());
+    EXPECT_LE(reaction.norm(), HapticSettings{}.f_max * (1 + 1e-12));
+    if (loop.stale_ticks() == stale) {  // the read of this tick was the previous tick's end state
+      EXPECT_EQ((loop.last().contact - before.row(c).transpose()).norm(), 0.0) << "tick " << k;
+    }
+    before = e.positions(0);
+  }
+  EXPECT_LT(before(c, 2) - x0.z(), -0.5);  // pulled towards the tool
+  EXPECT_THROW(gpu::HapticLoop(e, 1, c), InvalidInput);
 }
 
 TEST(GpuEngine, AsyncReadbackDeliversTheRequestedPositions) {

@@ -168,5 +168,74 @@ TEST(HdKernels, Fp32GatherFollowsTheFp64Engine) {
   EXPECT_LE(compare<float>(m, press(55, Vec3(0, 0, -0.8)), 200), 2e-5);
 }
 
+// The one-block-per-model algorithm (physics/kernels.hpp hd::block_rows, as block_frame_kernel runs it)
+// against step(): 120 nodes dealt to 64 threads (two rows per thread, degree order), soft springs, a
+// second load on the node; and in fp32.
+template <class R>
+double compare_block(const Model& m, const std::vector<PointLoad>& loads, int frames, int threads) {
+  StepSettings s;
+  State st = make_state(m, s);
+  testing::BlockStepper<R> blk(m, loads, threads);
+  double worst = 0, peak = 0;
+  for (int f = 0; f < frames; ++f) {
+    EXPECT_EQ(step(m, st, s, &loads).code, StepCode::Ok) << "frame " << f;
+    blk.frame(s);
+    worst = std::max({worst, relative_difference(blk.x, st.x), relative_difference(blk.v, st.v)});
+    peak = std::max(peak, (st.x - m.x0).cwiseAbs().maxCoeff());
+  }
+  EXPECT_EQ(blk.substeps, static_cast<long>(st.substeps));
+  EXPECT_EQ(blk.failures, 0);
+  EXPECT_GT(peak, 0.05);  // the load moved the model (mm): not a trivial match
+  ::testing::Test::RecordProperty(
+      sizeof(R) == 8 ? "block_max_relative_difference_fp64" : "block_max_relative_difference_fp32",
+      (std::ostringstream() << std::scientific << worst).str());
+  return worst;
+}
+
+TEST(HdKernels, OneBlockPerModelEqualsEngineStepSoftTube) {
+  const Model m = small_tube(true);
+  EXPECT_LE(compare_block<double>(m, press(65, Vec3(0.3, 0, -0.6)), 300, 64), 1e-13);
+}
+
+TEST(HdKernels, OneBlockPerModelFp32WithinTheStatedTolerance) {
+  const Model m = small_tube(false);
+  EXPECT_LE(compare_block<float>(m, press(55, Vec3(0, 0, -0.8)), 200, 64), 2e-5);
+}
+
+// Heavy rows split (kernels_split.hpp) with chunks of 3 springs: every tube node (pinned ones included)
+// is split, so phase 2 advances every free node from its chunks' partial sums; soft springs.
+TEST(HdKernels, SplitRowsEqualEngineStepSoftTube) {
+  const Model m = small_tube(true);
+  const auto loads = press(65, Vec3(0.3, 0, -0.6));
+  StepSettings s;
+  State st = make_state(m, s);
+  testing::SplitStepper<double> sp(m, loads, 64, 3);
+  ASSERT_EQ(sp.S.heavy_node.size(), static_cast<std::size_t>(m.num_nodes()));
+  double worst = 0, peak = 0;
+  for (int f = 0; f < 300; ++f) {
+    ASSERT_EQ(step(m, st, s, &loads).code, StepCode::Ok) << "frame " << f;
+    sp.frame(s);
+    worst = std::max({worst, relative_difference(sp.x, st.x), relative_difference(sp.v, st.v)});
+    peak = std::max(peak, (st.x - m.x0).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(peak, 0.05);
+  EXPECT_LE(worst, 1e-12);
+  EXPECT_EQ(sp.substeps, static_cast<long>(st.substeps));
+  EXPECT_NEAR(sp.stiffening, st.stiffening, 1e-9 * st.stiffening);
+  ::testing::Test::RecordProperty("split_max_relative_difference_fp64",
+                                  (std::ostringstream() << std::scientific << worst).str());
+}
+
+TEST(SpringTable, BalancedDealGivesEveryThreadAHeavyAndALightRowInTurn) {
+  // Degrees 9, 8, ..., 1 dealt to 4 threads: rounds forward, backward, forward.
+  const std::vector<int> degree{1, 2, 3, 4, 5, 6, 7, 8, 9};
+  const std::vector<int> rows = table_row_order(degree, RowOrder::Balanced, 4);
+  EXPECT_EQ(rows, (std::vector<int>{8, 7, 6, 5, 1, 2, 3, 4, 0}));
+  // HeavyLast: only rows over kHeavyDegree and twice the median move, by decreasing degree.
+  const std::vector<int> hybrid{6, 40, 6, 7, 30, 6, 5};
+  EXPECT_EQ(table_row_order(hybrid, RowOrder::HeavyLast, 0), (std::vector<int>{0, 2, 3, 5, 6, 1, 4}));
+  EXPECT_TRUE(table_row_order(hybrid, RowOrder::Nodes, 0).empty());
+}
+
 }  // namespace
 }  // namespace medspring

@@ -38,6 +38,7 @@ struct DeviceInfo {
   int major = 0, minor = 0;
   int multiprocessors = 0;
   std::size_t memory_bytes = 0;
+  std::size_t shared_per_block = 0;  // shared memory one block may use (opt-in limit; 227 KiB on an H100)
   int driver_version = 0, runtime_version = 0;  // e.g. 13000
 };
 
@@ -58,8 +59,20 @@ struct Options {
   /// Replay each frame as a CUDA graph (memset, load upload, substep kernels, readback of the frame's
   /// scalars): removes the launch gaps of small models. Captured once per substep count.
   bool graphs = true;
-  int block = 256;  // threads per block of the substep kernel
+  int block = 256;  // threads per block of the grid kernel
+  /// Grid: one thread per node, one launch per substep (large models). PerBlock: one thread block per
+  /// model, a frame's substeps in one launch with the model's positions and velocities in shared memory
+  /// (batches of small models). Auto: kernel_for() below.
+  enum class Kernel { Auto, Grid, PerBlock };
+  Kernel kernel = Kernel::Auto;
 };
+
+/// The kernel a batch of `batch` models of `nodes` nodes runs on `device` (docs/gpu.md): PerBlock when
+/// the option asks for it or, with Auto, when one model's state (9 n reals: two position buffers and
+/// the velocities) fits in the shared memory of one block and either the batch fills the card (batch >=
+/// the multiprocessors) or the model is small (n <= 1024: every thread of a 256-thread block gathers at
+/// most 4 nodes); otherwise Grid. GpuError when PerBlock is asked for and the state does not fit.
+Options::Kernel kernel_for(const Options& options, int batch, Index nodes, const DeviceInfo& device);
 
 /// B spring networks of the same topology (same nodes and spring ends; masses, damping, return springs,
 /// stiffnesses, rest positions and loads may differ per model) stepped together, one launch per
@@ -76,8 +89,10 @@ class Engine {
 
   int batch() const;
   Index nodes() const;
+  Options::Kernel kernel() const;  // Grid or PerBlock (kernel_for)
   const DeviceInfo& device() const;
   Precision precision() const;
+  const StepSettings& settings() const;
 
   /// Loads of model b, held until changed; evaluated at the start of every substep as step() does.
   void set_loads(int b, const std::vector<PointLoad>& loads);
@@ -98,6 +113,26 @@ class Engine {
   /// if one finished since the last poll (never blocks the GPU or waits for it).
   void request_positions();
   bool poll_positions(int b, MatX3& out);
+
+  /// The haptic loop's read (docs/gpu.md): request_node() enqueues a copy of node `node` of model b's
+  /// current position (3 reals, not the state) into pinned, double-buffered host memory after the work
+  /// issued so far; poll_node(out) returns true with the newest finished one (never waits for the GPU).
+  void request_node(int b, Index node);
+  bool poll_node(Vec3& out);
+
+  /// Device pointers of the current positions and velocities, (B, n, 3) row-major in the precision's
+  /// type, after the work issued so far has finished (synchronizes the engine's stream). Valid until the
+  /// next step(), upload() or time_substeps(): the engine alternates between two buffers. For zero-copy
+  /// hand-over (DLPack) to CuPy / PyTorch.
+  struct DeviceState {
+    void* x = nullptr;
+    void* v = nullptr;
+    int batch = 0;
+    Index nodes = 0;
+    Precision precision = Precision::Double;
+    int device = 0;
+  };
+  DeviceState device_state();
 
   double time() const;        // ms
   double stiffening() const;  // max kappa/k of the batch at the last stiffening evaluation

@@ -146,15 +146,18 @@ MEDSPRING_HD inline R load_scale(R t, R t_on, R t_ramp, R t_release, bool ramp_d
   return s;
 }
 
-/// Springs of every node as a sliced ELL table (slices of kSlice consecutive nodes, each stored
-/// column-major over the widest node of its slice, so that the threads of a warp read consecutive
-/// entries). The entries of a node are its springs in increasing spring index, each seen from that
-/// node: `other` is the spring's other end; padding entries point at the node itself (zero length:
-/// skipped). Built by gpu::make_spring_table (src/gpu/spring_table.cpp).
+/// Springs of every node as a sliced ELL table of rows (slices of kSlice consecutive rows, each stored
+/// column-major over the widest row of its slice, so that the threads of a warp read consecutive
+/// entries). Row r holds the springs of node row_node[r] (identity when row_node is null) in increasing
+/// spring index, each seen from that node: `other` is the spring's other end; padding entries point at
+/// the node itself (zero length: skipped). The row order balances the work (RowOrder in
+/// spring_table.hpp: heavy rows such as the kidney's atoms grouped into their own warps); a node's
+/// terms and their order do not depend on it. Built by make_spring_table (physics/spring_table.hpp).
 inline constexpr int kSlice = 32;
 template <class R>
 struct SpringTable {
   int nodes = 0;
+  const int* row_node = nullptr;     // (nodes) node of row r; null: row r is node r
   const int* slice_begin = nullptr;  // (slices) first entry of the slice
   const int* slice_width = nullptr;  // (slices) entries per node in the slice
   const int* other = nullptr;        // (entries) other end node
@@ -164,13 +167,20 @@ struct SpringTable {
   const R* ik = nullptr;             // (entries) 1/k (0 for k = 0)
 };
 
-/// Adds the spring forces on node a (positions x, interleaved xyz) to f[0..3), in increasing spring
-/// index: the same terms, summed in the same order, as the CPU's serial spring pass.
+/// Node of table row r.
+template <class R>
+MEDSPRING_HD inline int row_node(const SpringTable<R>& T, int r) {
+  return T.row_node ? T.row_node[r] : r;
+}
+
+/// Adds the spring forces on node a = row_node(T, r) (positions x, interleaved xyz) to f[0..3), in
+/// increasing spring index: the same terms, summed in the same order, as the CPU's serial spring pass.
 template <bool Soft, bool Stiff, class R>
-MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int a, const R* x, R& stiff, R* f) {
-  const int slice = a / kSlice;
+MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, int a, const R* x, R& stiff,
+                                              R* f) {
+  const int slice = r / kSlice;
   const int w = T.slice_width[slice];
-  int e = T.slice_begin[slice] + (a - slice * kSlice);
+  int e = T.slice_begin[slice] + (r - slice * kSlice);
   const R xa = x[3 * a], ya = x[3 * a + 1], za = x[3 * a + 2];
   for (int j = 0; j < w; ++j, e += kSlice) {
     const int b = T.other[e];
@@ -199,12 +209,14 @@ struct NodeArrays {
 /// Outcome codes of one node's update (the guard, §2.5).
 inline constexpr int kNodeOk = 0, kNodeTooFast = 1, kNodeNonFinite = 2;
 
-/// One fused substep of node a: force (external load from `loads` rows, return spring, springs) and
-/// symplectic update with implicit damping, reading x, v and writing xo, vo (distinct buffers: every
-/// node reads its neighbours' old positions). A pinned node keeps x and v. Returns a kNode* code.
+/// One fused substep of the node of table row r: force (external load from `loads` rows, return spring,
+/// springs) and symplectic update with implicit damping, reading x, v and writing xo, vo. x and xo are
+/// distinct buffers (every node reads its neighbours' old positions); v and vo may be one buffer (a node
+/// reads only its own velocity, before writing it). A pinned node keeps x and v. Returns a kNode* code.
 template <bool Soft, bool Stiff, class R>
-MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R>& T, int a, R h, R vmax2,
+MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R>& T, int r, R h, R vmax2,
                                      const R* loads, const R* x, const R* v, R* xo, R* vo, R& stiff) {
+  const int a = row_node(T, r);
   const int q = 3 * a;
   if (N.fixed[a]) {
     xo[q] = x[q];
@@ -215,7 +227,7 @@ MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R
     vo[q + 2] = v[q + 2];
     if constexpr (Stiff) {  // its springs still count for the stability measure
       R g[3] = {R(0), R(0), R(0)};
-      gather_spring_forces<Soft, true>(T, a, x, stiff, g);
+      gather_spring_forces<Soft, true>(T, r, a, x, stiff, g);
     }
     return kNodeOk;
   }
@@ -228,7 +240,7 @@ MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R
   }
   R g[3];
   return_force(fe, x + q, N.x0 + q, N.kr[a], g);
-  gather_spring_forces<Soft, Stiff>(T, a, x, stiff, g);
+  gather_spring_forces<Soft, Stiff>(T, r, a, x, stiff, g);
   const R mass = N.mass[a];
   const R c = step_coefficient(mass, N.damping[a], h);
   R vn[3];
@@ -239,6 +251,21 @@ MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R
   symplectic_position(h, x + q, vn, xo + q);
   if (!velocity_ok(v2, vmax2)) return isfinite(v2) ? kNodeTooFast : kNodeNonFinite;
   return kNodeOk;
+}
+
+/// One thread's share of a substep in the one-block-per-model kernel (docs/gpu.md): rows t, t + threads,
+/// ... of the table, reading positions x and writing xo (the block's two position buffers), velocities v
+/// updated in place. Returns the largest kNode* code of its rows. The kernel runs it on every thread of
+/// the block between barriers; the CPU-side test runs it for t = 0 .. threads - 1 in turn.
+template <bool Soft, bool Stiff, class R>
+MEDSPRING_HD inline int block_rows(const NodeArrays<R>& N, const SpringTable<R>& T, int t, int threads, R h,
+                                   R vmax2, const R* loads, const R* x, R* v, R* xo, R& stiff) {
+  int code = kNodeOk;
+  for (int r = t; r < N.nodes; r += threads) {
+    const int c = node_substep<Soft, Stiff>(N, T, r, h, vmax2, loads, x, v, xo, v, stiff);
+    code = c > code ? c : code;
+  }
+  return code;
 }
 
 }  // namespace medspring::hd

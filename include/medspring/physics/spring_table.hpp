@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "medspring/physics/kernels.hpp"
+#include "medspring/physics/kernels_split.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/physics/model.hpp"
 
@@ -16,20 +17,65 @@ namespace medspring {
 template <class R>
 struct SpringTableArrays {
   int nodes = 0;
+  std::vector<int> row_node;  // node of each row; empty: row r is node r
   std::vector<int> slice_begin, slice_width, other;
   std::vector<R> L0, k, kp, ik;
   std::size_t entries() const { return other.size(); }
   hd::SpringTable<R> view() const {
-    return {nodes,     slice_begin.data(), slice_width.data(), other.data(),
-            L0.data(), k.data(),           kp.data(),          ik.data()};
+    return {nodes,
+            row_node.empty() ? nullptr : row_node.data(),
+            slice_begin.data(),
+            slice_width.data(),
+            other.data(),
+            L0.data(),
+            k.data(),
+            kp.data(),
+            ik.data()};
   }
 };
 
+/// Order of the table's rows (load balance, docs/gpu.md). A node's terms and their order are the same
+/// in every order; only which thread (and warp) gathers which node changes.
+enum class RowOrder {
+  Nodes,      // row r = node r
+  HeavyLast,  // node order, except rows of more than kHeavyDegree springs (and more than twice the
+              // median degree: the kidney's atoms), moved to the end by decreasing degree, so that they
+              // fill warps of their own and light nodes are not padded to their width; locality of
+              // the other nodes kept (the grid kernel of large models)
+  Balanced,   // by decreasing degree, dealt to `threads` threads in snake order (round j runs forward
+              // for even j, backward for odd j): in the one-block-per-model kernel thread t takes rows
+              // t, t + threads, ... so every thread gets a heavy and a light row in turn, and each warp's
+              // rows have similar degrees
+};
+inline constexpr int kHeavyDegree = 16;
+
 /// The sliced ELL table of a finalized model: each node's springs in increasing spring index (the order
-/// of the CPU's serial spring pass). Throws InvalidInput for a model with bending terms (not a spring
-/// network: the gather has no three-node terms).
+/// of the CPU's serial spring pass), rows in `order` (`threads`: the block size, for Balanced). Throws
+/// InvalidInput for a model with bending terms (not a spring network: the gather has no three-node
+/// terms).
 template <class R>
-SpringTableArrays<R> make_spring_table(const Model& model);
+SpringTableArrays<R> make_spring_table(const Model& model, RowOrder order = RowOrder::Nodes, int threads = 0);
+
+/// The one-block-per-model kernel's table with heavy rows split (hd::SplitRows, kernels_split.hpp): a node
+/// of more than `chunk` springs becomes ceil(degree / chunk) rows of consecutive springs (in spring
+/// order); all rows are dealt by size to `threads` threads in snake order as RowOrder::Balanced.
+/// chunk <= 0: ceil(2 springs / threads), at least 8 (the mean work of a thread).
+template <class R>
+struct SplitTableArrays {
+  SpringTableArrays<R> table;  // table.row_node: the node of each row (rows = table.row_node.size())
+  std::vector<int> part, heavy_node, part_begin;
+  int chunk = 0;
+  int parts() const { return part_begin.empty() ? 0 : part_begin.back(); }
+  hd::SplitRows view() const {
+    return {static_cast<int>(part.size()), part.data(), static_cast<int>(heavy_node.size()),
+            heavy_node.data(), part_begin.data()};
+  }
+};
+template <class R>
+SplitTableArrays<R> make_split_table(const Model& model, int threads, int chunk = 0);
+
+/// The row order alone (node of each row; empty for RowOrder::Nodes) from the node degrees.
+std::vector<int> table_row_order(const std::vector<int>& degree, RowOrder order, int threads);
 
 /// hd::NodeArrays' arrays. load_slot is -1 everywhere until set_load_slots.
 template <class R>

@@ -8,6 +8,22 @@ import os
 import sys
 
 
+def _cuda_refusal() -> str:
+    """Why --device cuda cannot run here ("" when it can): no CUDA backend in the build, no usable device,
+    or (with both) the study runner's GPU path, which is not written yet (docs/gpu.md, "Python")."""
+    try:
+        from .. import gpu
+    except ImportError as e:  # the compiled module itself is missing
+        return f"the medspring package cannot be imported ({e})"
+    if not gpu.built():
+        return "this build has no CUDA backend (MEDSPRING_CUDA, docs/gpu.md)"
+    ok, why = gpu.available()
+    if not ok:
+        return why.splitlines()[0] if why else "no usable CUDA device"
+    return ("the study runner's GPU path is not written yet: its metrics are computed by the CPU scene run "
+            "(medspring.gpu.Engine steps batches from Python, docs/gpu.md)")
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(
         prog="medspring study",
@@ -29,14 +45,16 @@ def main(argv=None) -> int:
                    help="also time RUNS runs on 1..N local workers (N = --workers or every core) for the report")
     p.add_argument("--max-batches", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--device", choices=["cpu", "cuda"], default="cpu",
-                   help="where the runs step: cpu (default); cuda is refused for now (docs/gpu.md)")
+                   help="where the runs step: cpu (default) or cuda (docs/gpu.md)")
     a = p.parse_args(argv)
     if a.device == "cuda":
-        # No silent fallback: the CUDA backend (gpu::Engine, docs/gpu.md) has no Python binding yet, so
-        # the runner cannot batch a study's runs on the GPU.
-        print("medspring study: --device cuda: the study runner cannot step on the GPU yet (the CUDA backend "
-              "is C++ only, docs/gpu.md); run it on the CPU engine with --device cpu", file=sys.stderr)
-        return 2
+        # No silent fallback (docs/gpu.md): a build without the CUDA backend or a machine without a usable
+        # device is refused in one line naming the reason and --device cpu.
+        why = _cuda_refusal()
+        if why:
+            print(f"medspring study: --device cuda: {why}; run it on the CPU engine with --device cpu",
+                  file=sys.stderr)
+            return 2
     if a.workers is not None and a.workers < 0:
         print("medspring study: --workers: must be >= 0", file=sys.stderr)
         return 2

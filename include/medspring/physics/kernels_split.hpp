@@ -1,0 +1,90 @@
+// Heavy rows split across threads in the one-block-per-model kernel (docs/gpu.md, "Load balance"): a node
+// with more springs than a chunk (the hybrid kidney's atoms, up to 74 spokes) is gathered as several table
+// rows of at most `chunk` springs each, by different threads; each writes its partial force to a slot,
+// and after a barrier one thread sums the node's slots in spring order and advances the node. The other
+// nodes run hd::node_substep unchanged. MEDSPRING_HD like kernels.hpp: the CUDA kernel and the CPU-side
+// test run these functions.
+#pragma once
+
+#include "medspring/physics/kernels.hpp"
+
+namespace medspring::hd {
+
+/// The split rows of a table built by make_split_table (physics/spring_table.hpp).
+struct SplitRows {
+  int rows = 0;                     // table rows (whole nodes + chunks)
+  const int* part = nullptr;        // (rows) -1: the row is a whole node; else the chunk's slot
+  int heavy = 0;                    // split nodes
+  const int* heavy_node = nullptr;  // (heavy) node
+  const int* part_begin = nullptr;  // (heavy + 1) slots of split node h: part_begin[h] .. part_begin[h+1]
+};
+
+/// Phase 1 of a substep for thread t: whole rows as block_rows does (x read, xo written, v in place);
+/// chunk rows write their springs' force sum to parts[3 slot ..]. Returns the largest kNode* code.
+template <bool Soft, bool Stiff, class R>
+MEDSPRING_HD inline int split_phase1(const NodeArrays<R>& N, const SpringTable<R>& T, const SplitRows& S,
+                                     int t, int threads, R h, R vmax2, const R* loads, const R* x, R* v,
+                                     R* xo, R* parts, R& stiff) {
+  int code = kNodeOk;
+  for (int r = t; r < S.rows; r += threads) {
+    const int p = S.part[r];
+    if (p < 0) {
+      const int c = node_substep<Soft, Stiff>(N, T, r, h, vmax2, loads, x, v, xo, v, stiff);
+      code = c > code ? c : code;
+    } else {
+      R f[3] = {R(0), R(0), R(0)};
+      gather_spring_forces<Soft, Stiff>(T, r, row_node(T, r), x, stiff, f);
+      parts[3 * p] = f[0];
+      parts[3 * p + 1] = f[1];
+      parts[3 * p + 2] = f[2];
+    }
+  }
+  return code;
+}
+
+/// Phase 2 (after a barrier) for thread t: each split node h = t, t + threads, ...: load and return
+/// spring, plus its chunks' sums in spring order, then node_substep's update (a pinned node keeps x, v).
+template <class R>
+MEDSPRING_HD inline int split_phase2(const NodeArrays<R>& N, const SplitRows& S, int t, int threads, R h,
+                                     R vmax2, const R* loads, const R* x, R* v, R* xo, const R* parts) {
+  int code = kNodeOk;
+  for (int k = t; k < S.heavy; k += threads) {
+    const int a = S.heavy_node[k];
+    const int q = 3 * a;
+    if (N.fixed[a]) {
+      xo[q] = x[q];
+      xo[q + 1] = x[q + 1];
+      xo[q + 2] = x[q + 2];
+      continue;
+    }
+    R fe[3] = {R(0), R(0), R(0)};
+    const int slot = N.load_slot[a];
+    if (slot >= 0) {
+      fe[0] = loads[3 * slot];
+      fe[1] = loads[3 * slot + 1];
+      fe[2] = loads[3 * slot + 2];
+    }
+    R g[3];
+    return_force(fe, x + q, N.x0 + q, N.kr[a], g);
+    for (int p = S.part_begin[k]; p < S.part_begin[k + 1]; ++p) {
+      g[0] += parts[3 * p];
+      g[1] += parts[3 * p + 1];
+      g[2] += parts[3 * p + 2];
+    }
+    const R mass = N.mass[a];
+    const R c = step_coefficient(mass, N.damping[a], h);
+    R vn[3];
+    const R v2 = symplectic_velocity(mass, c, h, v + q, g, vn);
+    v[q] = vn[0];
+    v[q + 1] = vn[1];
+    v[q + 2] = vn[2];
+    symplectic_position(h, x + q, vn, xo + q);
+    if (!velocity_ok(v2, vmax2)) {
+      const int e = isfinite(v2) ? kNodeTooFast : kNodeNonFinite;
+      code = e > code ? e : code;
+    }
+  }
+  return code;
+}
+
+}  // namespace medspring::hd

@@ -1,0 +1,349 @@
+// The GPU engine's backend: construction (the spring table and node arrays of every model on the
+// device), loads, state transfers and the asynchronous readback (docs/gpu.md).
+#include "backend.hpp"
+
+#include <cstring>
+
+#include "medspring/core/check.hpp"
+
+namespace medspring::gpu::detail {
+
+namespace {
+
+// Same topology: node count and spring ends.
+void require_same_topology(const Model& a, const Model& b, int index) {
+  const bool same =
+      a.num_nodes() == b.num_nodes() && a.springs.i == b.springs.i && a.springs.j == b.springs.j;
+  if (!same)
+    throw GpuError(cat("gpu::Engine: model ", index, " ('", b.name, "') has another topology than model 0 ('",
+                       a.name, "'): a batch needs the same nodes and spring ends; run it in its own Engine"));
+}
+
+}  // namespace
+
+template <class R>
+Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, const Options& o,
+                    const DeviceInfo& dev) {
+  device = dev;
+  precision = std::is_same_v<R, double> ? Precision::Double : Precision::Float;
+  models = ms;
+  settings = s;
+  options = o;
+  B = static_cast<int>(ms.size());
+  const Model& m0 = *ms[0];
+  n = m0.num_nodes();
+  check(cudaSetDevice(dev.index), "selecting the device");
+  check(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "creating a stream");
+  check(cudaStreamCreateWithFlags(&copy_stream, cudaStreamNonBlocking), "creating a stream");
+  for (int w = 0; w < 2; ++w) {
+    check(cudaEventCreateWithFlags(&staged[w], cudaEventDisableTiming), "creating an event");
+    check(cudaEventCreateWithFlags(&copied[w], cudaEventDisableTiming), "creating an event");
+  }
+  const auto un = static_cast<std::size_t>(n);
+  const auto uB = static_cast<std::size_t>(B);
+  // The kernel, and the table for it (load balance, docs/gpu.md): heavy rows split into chunks and all
+  // rows dealt by size over the block's threads for one block per model (make_split_table); heavy rows
+  // in warps of their own for the grid kernel (RowOrder::HeavyLast).
+  kernel = kernel_for(o, B, n, dev);
+  per_block = kernel == Options::Kernel::PerBlock;
+  block_threads = std::min(kBlockThreads, std::max(32, (n + 31) / 32 * 32));
+  SplitTableArrays<R> S0;
+  if (per_block) {
+    S0 = make_split_table<R>(m0, block_threads);
+    const std::size_t bytes = block_shared_bytes<R>(n, S0.parts());
+    if (bytes + 32 * sizeof(double) > dev.shared_per_block) {  // the chunks' slots did not fit after all
+      if (o.kernel == Options::Kernel::PerBlock)
+        throw GpuError(cat("GPU: one block per model needs ", bytes + 32 * sizeof(double),
+                           " bytes of shared memory for '", m0.name, "'; the device allows ",
+                           dev.shared_per_block, " per block: use the grid kernel (Auto)"));
+      per_block = false;
+      kernel = Options::Kernel::Grid;
+    }
+  }
+  if (per_block) {
+    parts = S0.parts();
+    check(prepare_block_frame<R>(block_shared_bytes<R>(n, parts)),
+          "allocating shared memory for the block kernel");
+    split_rows = static_cast<int>(S0.part.size());
+    split_heavy = static_cast<int>(S0.heavy_node.size());
+    part.allocate(S0.part.size(), "allocating the spring table");
+    part.upload(S0.part.data(), S0.part.size(), 0, "uploading the spring table");
+    heavy_node.allocate(S0.heavy_node.size(), "allocating the spring table");
+    heavy_node.upload(S0.heavy_node.data(), S0.heavy_node.size(), 0, "uploading the spring table");
+    part_begin.allocate(S0.part_begin.size(), "allocating the spring table");
+    part_begin.upload(S0.part_begin.data(), S0.part_begin.size(), 0, "uploading the spring table");
+  }
+  auto table_of = [&](const Model& m) {
+    return per_block ? make_split_table<R>(m, block_threads).table
+                     : make_spring_table<R>(m, RowOrder::HeavyLast);
+  };
+  // Topology from model 0, parameters from every model.
+  const SpringTableArrays<R> T0 = per_block ? std::move(S0.table) : table_of(m0);
+  entries = T0.entries();
+  if (!T0.row_node.empty()) {
+    row_node.allocate(T0.row_node.size(), "allocating the spring table");
+    row_node.upload(T0.row_node.data(), T0.row_node.size(), 0, "uploading the spring table");
+  }
+  slice_begin.allocate(T0.slice_begin.size(), "allocating the spring table");
+  slice_begin.upload(T0.slice_begin.data(), T0.slice_begin.size(), 0, "uploading the spring table");
+  slice_width.allocate(T0.slice_width.size(), "allocating the spring table");
+  slice_width.upload(T0.slice_width.data(), T0.slice_width.size(), 0, "uploading the spring table");
+  other.allocate(entries, "allocating the spring table");
+  other.upload(T0.other.data(), entries, 0, "uploading the spring table");
+  for (DeviceArray<R>* a : {&L0, &k, &kp, &ik}) a->allocate(entries * uB, "allocating the spring table");
+  for (DeviceArray<R>* a : {&mass, &damping, &kr}) a->allocate(un * uB, "allocating the node arrays");
+  x0.allocate(3 * un * uB, "allocating the node arrays");
+  fixed.allocate(un * uB, "allocating the node arrays");
+  load_slot.allocate(un * uB, "allocating the node arrays");
+  for (int p = 0; p < 2; ++p) {
+    xb[p].allocate(3 * un * uB, "allocating the state");
+    vb[p].allocate(3 * un * uB, "allocating the state");
+  }
+  std::vector<R> zero(3 * un, R(0));
+  for (int b = 0; b < B; ++b) {
+    const Model& m = *ms[static_cast<std::size_t>(b)];
+    if (b > 0) require_same_topology(m0, m, b);
+    soft = soft || m.has_soft_springs;
+    const bool same = b > 0 && &m == &m0;  // a batch of one model: its arrays once
+    const SpringTableArrays<R> T = b == 0 || same ? SpringTableArrays<R>{} : table_of(m);
+    const SpringTableArrays<R>& Tb = b == 0 || same ? T0 : T;
+    const auto ub = static_cast<std::size_t>(b);
+    L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
+    k.upload(Tb.k.data(), entries, ub * entries, "uploading the spring table");
+    kp.upload(Tb.kp.data(), entries, ub * entries, "uploading the spring table");
+    ik.upload(Tb.ik.data(), entries, ub * entries, "uploading the spring table");
+    const NodeArrayData<R> N = make_node_arrays<R>(m);
+    x0.upload(N.x0.data(), 3 * un, ub * 3 * un, "uploading the node arrays");
+    mass.upload(N.mass.data(), un, ub * un, "uploading the node arrays");
+    damping.upload(N.damping.data(), un, ub * un, "uploading the node arrays");
+    kr.upload(N.kr.data(), un, ub * un, "uploading the node arrays");
+    fixed.upload(N.fixed.data(), un, ub * un, "uploading the node arrays");
+    load_slot.upload(N.load_slot.data(), un, ub * un, "uploading the node arrays");
+    for (int p = 0; p < 2; ++p) {
+      xb[p].upload(N.x0.data(), 3 * un, ub * 3 * un, "uploading the state");
+      vb[p].upload(zero.data(), 3 * un, ub * 3 * un, "uploading the state");
+    }
+  }
+  loads.assign(uB, {});
+  slots.assign(uB, LoadSlots{{}, std::vector<int>(un, -1)});
+  rows = 1;
+  scalars_host_init.allocate(1, "allocating pinned memory");
+  *scalars_host_init.p = scalars_init;
+  scalars_host.allocate(1, "allocating pinned memory");
+  scalars_dev.allocate(1, "allocating the frame scalars");
+  ensure_capacity(std::max<long>(8, 1));
+  seen.assign(uB, 0);
+}
+
+template <class R>
+Backend<R>::~Backend() {
+  clear_graphs();
+  if (stream) cudaStreamSynchronize(stream);
+  if (copy_stream) cudaStreamSynchronize(copy_stream);
+  for (int w = 0; w < 2; ++w) {
+    for (cudaEvent_t e : {staged[w], copied[w], node_staged[w], node_copied[w]})
+      if (e) cudaEventDestroy(e);
+  }
+  if (stream) cudaStreamDestroy(stream);
+  if (copy_stream) cudaStreamDestroy(copy_stream);
+}
+
+template <class R>
+void Backend<R>::clear_graphs() {
+  for (auto& g : graphs) cudaGraphExecDestroy(g.second);
+  graphs.clear();
+}
+
+template <class R>
+std::size_t Backend<R>::row_count(long subs) const {
+  return static_cast<std::size_t>(subs) * static_cast<std::size_t>(B) * 3 * static_cast<std::size_t>(rows);
+}
+
+template <class R>
+void Backend<R>::ensure_capacity(long subs) {
+  if (subs <= capacity) return;
+  check(cudaStreamSynchronize(stream), "finishing the work in flight");
+  clear_graphs();
+  capacity = std::max(subs, 2 * capacity);
+  rows_host.allocate(row_count(capacity), "allocating pinned memory for the load table");
+  rows_dev.allocate(row_count(capacity), "allocating the load table");
+  stiff_dev.allocate(static_cast<std::size_t>(capacity), "allocating the stiffening slots");
+  stiff_host.allocate(static_cast<std::size_t>(capacity), "allocating pinned memory");
+}
+
+template <class R>
+void Backend<R>::set_loads(int b, const std::vector<PointLoad>& L) {
+  require(b >= 0 && b < B, "gpu::Engine::set_loads: model ", b, " out of range (batch of ", B, ")");
+  LoadSlots S = make_load_slots(L, n);
+  const auto ub = static_cast<std::size_t>(b);
+  if (S.nodes == slots[ub].nodes) {  // the same loaded nodes (a haptic tick): only the forces change,
+    loads[ub] = L;                   // which the host's load table of the next frame picks up
+    return;
+  }
+  check(cudaStreamSynchronize(stream), "finishing the work in flight");
+  loads[ub] = L;
+  slots[ub] = std::move(S);
+  load_slot.upload(slots[ub].slot.data(), static_cast<std::size_t>(n), ub * static_cast<std::size_t>(n),
+                   "uploading the load slots");
+  int r = 1;
+  for (const LoadSlots& s : slots) r = std::max(r, static_cast<int>(s.nodes.size()));
+  if (r != rows) {  // the load table's shape changed: resize it, recapture the graphs
+    rows = r;
+    const long c = capacity;
+    capacity = 0;
+    ensure_capacity(c);
+  }
+}
+
+template <class R>
+void Backend<R>::upload(int b, const State& st) {
+  require(b >= 0 && b < B, "gpu::Engine::upload: model ", b, " out of range (batch of ", B, ")");
+  require(st.x.rows() == n && st.v.rows() == n, "gpu::Engine::upload: state of ", st.x.rows(),
+          " nodes for a model of ", n);
+  check(cudaStreamSynchronize(stream), "finishing the work in flight");
+  std::vector<R> h(3 * static_cast<std::size_t>(n));
+  const auto off = static_cast<std::size_t>(b) * h.size();
+  for (std::size_t q = 0; q < h.size(); ++q) h[q] = static_cast<R>(st.x.data()[q]);
+  xb[cur].upload(h.data(), h.size(), off, "uploading the state");
+  for (std::size_t q = 0; q < h.size(); ++q) h[q] = static_cast<R>(st.v.data()[q]);
+  vb[cur].upload(h.data(), h.size(), off, "uploading the state");
+  if (b == 0) {
+    t = st.t;
+    stiffening = st.stiffening;
+  }
+}
+
+template <class R>
+MatX3 Backend<R>::fetch(int b, bool velocities) {
+  require(b >= 0 && b < B, "gpu::Engine: model ", b, " out of range (batch of ", B, ")");
+  check(cudaStreamSynchronize(stream), "finishing the work in flight");
+  std::vector<R> h(3 * static_cast<std::size_t>(n));
+  const DeviceArray<R>& src = velocities ? vb[cur] : xb[cur];
+  check(cudaMemcpy(h.data(), src.p + static_cast<std::size_t>(b) * h.size(), h.size() * sizeof(R),
+                   cudaMemcpyDeviceToHost),
+        "copying the state back");
+  MatX3 out(n, 3);
+  for (std::size_t q = 0; q < h.size(); ++q) out.data()[q] = static_cast<double>(h[q]);
+  return out;
+}
+
+template <class R>
+void Backend<R>::request_positions() {
+  const int w = next_snap;
+  const std::size_t count = 3 * static_cast<std::size_t>(n) * static_cast<std::size_t>(B);
+  if (!staging[w].p) {
+    staging[w].allocate(count, "allocating the readback staging buffer");
+    snapshot[w].allocate(count, "allocating pinned memory for the readback");
+  }
+  // The staging buffer may still be read by its previous host copy: the compute stream waits for it
+  // (only when requests come faster than the PCIe copies finish).
+  if (requested[w]) check(cudaStreamWaitEvent(stream, copied[w], 0), "ordering the readback");
+  check(cudaMemcpyAsync(staging[w].p, xb[cur].p, count * sizeof(R), cudaMemcpyDeviceToDevice, stream),
+        "staging the readback");
+  check(cudaEventRecord(staged[w], stream), "ordering the readback");
+  check(cudaStreamWaitEvent(copy_stream, staged[w], 0), "ordering the readback");
+  check(cudaMemcpyAsync(snapshot[w].p, staging[w].p, count * sizeof(R), cudaMemcpyDeviceToHost, copy_stream),
+        "reading back the positions");
+  check(cudaEventRecord(copied[w], copy_stream), "ordering the readback");
+  requested[w] = true;
+  snap_seq[w] = next_seq++;
+  next_snap = 1 - w;
+}
+
+template <class R>
+bool Backend<R>::poll_positions(int b, MatX3& out) {
+  require(b >= 0 && b < B, "gpu::Engine: model ", b, " out of range (batch of ", B, ")");
+  int best = -1;
+  for (int w = 0; w < 2; ++w) {
+    if (!requested[w] || snap_seq[w] <= seen[static_cast<std::size_t>(b)]) continue;
+    const cudaError_t e = cudaEventQuery(copied[w]);
+    if (e == cudaErrorNotReady) continue;
+    check(e, "reading back the positions");
+    if (best < 0 || snap_seq[w] > snap_seq[best]) best = w;
+  }
+  if (best < 0) return false;
+  out.resize(n, 3);
+  const R* src = snapshot[best].p + static_cast<std::size_t>(b) * 3 * static_cast<std::size_t>(n);
+  for (Index q = 0; q < 3 * n; ++q) out.data()[q] = static_cast<double>(src[q]);
+  seen[static_cast<std::size_t>(b)] = snap_seq[best];
+  return true;
+}
+
+template <class R>
+void Backend<R>::request_node(int b, Index node) {
+  require(b >= 0 && b < B, "gpu::Engine::request_node: model ", b, " out of range (batch of ", B, ")");
+  require(node >= 0 && node < n, "gpu::Engine::request_node: node ", node, " out of range (", n, " nodes)");
+  if (!node_staging.p) {
+    node_staging.allocate(6, "allocating the node readback");
+    node_host.allocate(6, "allocating pinned memory for the node readback");
+    for (int w = 0; w < 2; ++w) {
+      check(cudaEventCreateWithFlags(&node_staged[w], cudaEventDisableTiming), "creating an event");
+      check(cudaEventCreateWithFlags(&node_copied[w], cudaEventDisableTiming), "creating an event");
+    }
+  }
+  const int w = node_next;
+  // As request_positions, for 3 reals: staged on the compute stream (ordered after the substeps issued
+  // so far, before the buffer is written again), copied to pinned memory on the copy stream.
+  if (node_requested[w]) check(cudaStreamWaitEvent(stream, node_copied[w], 0), "ordering the node readback");
+  const std::size_t at =
+      (static_cast<std::size_t>(b) * static_cast<std::size_t>(n) + static_cast<std::size_t>(node)) * 3;
+  check(cudaMemcpyAsync(node_staging.p + 3 * w, xb[cur].p + at, 3 * sizeof(R), cudaMemcpyDeviceToDevice,
+                        stream),
+        "staging the node readback");
+  check(cudaEventRecord(node_staged[w], stream), "ordering the node readback");
+  check(cudaStreamWaitEvent(copy_stream, node_staged[w], 0), "ordering the node readback");
+  check(cudaMemcpyAsync(node_host.p + 3 * w, node_staging.p + 3 * w, 3 * sizeof(R), cudaMemcpyDeviceToHost,
+                        copy_stream),
+        "reading back the node");
+  check(cudaEventRecord(node_copied[w], copy_stream), "ordering the node readback");
+  node_requested[w] = true;
+  node_seq[w] = next_seq++;
+  node_next = 1 - w;
+}
+
+template <class R>
+bool Backend<R>::poll_node(Vec3& out) {
+  int best = -1;
+  for (int w = 0; w < 2; ++w) {
+    if (!node_requested[w] || node_seq[w] <= node_seen) continue;
+    const cudaError_t e = cudaEventQuery(node_copied[w]);
+    if (e == cudaErrorNotReady) continue;
+    check(e, "reading back the node");
+    if (best < 0 || node_seq[w] > node_seq[best]) best = w;
+  }
+  if (best < 0) return false;
+  const R* p = node_host.p + 3 * best;
+  out = Vec3(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
+  node_seen = node_seq[best];
+  return true;
+}
+
+template <class R>
+Engine::DeviceState Backend<R>::device_state() {
+  check(cudaStreamSynchronize(stream), "finishing the work in flight");
+  Engine::DeviceState d;
+  d.x = xb[cur].p;
+  d.v = vb[cur].p;
+  d.batch = B;
+  d.nodes = n;
+  d.precision = precision;
+  d.device = device.index;
+  return d;
+}
+
+template <class R>
+std::size_t Backend<R>::device_bytes() const {
+  std::size_t total = 0;
+  for (const DeviceArray<R>* a :
+       {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &xb[0], &xb[1], &vb[0], &vb[1]})
+    total += a->n * sizeof(R);
+  total += fixed.n + (load_slot.n + row_node.n + slice_begin.n + slice_width.n + other.n + part.n +
+                      heavy_node.n + part_begin.n) *
+                         sizeof(int);
+  return total;
+}
+
+template struct Backend<double>;
+template struct Backend<float>;
+
+}  // namespace medspring::gpu::detail

@@ -1,0 +1,130 @@
+// The GPU engine's backend (private to src/gpu): device arrays of a batch of models and its frame loop,
+// one instantiation per precision. backend.cpp: construction, loads, state transfers, asynchronous
+// readback; frame.cpp: the frame loop (the CPU engine's substep rule, guard and rollbacks), CUDA graphs,
+// the substep timing. The kernels are in kernels.cu.
+#pragma once
+
+#include <cuda_runtime_api.h>
+
+#include <climits>
+#include <cstdint>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "device.hpp"
+#include "launch.hpp"
+#include "medspring/gpu/engine.hpp"
+#include "medspring/physics/spring_table.hpp"
+
+namespace medspring::gpu {
+
+struct Engine::Impl {
+  virtual ~Impl() = default;
+  DeviceInfo device;
+  Precision precision = Precision::Double;
+  std::vector<const Model*> models;
+  StepSettings settings;
+  Options options;
+  Options::Kernel kernel = Options::Kernel::Grid;
+  double t = 0, stiffening = 1.0;
+  std::uint64_t frames = 0, substeps = 0;
+  Warnings warnings;
+
+  virtual void set_loads(int b, const std::vector<PointLoad>& loads) = 0;
+  virtual void upload(int b, const State& st) = 0;
+  virtual StepStatus step() = 0;
+  virtual MatX3 fetch(int b, bool velocities) = 0;
+  virtual void request_positions() = 0;
+  virtual bool poll_positions(int b, MatX3& out) = 0;
+  virtual void request_node(int b, Index node) = 0;
+  virtual bool poll_node(Vec3& out) = 0;
+  virtual Engine::DeviceState device_state() = 0;
+  virtual std::size_t device_bytes() const = 0;
+  virtual double time_substeps(int count, int repeats) = 0;
+};
+
+namespace detail {
+
+template <class R>
+struct Backend final : Engine::Impl {
+  int B = 1;
+  Index n = 0;
+  std::size_t entries = 0;
+  bool soft = false;
+  bool per_block = false;  // Options::Kernel::PerBlock (kernel_for): one block per model
+  int block_threads = 0;   // its block size
+  cudaStream_t stream = nullptr, copy_stream = nullptr;
+
+  // Model arrays (node arrays and spring parameters per model, topology shared).
+  DeviceArray<R> x0, mass, damping, kr, L0, k, kp, ik;
+  DeviceArray<unsigned char> fixed;
+  DeviceArray<int> load_slot, row_node, slice_begin, slice_width, other;
+  // The block kernel's split rows (hd::SplitRows): chunk slot per row, split nodes, their slots.
+  DeviceArray<int> part, heavy_node, part_begin;
+  int split_rows = 0, split_heavy = 0, parts = 0;
+  // State: ping-pong buffers, `cur` holds the current positions and velocities.
+  DeviceArray<R> xb[2], vb[2];
+  int cur = 0;
+  // Loads: per model; the load table of a batch of substeps (substep k, model b, row r).
+  std::vector<std::vector<PointLoad>> loads;
+  std::vector<LoadSlots> slots;
+  int rows = 0;       // rows per model (max over the batch, >= 1)
+  long capacity = 0;  // substeps the load table, stiffening slots and graphs are sized for
+  PinnedArray<R> rows_host;
+  DeviceArray<R> rows_dev;
+  std::vector<double> row_scratch;
+  // Frame scalars.
+  detail::FrameScalars scalars_init{INT_MAX, 0};
+  PinnedArray<detail::FrameScalars> scalars_host_init, scalars_host;
+  DeviceArray<detail::FrameScalars> scalars_dev;
+  DeviceArray<unsigned long long> stiff_dev;
+  PinnedArray<unsigned long long> stiff_host;
+  // Graphs per (substeps, parity of cur).
+  std::map<std::pair<long, int>, cudaGraphExec_t> graphs;
+  // Asynchronous readback: device staging + pinned host snapshots, double-buffered.
+  DeviceArray<R> staging[2];
+  PinnedArray<R> snapshot[2];
+  cudaEvent_t staged[2]{}, copied[2]{};
+  std::uint64_t snap_seq[2]{0, 0}, next_seq = 1;
+  std::vector<std::uint64_t> seen;
+  bool requested[2]{false, false};
+  int next_snap = 0;
+  // The haptic read of one node: 3 reals per request, double-buffered the same way.
+  DeviceArray<R> node_staging;  // 2 x 3
+  PinnedArray<R> node_host;     // 2 x 3
+  cudaEvent_t node_staged[2]{}, node_copied[2]{};
+  std::uint64_t node_seq[2]{0, 0}, node_seen = 0;
+  bool node_requested[2]{false, false};
+  int node_next = 0;
+
+  Backend(const std::vector<const Model*>& ms, const StepSettings& s, const Options& o,
+          const DeviceInfo& dev);
+  ~Backend() override;
+  void clear_graphs();
+  std::size_t row_count(long subs) const;
+  void ensure_capacity(long subs);
+  void set_loads(int b, const std::vector<PointLoad>& L) override;
+  void upload(int b, const State& st) override;
+  detail::SubstepArgs<R> args(int parity, long kk, R h, bool stiff);
+  // Enqueues a batch of `left` substeps of h from the current buffers (no host work, capturable).
+  void enqueue(long left, double h, int rollbacks);
+  void run_batch(long left, double h, int rollbacks);
+  // The block kernel's arguments for `count` substeps from buffer `parity` (into the other buffer).
+  detail::BlockArgs<R> block_args(int parity, int count, R h, int stiff_mode, bool guard);
+  StepStatus step() override;
+  MatX3 fetch(int b, bool velocities) override;
+  void request_positions() override;
+  bool poll_positions(int b, MatX3& out) override;
+  void request_node(int b, Index node) override;
+  bool poll_node(Vec3& out) override;
+  Engine::DeviceState device_state() override;
+  double time_substeps(int count, int repeats) override;
+  std::size_t device_bytes() const override;
+};
+
+extern template struct Backend<double>;
+extern template struct Backend<float>;
+
+}  // namespace detail
+}  // namespace medspring::gpu
