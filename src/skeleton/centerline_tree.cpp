@@ -51,19 +51,23 @@ struct Picked {
 
 // TEASAR endpoints: the farthest uncovered node, its path to the skeleton, the ball around it covered.
 Picked pick_endpoints(const Graph& g, const std::vector<double>& dfb, const std::vector<double>& dfs,
-                      const std::vector<Index>& parent, double h_max, const TreeSkeletonSettings& s,
-                      Index R) {
+                      std::vector<Index>& parent, const Vec3& h_vec, const TreeSkeletonSettings& s, Index R) {
+  const double h_max = h_vec.maxCoeff();
   const Index V = g.size();
   std::vector<char> covered(V, 0), on_tree(V, 0);
   std::vector<double> dist(V, kInf), rad(V, 0.0);
+  std::vector<Index> src_of(V, -1);
   std::vector<Index> touched;
   on_tree[R] = 1;
+  std::vector<Index> tree_nodes{R};
   Picked out;
-  auto cover = [&](const std::vector<Index>& src) {  // geodesic balls of radius ball_scale DFB + h
+  std::vector<Index> owner(V, -1);  // the skeleton voxel whose ball covers a voxel (accepted paths only)
+  auto cover = [&](const std::vector<Index>& src, bool attach) {  // geodesic balls: ball_scale DFB + h
     DistQueue q;
     for (Index v : src) {
       dist[v] = 0.0;
-      rad[v] = s.ball_scale * dfb[v] + h_max;
+      rad[v] = s.ball_scale * dfb[v] + 2.0 * h_max;
+      src_of[v] = v;
       touched.push_back(v);
       q.push(0.0, v);
     }
@@ -71,6 +75,7 @@ Picked pick_endpoints(const Graph& g, const std::vector<double>& dfb, const std:
       const DistQueue::Entry e = q.pop();
       if (e.dist != dist[e.id]) continue;
       covered[e.id] = 1;
+      if (attach && owner[e.id] < 0) owner[e.id] = src_of[e.id];
       const Index wv = g.widx[e.id];
       for (const Offset& o : g.offsets) {
         const Index w = g.gid[wv + o.d];
@@ -79,6 +84,7 @@ Picked pick_endpoints(const Graph& g, const std::vector<double>& dfb, const std:
         if (nd <= rad[e.id] && nd < dist[w]) {
           dist[w] = nd;
           rad[w] = rad[e.id];
+          src_of[w] = src_of[e.id];
           touched.push_back(w);
           q.push(nd, w);
         }
@@ -87,7 +93,7 @@ Picked pick_endpoints(const Graph& g, const std::vector<double>& dfb, const std:
     for (Index v : touched) dist[v] = kInf;
     touched.clear();
   };
-  cover({R});
+  cover({R}, true);
   for (;;) {
     Index E = -1;
     for (Index v = 0; v < V; ++v)
@@ -95,27 +101,43 @@ Picked pick_endpoints(const Graph& g, const std::vector<double>& dfb, const std:
     if (E < 0) break;
     std::vector<Index> part;  // E up to (not including) the first node already on the skeleton
     Index v = E;
-    for (; v >= 0 && !on_tree[v]; v = parent[v]) part.push_back(v);
+    // up to the skeleton, or into the ball of a skeleton voxel (then straight to that voxel: penalised
+    // paths to two branches can run side by side along a wide trunk before they meet)
+    for (; v >= 0 && !on_tree[v] && owner[v] < 0; v = parent[v]) part.push_back(v);
+    if (v >= 0 && !on_tree[v]) v = owner[v];
     const Index junction = v;
-    double len = 0.0, r_part = 0.0;
-    for (std::size_t k = 0; k < part.size(); ++k) {
-      const Index b = k + 1 < part.size() ? part[k + 1] : junction;
-      if (b >= 0) len += std::sqrt(g.edge_len2(part[k], b));
-      r_part = std::max(r_part, dfb[part[k]]);
-    }
-    // A branch reaches beyond the parent's surface (the junction's DFB) by more than its own radius
-    // (times branch_scale); the first path (root to the farthest end) is always kept.
+    double r_part = 0.0;
+    for (Index p : part) r_part = std::max(r_part, dfb[p]);
+    // How far the new path reaches beyond the skeleton's wall: the straight distance from E to the
+    // nearest skeleton voxel minus that voxel's DFB (a path length would count the long parallel runs
+    // that penalised paths to two neighbouring tip voxels can take before they meet).
     const bool first = out.leaves.empty();
-    const double beyond = junction >= 0 ? len - dfb[junction] : len;
-    if (first || beyond > s.branch_scale * r_part) {
+    double beyond = kInf;
+    if (!first) {
+      const auto ce = g.ijk(E);
+      for (Index t : tree_nodes) {
+        const auto ct = g.ijk(t);
+        const Vec3 d(h_vec[0] * static_cast<double>(ce[0] - ct[0]),
+                     h_vec[1] * static_cast<double>(ce[1] - ct[1]),
+                     h_vec[2] * static_cast<double>(ce[2] - ct[2]));
+        beyond = std::min(beyond, d.norm() - dfb[t]);
+      }
+    }
+    (void)junction;
+    const bool accepted = first || beyond > s.branch_scale * std::max(r_part, 2.0 * h_max);
+    if (accepted) {
       require(static_cast<Index>(out.leaves.size()) < s.max_endpoints, "mask: more than ", s.max_endpoints,
               " endpoints (a noisy or non-tubular object; smooth the mask)");
       out.leaves.push_back(E);
-      for (Index p : part) on_tree[p] = 1;
+      if (!part.empty() && v >= 0) parent[part.back()] = v;  // joins the skeleton at v
+      for (Index p : part) {
+        on_tree[p] = 1;
+        tree_nodes.push_back(p);
+      }
     } else {
       ++out.dropped;
     }
-    cover(part);
+    cover(part, accepted);
   }
   return out;
 }
@@ -129,7 +151,6 @@ TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonS
   TreeSkeleton out;
   const Vec3 h = mask.spacing;
   out.h_min = h.minCoeff();
-  const double h_max = h.maxCoeff();
   // padded working grid: 2 background voxels on every side
   constexpr Index P = 2;
   MaskVolume work;
@@ -203,7 +224,7 @@ TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonS
   for (int pass = 0; pass < 2; ++pass) {
     dijkstra(g, R, dfs);
     parent = penalized_parents(g, dfb, dfb_max, s, R);
-    picked = pick_endpoints(g, dfb, dfs, parent, h_max, s, R);
+    picked = pick_endpoints(g, dfb, dfs, parent, h, s, R);
     if (pass == 1) break;
     // the width of an end: the largest DFB on its path within 3 of its own (smallest) radii of the tip
     auto width = [&](Index e, bool from_root) {
@@ -289,20 +310,42 @@ TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonS
     }
     out.lines.push_back(std::move(cl));
   }
-  // D-8: trim both ends of the tree (the root's start, every leaf's end) where the arc length to the end
-  // is below the radius there. The root's cut is the same on every line (shared prefix).
+  // Ends (D-8, adapted): the path's last voxels run off the axis to the farthest voxel of the tip, where
+  // the DFB is that of the tip's wall. Both ends of the tree (the root's start, every leaf's end) are cut
+  // one radius of the vessel short of the tip: r_ref = the 75th percentile of the radii on the end's half
+  // of the line, the cut at the first point (walking inwards) at least r_ref from the tip along the line.
+  // The root's cut is the same on every line (shared prefix).
   auto cut_index = [](const Centerline& c, bool at_end) {
     const Index n = c.size();
-    double s_acc = 0.0;
-    for (Index k = 1; k < n - 1; ++k) {
+    VecX sa = VecX::Zero(n);  // arc length from the end
+    for (Index k = 1; k < n; ++k) {
       const Index a = at_end ? n - k : k - 1, b = at_end ? n - 1 - k : k;
-      s_acc += (c.points.row(b) - c.points.row(a)).norm();
-      if (s_acc >= c.radii[b]) return b;
+      sa[b] = sa[a] + (c.points.row(b) - c.points.row(a)).norm();
+    }
+    const double half = 0.5 * (at_end ? sa[0] : sa[n - 1]);
+    std::vector<double> rr;
+    for (Index k = 0; k < n; ++k)
+      if (sa[k] <= half) rr.push_back(c.radii[k]);
+    std::sort(rr.begin(), rr.end());
+    const double r_ref =
+        rr.empty() ? 0.0 : rr[(3 * rr.size()) / 4 < rr.size() ? (3 * rr.size()) / 4 : rr.size() - 1];
+    for (Index k = 0; k < n; ++k) {
+      const Index b = at_end ? n - 1 - k : k;
+      if (sa[b] >= r_ref || sa[b] >= half) return b;
     }
     return at_end ? n - 1 : Index{0};
   };
   if (!out.lines.empty()) {
-    const Index r0 = cut_index(out.lines.front(), false);
+    // the root's cut stays before the first junction: within the prefix every line shares
+    Index common = out.lines.front().size() - 1;
+    for (const Centerline& c : out.lines) {
+      Index k = 0;
+      while (k < std::min(c.size(), out.lines.front().size()) &&
+             c.points.row(k) == out.lines.front().points.row(k))
+        ++k;
+      common = std::min(common, k - 1);
+    }
+    const Index r0 = std::max<Index>(0, std::min(cut_index(out.lines.front(), false), common - 1));
     for (Centerline& c : out.lines) {
       const Index e0 = std::max(cut_index(c, true), r0 + 1);
       Centerline t;

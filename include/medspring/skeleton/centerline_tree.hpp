@@ -18,8 +18,9 @@ namespace medspring {
 
 struct TreeSkeletonSettings {
   double ball_scale = 1.5;       // a path covers the object voxels within ball_scale x DFB + h of it
-  double branch_scale = 1.0;     // a side path is a branch when it reaches more than branch_scale x its own
-                                 // largest DFB beyond the parent's surface (else it is a bump: dropped)
+  double branch_scale = 1.0;     // a side path is a branch when its endpoint lies farther than branch_scale x
+                                 // its own largest DFB beyond the skeleton's wall (straight distance to the
+                                 // nearest skeleton voxel minus that voxel's DFB); else a bump: dropped
   Index max_endpoints = 64;      // InvalidInput beyond (a noisy mask)
   double smoothing_sigma = 0.0;  // mm, Gaussian sigma along every branch (junctions fixed); 0 = 2 h_min
   double penalty_lambda = 5000.0, penalty_power = 16.0;  // paths: TEASAR penalised Dijkstra (§3.4)
@@ -41,8 +42,10 @@ struct TreeSkeleton {
 /// voxel's path to R, so all paths form one tree. Endpoints are picked TEASAR-style: the farthest
 /// (geodesic, from R) voxel not yet covered; its path is followed until it meets the skeleton (a
 /// junction) and the voxels near it are covered. Every branch between junctions / ends is resampled
-/// (h_min / 2) and smoothed with its two ends fixed (§3.5), the ends of the tree trimmed where the arc
-/// length to the end is below the radius (D-8); radius = max(DFB - h_min/2, h_min/2) (§3.5.5).
+/// (h_min / 2) and smoothed with its two ends fixed (§3.5); both ends of the tree (the root's start, every
+/// leaf's end) are cut one vessel radius short of the tip (D-8 adapted: the radius is the 75th percentile
+/// of the radii on the end's half of the line), where the voxel path runs off the axis to the tip's wall;
+/// radius = max(DFB - h_min/2, h_min/2) (§3.5.5).
 /// Deterministic. Throws InvalidInput for an invalid volume, an empty mask or more than max_endpoints.
 TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonSettings& settings = {});
 
