@@ -14,6 +14,9 @@
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "scene_support.hpp"
+#ifdef MEDSPRING_HAVE_BUILDERS
+#include "medspring/builders/vessel_build.hpp"
+#endif
 
 namespace medspring::cli {
 
@@ -95,6 +98,24 @@ int cmd_export(const Args& args) {
                          " masses"));
         entries.push_back({file, name, description, package_of(*tree, name, description)});
       }
+#ifdef MEDSPRING_HAVE_BUILDERS
+      {  // the same tree with one watertight surface (the union of its path tubes, docs/vessels.md)
+        const std::string name = "Real aorta tree (watertight)", file = "aorta_tree_blended.msm";
+        progress.begin(cat("build ", name));
+        TreeSurface ts;
+        const auto tree =
+            make_blended_tree(merge_centerlines(read_centerlines(data / "vmr-0159-aorta-centerline.vtp",
+                                                                 LengthUnit::Centimetre)),
+                              SmrmTreeSettings{}, 0.0, &ts);
+        const std::string description =
+            cat("VMR 0159 aorta with its branches: SMRM vessel tree, ", tree->num_branches(), " branches, ",
+                tree->num_atoms(), " atoms, one watertight surface (the union of ", ts.path_tubes,
+                " closed path tubes, ", tree->num_surface_nodes(), " nodes), wall bending");
+        progress.end(cat(tree->kind(), ", ", tree->num_surface_nodes(), " surface nodes (watertight), ",
+                         tree->num_atoms(), " masses"));
+        entries.push_back({file, name, description, package_of(*tree, name, description)});
+      }
+#endif
     } else {
       notes.push_back(
           cat("the real anatomy was not found in ", data.string(), " (set MEDSPRING_DATA): phantoms only"));

@@ -18,6 +18,9 @@
 #include "medspring/io/temp_folders.hpp"
 #include "medspring/io/volume_io.hpp"
 #include "medspring/paper/run_summary.hpp"
+#ifdef MEDSPRING_HAVE_BUILDERS
+#include "medspring/builders/vessel_build.hpp"
+#endif
 #ifdef MEDSPRING_HAVE_MESHING
 #include "medspring/meshing/balloon.hpp"
 #include "medspring/meshing/isosurface.hpp"
@@ -64,6 +67,21 @@ VolumetricMesh FileLoader::tetrahedralize(const SurfaceMesh& organ, Index nodes)
   return fem::volumetric_mesh(organ, {.target_nodes = nodes});
 #else
   return SceneLoader::tetrahedralize(organ, nodes);
+#endif
+}
+
+SurfaceMesh FileLoader::tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
+                                     std::vector<std::string>& notes) {
+#ifdef MEDSPRING_HAVE_BUILDERS
+  TreeSurface r = blended_tree_surface(tree, plain, spacing);
+  notes.push_back(cat("union of ", r.path_tubes, " closed path tubes: ", r.mesh.num_vertices(), " nodes, ",
+                      r.closed ? "closed and manifold" : "NOT closed", ", ", r.components, " component(s), ",
+                      r.self_intersections, " self-intersecting triangle pairs"));
+  for (const auto& n : r.notes) notes.push_back(n);
+  for (const auto& w : r.warnings) notes.push_back("warning: " + w);
+  return std::move(r.mesh);
+#else
+  return SceneLoader::tree_surface(tree, plain, spacing, notes);
 #endif
 }
 

@@ -29,6 +29,8 @@ class FileLoader final : public SceneLoader {
   SurfaceMesh isosurface(const MaskVolume& mask) override;
   SurfaceMesh balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) override;
   VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override;  // TetGen (fem layer)
+  SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
+                           std::vector<std::string>& notes) override;  // CGAL union (builders layer)
 
  private:
   std::map<std::string, SurfaceMesh> meshes_;

@@ -1,7 +1,13 @@
 // SMRM vessel tree update (issue 17, docs/vessels.md): the VMR 0159 tree (4 polylines sharing their start
-// merged into 7 branches, 3 junctions), one 0.5 ms frame = chain step (with its bending substeps) +
-// frames and reconstruction of every branch + vertex normals, 1 thread, strong force (0.5 N) held on a
-// leaf. Needs the data file (skipped with a message without it) and the io layer.
+// merged into 7 branches, 3 junctions), 1 thread, strong force (0.5 N) held on a leaf.
+//   BM_SmrmTreeUpdate        one 0.5 ms frame as Simulation::update runs it: chain step (with its bending
+//                            substeps) + frames and reconstruction of every branch; normals are computed
+//                            when read (Simulation::normals), not per frame
+//   BM_SmrmTreeUpdateNormals the same + the vertex normals of every branch every frame (the earlier
+//                            definition of the update)
+//   BM_SmrmTreeNormals       the normal pass alone (what a read costs)
+// and the same for the watertight surface (--blend). Needs the data file (skipped with a message without
+// it) and the io layer.
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
@@ -42,7 +48,8 @@ void BM_SmrmTreeBuild(benchmark::State& st) {
 }
 BENCHMARK(BM_SmrmTreeBuild)->Unit(benchmark::kMillisecond);
 
-void BM_SmrmTreeUpdate(benchmark::State& st) {
+// mode 0: step + surface; 1: + normals every frame; 2: normals only (of the loaded, deformed surface)
+void tree_update(benchmark::State& st, int mode) {
   const auto tree = vmr_tree();
   if (!tree) {
     st.SkipWithError("vmr-0159-aorta-centerline.vtp not found (MEDSPRING_DATA)");
@@ -57,30 +64,51 @@ void BM_SmrmTreeUpdate(benchmark::State& st) {
   MatX3 S = tree->rest_surface();
   std::vector<MatX3> N(static_cast<std::size_t>(tree->num_branches()));
   double frames = 0;
+  auto normals = [&] {
+    for (Index b = 0; b < tree->num_branches(); ++b) {
+      const std::size_t q = static_cast<std::size_t>(b);
+      const Index n0 = tree->node_begin(b), n = tree->branch_vessel(b).num_surface_nodes();
+      ws.surface[q] = S.middleRows(n0, n);  // the branch's rows (a tree surface is one matrix)
+      tree->branch_vessel(b).surface_normals(ws.surface[q], ws.vessel[q], N[q]);
+    }
+  };
   auto update = [&] {
     frames += 1;
     step(tree->model(), s, ss);
     tree->map_to_surface(s.x, ws, S);
-    for (Index b = 0; b < tree->num_branches(); ++b)
-      tree->branch_vessel(b).surface_normals(ws.surface[static_cast<std::size_t>(b)],
-                                             ws.vessel[static_cast<std::size_t>(b)],
-                                             N[static_cast<std::size_t>(b)]);
+    if (mode == 1) normals();
   };
   for (int i = 0; i < 200; ++i) update();
   for (auto _ : st) {
-    update();
+    if (mode == 2)
+      normals();
+    else
+      update();
     benchmark::DoNotOptimize(S.data());
+    benchmark::DoNotOptimize(N[0].data());
   }
   st.counters["atoms"] = static_cast<double>(tree->num_atoms());
   st.counters["surface_nodes"] = static_cast<double>(S.rows());
   st.counters["substeps_per_frame"] = static_cast<double>(s.substeps) / frames;
 }
+void BM_SmrmTreeUpdate(benchmark::State& st) {
+  tree_update(st, 0);
+}
+void BM_SmrmTreeUpdateNormals(benchmark::State& st) {
+  tree_update(st, 1);
+}
+void BM_SmrmTreeNormals(benchmark::State& st) {
+  tree_update(st, 2);
+}
 BENCHMARK(BM_SmrmTreeUpdate)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SmrmTreeUpdateNormals)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SmrmTreeNormals)->Unit(benchmark::kMicrosecond);
 
 #ifdef MEDSPRING_BENCH_HAVE_BUILDERS
 // The same update with the watertight junction surface (union of the closed path tubes, --blend): every
 // node rebuilt from its two bracket atoms' frames, and area-weighted normals of the whole mesh.
-void BM_SmrmTreeBlendedUpdate(benchmark::State& st) {
+// mode as tree_update
+void blended_update(benchmark::State& st, int mode) {
   const std::filesystem::path file = data_dir() / "vmr-0159-aorta-centerline.vtp";
   if (!std::filesystem::exists(file)) {
     st.SkipWithError("vmr-0159-aorta-centerline.vtp not found (MEDSPRING_DATA)");
@@ -107,17 +135,32 @@ void BM_SmrmTreeBlendedUpdate(benchmark::State& st) {
     frames += 1;
     step(tree.model(), s, ss);
     tree.map_to_surface(s.x, ws, S);
-    vertex_normals(plan, S, scratch, N);
+    if (mode == 1) vertex_normals(plan, S, scratch, N);
   };
   for (int i = 0; i < 200; ++i) update();
   for (auto _ : st) {
-    update();
+    if (mode == 2)
+      vertex_normals(plan, S, scratch, N);
+    else
+      update();
     benchmark::DoNotOptimize(S.data());
+    benchmark::DoNotOptimize(N.data());
   }
   st.counters["surface_nodes"] = static_cast<double>(S.rows());
   st.counters["substeps_per_frame"] = static_cast<double>(s.substeps) / frames;
 }
+void BM_SmrmTreeBlendedUpdate(benchmark::State& st) {
+  blended_update(st, 0);
+}
+void BM_SmrmTreeBlendedUpdateNormals(benchmark::State& st) {
+  blended_update(st, 1);
+}
+void BM_SmrmTreeBlendedNormals(benchmark::State& st) {
+  blended_update(st, 2);
+}
 BENCHMARK(BM_SmrmTreeBlendedUpdate)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SmrmTreeBlendedUpdateNormals)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SmrmTreeBlendedNormals)->Unit(benchmark::kMicrosecond);
 #endif
 #endif
 

@@ -10,6 +10,9 @@
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/models/smrm_tree.hpp"
+#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
+#include "medspring/builders/vessel_build.hpp"
+#endif
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
 #include "medspring/models/tissue.hpp"
@@ -429,18 +432,38 @@ void bind_models(py::module_& m) {
       .def("branch_atoms", &SmrmTree::branch_atoms, "branch"_a,
            "The tree atoms of a branch in order (a child's first is its parent's last).")
       .def("node_branch", &SmrmTree::node_branch, "node"_a, "The branch of a surface node.")
-      .def("node_atom", &SmrmTree::node_atom, "node"_a, "The tree atom a surface node rides on.");
+      .def("node_atom", &SmrmTree::node_atom, "node"_a, "The tree atom a surface node rides on.")
+      .def_property_readonly("blended", &SmrmTree::blended,
+                             "True for a tree with one watertight surface (blend=True), False for one tube "
+                             "per branch.");
+  // blend: the watertight junction surface (union of the closed path tubes; needs the builders layer).
+  const auto tree_of = [](const CenterlineTree& ct, const SmrmSettings& s, bool blend,
+                          double blend_spacing) -> std::shared_ptr<SmrmTree> {
+    if (!blend) return std::make_shared<SmrmTree>(ct, SmrmTreeSettings{s});
+#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
+    return make_blended_tree(ct, SmrmTreeSettings{s}, blend_spacing);
+#else
+    (void)blend_spacing;
+    throw InvalidInput(
+        "blend=True: the watertight tree surface needs CGAL (the builders layer) in this build");
+#endif
+  };
   m.def(
       "smrm_tree_from_centerlines",
-      [](const std::vector<Centerline>& lines, double tolerance, const SmrmSettings& s) {
-        return std::make_shared<SmrmTree>(merge_centerlines(lines, tolerance), SmrmTreeSettings{s});
+      [tree_of](const std::vector<Centerline>& lines, double tolerance, const SmrmSettings& s, bool blend,
+                double blend_spacing) {
+        return tree_of(merge_centerlines(lines, tolerance), s, blend, blend_spacing);
       },
-      "lines"_a, "tolerance"_a = 0.05, "settings"_a = SmrmSettings{},
+      "lines"_a, "tolerance"_a = 0.05, "settings"_a = SmrmSettings{}, "blend"_a = false,
+      "blend_spacing"_a = 0.0,
       "A vessel tree from centerlines sharing their start (VMTK): merged where they agree within "
-      "`tolerance` mm; settings.atoms = atoms on the longest root-to-leaf path.");
+      "`tolerance` mm; settings.atoms = atoms on the longest root-to-leaf path. blend=True gives one "
+      "watertight surface (the union of the closed path tubes, rings blend_spacing mm apart, 0 = the atom "
+      "spacing) instead of one tube per branch.");
   m.def(
       "smrm_tree_from_parents",
-      [](py::handle atoms, py::handle parent, py::handle radii, const SmrmSettings& s) {
+      [tree_of](py::handle atoms, py::handle parent, py::handle radii, const SmrmSettings& s, bool blend,
+                double blend_spacing) {
         const MatX3 X = points_arg(atoms, "atoms");
         const Index n = static_cast<Index>(X.rows());
         const py::array_t<long long, py::array::c_style | py::array::forcecast> p(
@@ -453,13 +476,15 @@ void bind_models(py::module_& m) {
           require(v >= -1 && v < n, "parent[", i, "]: ", v, " is not -1 or an atom index");
           par[static_cast<std::size_t>(i)] = static_cast<Index>(v);
         }
-        return std::make_shared<SmrmTree>(tree_from_parents(X, par, vector_arg(radii, "radii", n)),
-                                          SmrmTreeSettings{s});
+        return tree_of(tree_from_parents(X, par, vector_arg(radii, "radii", n)), s, blend, blend_spacing);
       },
-      "atoms"_a, "parent"_a, "radii"_a, "settings"_a = SmrmSettings{},
+      "atoms"_a, "parent"_a, "radii"_a, "settings"_a = SmrmSettings{}, "blend"_a = false,
+      "blend_spacing"_a = 0.0,
       "A vessel tree from NumPy: atoms (n, 3) mm, parent index of every atom (n,) (-1 for the root atom 0, "
       "else an earlier atom), radii (n,) mm. Runs of atoms form branches; an atom with several children is a "
-      "junction. settings.atoms = atoms on the longest root-to-leaf path (the resampling spacing).");
+      "junction. settings.atoms = atoms on the longest root-to-leaf path (the resampling spacing). "
+      "blend=True: "
+      "one watertight surface, as smrm_tree_from_centerlines.");
   m.def(
       "first_ray_hit",
       [](const SurfaceMesh& mesh, py::handle o, py::handle w, double t_max) {

@@ -29,6 +29,9 @@
 #include "medspring/io/mesh_io.hpp"
 #include "medspring/io/volume_io.hpp"
 #endif
+#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
+#include "medspring/builders/vessel_build.hpp"
+#endif
 #ifdef MEDSPRING_PYTHON_WITH_MESHING
 #include "medspring/meshing/balloon.hpp"
 #include "medspring/meshing/isosurface.hpp"
@@ -76,6 +79,15 @@ class FileLoader final : public SceneLoader {
 #ifdef MEDSPRING_PYTHON_WITH_FEM
   VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override {  // volumetric kind (TetGen)
     return fem::volumetric_mesh(organ, {.target_nodes = nodes});
+  }
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
+  SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
+                           std::vector<std::string>& notes) override {  // "blend": true (CGAL union)
+    TreeSurface r = blended_tree_surface(tree, plain, spacing);
+    for (const auto& n : r.notes) notes.push_back(n);
+    for (const auto& w : r.warnings) notes.push_back("warning: " + w);
+    return std::move(r.mesh);
   }
 #endif
   SurfaceMesh isosurface(const MaskVolume& mask) override {

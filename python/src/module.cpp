@@ -106,6 +106,11 @@ PYBIND11_MODULE(_medspring, m) {
 #else
   m.attr("has_fem") = false;
 #endif
+#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
+  m.attr("has_builders") = true;  // blended (watertight) vessel trees: blend=True, scenes' "blend"
+#else
+  m.attr("has_builders") = false;
+#endif
 #ifdef MEDSPRING_PYTHON_WITH_PAPER
   bind_paper(m);
   m.attr("has_paper") = true;

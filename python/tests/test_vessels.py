@@ -77,3 +77,70 @@ def test_tree_model_package_round_trip(tmp_path):
     assert back.num_branches == 3 and back.num_junctions == 1
     np.testing.assert_array_equal(back.rest_surface, tree.rest_surface)
     np.testing.assert_array_equal(back.model.x0, tree.model.x0)
+
+
+# Out of plane and not mirror-symmetric: a planar symmetric Y puts tube vertices of the union exactly on
+# each other's edges, and CGAL leaves zero-area triangles (refused; docs/vessels.md).
+Y_ATOMS = np.array([[0, 0, 0], [5, 0.3, 0.2], [10, 0.5, -0.2], [15, 0.2, 0.1], [20, 3.3, 1.1], [25, 6.2, 2.3],
+                    [30, 9.4, 3.1], [19.6, -3.2, -0.7], [24.1, -6.3, -1.6], [28.7, -9.1, -2.2]], float)
+Y_PARENT = np.array([-1, 0, 1, 2, 3, 4, 5, 3, 7, 8])
+
+
+def closed_manifold_edges(faces):
+    # Every undirected edge in exactly two triangles, once in each direction (closed, consistently oriented).
+    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    undirected = np.sort(directed, axis=1)
+    _, counts = np.unique(undirected, axis=0, return_counts=True)
+    _, dcounts = np.unique(directed, axis=0, return_counts=True)
+    return bool(np.all(counts == 2) and np.all(dcounts == 1))
+
+
+@pytest.mark.skipif(not ms._medspring.has_builders, reason="built without the builders layer (CGAL)")
+def test_blended_tree_from_numpy_is_one_closed_surface_exact_at_rest_and_survives_a_package(tmp_path):
+    # blend=True: the union of the Y's closed path tubes is the surface the atoms deform.
+    settings = ms.SmrmSettings(atoms=7)
+    tubes = ms.smrm_tree_from_parents(Y_ATOMS, Y_PARENT, np.full(10, 1.0), settings)
+    tree = ms.smrm_tree_from_parents(Y_ATOMS, Y_PARENT, np.full(10, 1.0), settings, blend=True)
+    assert tree.blended and not tubes.blended
+    assert tree.num_branches == 3 and tree.num_junctions == 1
+    assert closed_manifold_edges(np.asarray(tree.faces))
+    assert not closed_manifold_edges(np.asarray(tubes.faces))  # three open tubes
+    sim = ms.Simulation(tree)
+    np.testing.assert_allclose(sim.surface, tree.rest_surface, rtol=0, atol=1e-9)
+    # A press on the middle of branch 2 moves branch 2's atoms most.
+    leaf = tree.branch_atoms(2)
+    node = next(k for k in range(tree.num_surface_nodes)
+                if tree.node_branch(k) == 2 and tree.node_atom(k) == leaf[len(leaf) // 2])
+    sim.set_loads([ms.PointLoad(node=node, force=[0.0, -0.05, 0.0], t_ramp=20.0)])
+    sim.update(nsteps=400)
+    u = np.linalg.norm(sim.state.x - tree.model.x0, axis=1)
+    assert int(np.argmax(u)) in leaf
+    assert np.all(np.isfinite(sim.surface))
+    # The package keeps the blended surface: rebuilt without CGAL, same faces and rest surface.
+    path = str(tmp_path / "y_blend.msm")
+    ms.save_model_package(path, tree, "Y tree, watertight")
+    back = ms.load_model_package(path)
+    assert back.kind == "smrm_tree" and back.blended
+    np.testing.assert_array_equal(back.faces, tree.faces)
+    np.testing.assert_array_equal(back.rest_surface, tree.rest_surface)
+    with pytest.raises(ms.InvalidInput, match="blend spacing must be >= 0"):
+        ms.smrm_tree_from_parents(Y_ATOMS, Y_PARENT, np.full(10, 1.0), settings, blend=True, blend_spacing=-1.0)
+
+
+@pytest.mark.skipif(not (ms._medspring.has_builders and ms._medspring.has_scene and ms._medspring.has_io),
+                    reason="needs the builders, scene and io layers")
+def test_scene_with_a_blended_vmr_tree_runs_on_the_watertight_surface():
+    from conftest import data_file
+
+    line = data_file("vmr-0159-aorta-centerline.vtp")
+    doc = {"name": "tree", "model": {"kind": "smrm", "source": {"centerline": {
+        "file": str(line), "unit": "cm", "branches": "all", "blend": True}}},
+        "loads": [{"node": 1900, "direction": "inward_normal", "magnitude": 0.5, "t_ramp": 20}],
+        "duration": 60}
+    out = ms.run_scene(doc, field_times=[60.0])
+    assert out["fields"].shape[1] == 2083  # the union's nodes, not the 7 tubes' 1980
+    assert out["summary"]["contact_hold_mm"] > 0.1 and out["summary"]["warnings"] == 0
+    assert np.all(np.isfinite(out["fields"]))
+    lines = ms.read_centerlines(str(line), "cm")
+    tree = ms.smrm_tree_from_centerlines(lines, blend=True)
+    assert tree.blended and tree.num_surface_nodes == 2083 and tree.num_atoms == 60

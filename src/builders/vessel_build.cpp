@@ -76,7 +76,86 @@ VesselBuild finish_tree(std::shared_ptr<SmrmTree> tree, VesselSummary s,
   return out;
 }
 
+// The blended tree (--blend) and its summary fields.
+std::shared_ptr<SmrmTree> blended(const CenterlineTree& ct, const SmrmTreeSettings& ts, double spacing,
+                                  VesselSummary& s) {
+  TreeSurface r;
+  auto tree = make_blended_tree(ct, ts, spacing, &r);
+  s.blended = true;
+  s.path_tubes = r.path_tubes;
+  s.surface_closed = r.closed;
+  s.surface_components = r.components;
+  s.self_intersections = r.self_intersections;
+  s.surface_volume_mm3 = r.volume_mm3;
+  for (auto& n : r.notes) s.notes.push_back(std::move(n));
+  for (auto& w : r.warnings) s.warnings.push_back(std::move(w));
+  return tree;
+}
+
 }  // namespace
+
+TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain, double spacing_mm) {
+  require(std::isfinite(spacing_mm) && spacing_mm >= 0,
+          "vessel tree surface: blend spacing must be >= 0 mm (got ", spacing_mm, ")");
+  const MatX3& C = plain.branch_vessel(0).rest_atoms();
+  const double spacing = spacing_mm > 0 ? spacing_mm : (C.row(1) - C.row(0)).norm();
+  const Index spokes = plain.settings().vessel.spokes;
+  // Rings too far apart on a tight bend, or too close on a wavy wide stretch (neighbouring rings of a
+  // 12 mm radius tilt into each other), make a tube cross itself: every path takes the first ring
+  // spacing of spacing x (1, 0.9, 1.1, 0.8, 1.2, ...) that gives a simple tube.
+  const std::vector<double> factors{1.0, 0.9, 1.1, 0.8, 1.2, 0.7, 1.3, 0.6, 1.4, 1.5};
+  std::vector<SurfaceMesh> tubes;
+  std::vector<double> used;
+  for (double f : factors) {
+    const std::vector<SurfaceMesh> cand = tree_path_tubes(ct, spokes, f * spacing);
+    if (tubes.empty()) {
+      tubes.resize(cand.size());
+      used.assign(cand.size(), 0.0);
+    }
+    bool all = true;
+    for (std::size_t q = 0; q < cand.size(); ++q) {
+      if (used[q] > 0) continue;
+      if (self_intersections(cand[q], "vessel tree tube") == 0) {
+        tubes[q] = cand[q];
+        used[q] = f * spacing;
+      } else {
+        all = false;
+      }
+    }
+    if (all) break;
+  }
+  for (std::size_t q = 0; q < used.size(); ++q)
+    require(used[q] > 0, "vessel tree surface: path tube ", q,
+            " intersects itself at every ring spacing tried (", factors.back() * spacing, " to ",
+            0.6 * spacing, " mm): a bend tighter than the vessel's radius");
+  TreeSurface r;
+  r.spacing_min_mm = *std::min_element(used.begin(), used.end());
+  r.spacing_max_mm = *std::max_element(used.begin(), used.end());
+  r.notes.push_back(cat("path tube ring spacing ", r.spacing_min_mm, "..", r.spacing_max_mm,
+                        " mm (the first of ", spacing, " mm x 1, 0.9, 1.1, ... without self-intersection)"));
+  r.mesh = union_of_closed_meshes(tubes, "vessel tree surface");
+  const ClosedManifoldReport cm = check_closed_manifold(r.mesh);
+  r.path_tubes = static_cast<Index>(tubes.size());
+  r.closed = cm.ok();
+  r.components = cm.mesh.components;
+  r.self_intersections = self_intersections(r.mesh, "vessel tree surface");
+  r.volume_mm3 = signed_volume(r.mesh.V, r.mesh.F);
+  require(r.closed, "vessel tree surface: the union of the path tubes is not a closed manifold (",
+          cm.mesh.summary(), ")");
+  if (r.self_intersections > 0)
+    r.warnings.push_back(cat("the tree surface intersects itself: ", r.self_intersections,
+                             " triangle pairs (try another blend spacing)"));
+  return r;
+}
+
+std::shared_ptr<SmrmTree> make_blended_tree(const CenterlineTree& ct, const SmrmTreeSettings& settings,
+                                            double spacing, TreeSurface* report) {
+  const SmrmTree plain(ct, settings);
+  TreeSurface r = blended_tree_surface(ct, plain, spacing);
+  auto tree = std::make_shared<SmrmTree>(ct, settings, r.mesh);
+  if (report) *report = std::move(r);
+  return tree;
+}
 
 VesselBuild build_vessel(const VesselBuildSettings& st) {
   using Clock = std::chrono::steady_clock;
@@ -84,11 +163,11 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   const bool has_line = !st.centerline.empty();
   const bool has_organ = !st.source.mesh.empty() || !st.source.mask.empty();
   require(has_line != has_organ, "vessel: give exactly one of a centerline, a mesh and a segmentation");
-  require(!st.all_branches || has_line, "vessel: all branches (a tree) need a centerline file");
   require(!st.blend || st.all_branches,
           "vessel: a blended (watertight) surface applies to a tree (all branches)");
   require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");
   require(st.smrm.spokes >= 3, "vessel: spokes must be >= 3 (got ", st.smrm.spokes, ")");
+  require(!st.all_branches || has_line, "vessel: all branches (a tree) need a centerline file");
   VesselBuild out;
   VesselSummary& s = out.summary;
   std::shared_ptr<SmrmVessel> vessel;
@@ -103,58 +182,11 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
       SmrmTreeSettings ts;
       ts.vessel = st.smrm;
       const CenterlineTree ct = merge_centerlines(lines, st.merge_tolerance);
-      auto tree = std::make_shared<SmrmTree>(ct, ts);
-      if (st.blend) {  // the watertight junction surface: union of the closed path tubes
-        require(std::isfinite(st.blend_spacing) && st.blend_spacing >= 0,
-                "vessel: blend spacing must be >= 0 mm (got ", st.blend_spacing, ")");
-        const MatX3& C = tree->branch_vessel(0).rest_atoms();
-        const double spacing = st.blend_spacing > 0 ? st.blend_spacing : (C.row(1) - C.row(0)).norm();
-        // Rings too far apart on a tight bend, or too close on a wavy wide stretch (neighbouring rings of a
-        // 12 mm radius tilt into each other), make a tube cross itself: every path takes the first ring
-        // spacing of spacing x (1, 0.9, 1.1, 0.8, 1.2, ...) that gives a simple tube.
-        const std::vector<double> factors{1.0, 0.9, 1.1, 0.8, 1.2, 0.7, 1.3, 0.6, 1.4, 1.5};
-        std::vector<SurfaceMesh> tubes;
-        std::vector<double> used;
-        for (double f : factors) {
-          const std::vector<SurfaceMesh> cand = tree_path_tubes(ct, st.smrm.spokes, f * spacing);
-          if (tubes.empty()) {
-            tubes.resize(cand.size());
-            used.assign(cand.size(), 0.0);
-          }
-          bool all = true;
-          for (std::size_t q = 0; q < cand.size(); ++q) {
-            if (used[q] > 0) continue;
-            if (self_intersections(cand[q], "vessel tree tube") == 0) {
-              tubes[q] = cand[q];
-              used[q] = f * spacing;
-            } else {
-              all = false;
-            }
-          }
-          if (all) break;
-        }
-        for (std::size_t q = 0; q < used.size(); ++q)
-          require(used[q] > 0, "vessel tree surface: path tube ", q,
-                  " intersects itself at every ring spacing tried (", factors.back() * spacing, " to ",
-                  0.6 * spacing, " mm): a bend tighter than the vessel's radius");
-        s.notes.push_back(cat("path tube ring spacing ", *std::min_element(used.begin(), used.end()), "..",
-                              *std::max_element(used.begin(), used.end()), " mm (the first of ", spacing,
-                              " mm x 1, 0.9, 1.1, ... without self-intersection)"));
-        const SurfaceMesh u = union_of_closed_meshes(tubes, "vessel tree surface");
-        const ClosedManifoldReport cm = check_closed_manifold(u);
-        s.blended = true;
-        s.path_tubes = static_cast<Index>(tubes.size());
-        s.surface_closed = cm.ok();
-        s.surface_components = cm.mesh.components;
-        s.self_intersections = self_intersections(u, "vessel tree surface");
-        s.surface_volume_mm3 = signed_volume(u.V, u.F);
-        require(s.surface_closed,
-                "vessel tree surface: the union of the path tubes is not a closed manifold (",
-                cm.mesh.summary(), ")");
-        if (s.self_intersections > 0)
-          s.warnings.push_back(cat("the tree surface intersects itself: ", s.self_intersections,
-                                   " triangle pairs (try another --blend-spacing)"));
-        tree = std::make_shared<SmrmTree>(ct, ts, u);
+      std::shared_ptr<SmrmTree> tree;
+      if (!st.blend) {
+        tree = std::make_shared<SmrmTree>(ct, ts);
+      } else {  // the watertight junction surface: union of the closed path tubes
+        tree = blended(ct, ts, st.blend_spacing, s);
       }
       return finish_tree(std::move(tree), s, t0);
     }

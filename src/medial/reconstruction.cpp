@@ -302,11 +302,15 @@ void segment_rotations(const FrameField& F, MatX3& axis, VecX& angle) {
 }
 
 void reconstruct(const SurfaceBinding& b, const MatX3& C, const FrameField& F, ReconstructionScratch& scratch,
-                 MatX3& S) {  // §5.7: S = C + F o
+                 MatX3& S) {
+  if (S.rows() != b.size()) S.resize(b.size(), 3);
+  reconstruct(b, C, F, scratch, S.data());
+}
+
+void reconstruct(const SurfaceBinding& b, const MatX3& C, const FrameField& F, ReconstructionScratch& scratch,
+                 double* P) {  // §5.7: S = C + F o
   const Index m = b.size();
-  if (S.rows() != m) S.resize(m, 3);
   const double* O = b.offset.data();
-  double* P = S.data();
   const double* Cd = C.data();
   const double* U = F.u.data();
   const double* V = F.v.data();

@@ -416,9 +416,11 @@ void SmrmTree::map_to_surface(const MatX3& x, Workspace& ws, MatX3& surface) con
     const std::vector<Index>& ids = atoms_[b];
     MatX3& A = ws.atoms[b];
     for (std::size_t k = 0; k < ids.size(); ++k) A.row(static_cast<Index>(k)) = x.row(ids[k]);
-    if (!blended()) {
-      branches_[b]->map_to_surface(A, ws.vessel[b], ws.surface[b]);
-      surface.middleRows(node_begin_[b], ws.surface[b].rows()) = ws.surface[b];
+    if (!blended()) {  // §5.5 frames, §5.7 straight into the branch's rows of the tree surface
+      const SmrmVessel& v = *branches_[b];
+      compute_frames(A, v.frame_reference(), ws.vessel[b].frames);
+      reconstruct(v.binding(), A, ws.vessel[b].frames, ws.vessel[b].scratch,
+                  surface.data() + 3 * node_begin_[b]);
       continue;
     }
     const BlendBranch& bb = blend_[b];

@@ -27,6 +27,14 @@ VolumetricMesh SceneLoader::tetrahedralize(const SurfaceMesh&, Index) {
       "Python module");
 }
 
+SurfaceMesh SceneLoader::tree_surface(const CenterlineTree&, const SmrmTree&, double,
+                                      std::vector<std::string>&) {
+  throw InvalidInput(
+      "a blended (watertight) vessel tree surface needs CGAL (the builders layer): the loader of the "
+      "medspring "
+      "command or of the Python module");
+}
+
 namespace {
 
 struct Builder {
@@ -214,10 +222,23 @@ struct Builder {
     const ModelSource& s = scene.model.source;
     const std::vector<Centerline> lines =
         files("model.source.centerline").read_centerlines(s.centerline, s.centerline_unit, s.radius_array);
-    auto t = std::make_shared<SmrmTree>(merge_centerlines(lines), SmrmTreeSettings{scene.model.smrm});
+    const CenterlineTree ct = merge_centerlines(lines);
+    auto t = std::make_shared<SmrmTree>(ct, SmrmTreeSettings{scene.model.smrm});
+    if (s.blend) {  // one watertight surface: the union of the closed path tubes (CGAL, in the loader)
+      std::vector<std::string> notes;
+      SurfaceMesh u;
+      try {
+        u = files("model.source.centerline.blend").tree_surface(ct, *t, s.blend_spacing, notes);
+      } catch (const InvalidInput& e) {
+        fail("model.source.centerline.blend", e.what());
+      }
+      t = std::make_shared<SmrmTree>(ct, SmrmTreeSettings{scene.model.smrm}, u);
+      for (const std::string& n : notes) out.notes.push_back("smrm tree surface: " + n);
+    }
     out.notes.push_back(cat("smrm tree: ", lines.size(), " polylines -> ", t->num_branches(), " branches, ",
                             t->num_junctions(), " junctions, ", t->num_atoms(), " atoms, ",
-                            t->num_surface_nodes(), " surface nodes (one tube per branch)"));
+                            t->num_surface_nodes(), " surface nodes (",
+                            t->blended() ? "one watertight surface" : "one tube per branch", ")"));
     num_atoms = t->num_atoms();
     atoms_rest = t->model().x0;
     tree = t;

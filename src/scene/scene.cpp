@@ -165,6 +165,15 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
       if (p.get("branch")) fail(c, p.at("branches"), "give \"branch\" or \"branches\", not both");
       s.all_branches = true;
     }
+    s.blend = p.boolean("blend", false);
+    if (const json* bs = p.get("blend_spacing_mm")) {
+      s.blend_spacing = as_number(c, *bs, p.at("blend_spacing_mm"));
+      if (!(s.blend_spacing > 0) || !std::isfinite(s.blend_spacing))
+        fail(c, p.at("blend_spacing_mm"), cat("must be > 0 mm (got ", s.blend_spacing, ")"));
+      if (!s.blend) fail(c, p.at("blend_spacing_mm"), "applies with \"blend\": true");
+    }
+    if (s.blend && !s.all_branches)
+      fail(c, p.at("blend"), "a watertight (blended) surface applies to a tree (\"branches\": \"all\")");
     s.radius_array = p.string("radius_array", s.radius_array);
     if (const json* r = p.get("range_mm")) {
       const std::string rp = p.at("range_mm");
@@ -506,170 +515,6 @@ Scene load_scene(const fs::path& file) {
   fs::path base = file.parent_path();
   if (base.empty()) base = ".";
   return parse_scene(ss.str(), fs::absolute(base).lexically_normal(), file.string());
-}
-
-namespace {
-
-json vec_json(const Vec3& v) {
-  return json::array({v.x(), v.y(), v.z()});
-}
-
-json duffing_json(const DuffingSettings& d) {
-  return {{"mode", to_string(d.mode)}, {"eta", d.eta}, {"length", d.length}, {"soft", d.soft}};
-}
-
-const char* stiffness_name(LocalStiffness s) {
-  switch (s) {
-    case LocalStiffness::Isotropic:
-      return "isotropic";
-    case LocalStiffness::Linearized:
-      return "linearized";
-    case LocalStiffness::AxisProjected:
-      return "axis_projected";
-    case LocalStiffness::PaperLiteral:
-      return "paper_literal";
-  }
-  return "?";
-}
-
-}  // namespace
-
-std::string scene_to_json(const Scene& s) {
-  const ModelSource& src = s.model.source;
-  json source;
-  switch (src.type) {
-    case ModelSource::Type::Phantom: {
-      json p = {{"name", src.phantom}};
-      if (src.phantom == "tube")
-        p.update(
-            {{"rings", src.rings}, {"spokes", src.spokes}, {"spacing", src.spacing}, {"radius", src.radius}});
-      if (src.phantom == "vessel")
-        p.update({{"path", to_string(src.path)}, {"cross_section", to_string(src.cross_section)}});
-      source["phantom"] = p;
-      break;
-    }
-    case ModelSource::Type::Mesh:
-      break;
-    case ModelSource::Type::Segmentation:
-      source["segmentation"] = {{"file", src.segmentation.string()}, {"label", src.label}};
-      break;
-    case ModelSource::Type::Centerline: {
-      json cl = {{"file", src.centerline.string()},
-                 {"unit", to_string(src.centerline_unit)},
-                 {"branch", src.branch},
-                 {"radius_array", src.radius_array}};
-      if (src.all_branches) {
-        cl.erase("branch");
-        cl["branches"] = "all";
-      }
-      if (src.range_start > 0 || std::isfinite(src.range_end))
-        cl["range_mm"] = {src.range_start,
-                          std::isfinite(src.range_end) ? json(src.range_end) : json(nullptr)};
-      source["centerline"] = cl;
-      break;
-    }
-  }
-  if (!src.mesh.empty()) source["mesh"] = {{"file", src.mesh.string()}, {"unit", to_string(src.mesh_unit)}};
-
-  json params;
-  const SceneModel& m = s.model;
-  if (m.kind == ModelKind::Hybrid) {
-    params = params_to_json(m.hybrid);
-  } else if (m.kind == ModelKind::Surface) {
-    const SurfaceBodyParams& p = m.surface;
-    params = {{"mass", p.node.mass},
-              {"beta", p.node.beta},
-              {"k_r", p.node.return_k},
-              {"k", p.k},
-              {"duffing", duffing_json(p.duffing)},
-              {"fixed", p.fixed}};
-  } else if (m.kind == ModelKind::Volumetric) {
-    const VolumetricSettings& v = m.volumetric;
-    params = {{"nodes", m.volumetric_nodes},
-              {"density", v.density},
-              {"beta", v.beta},
-              {"spring_scale", v.spring_scale},
-              {"volume_scale", v.volume_scale},
-              {"duffing", duffing_json(v.duffing)},
-              {"fixed", v.fixed}};
-    if (v.return_k) params["k_r"] = *v.return_k;
-  } else {
-    const SmrmSettings& q = m.smrm;
-    params = {{"spokes", q.spokes},
-              {"mass", q.chain.mass},
-              {"beta", q.chain.beta},
-              {"k_cl", q.chain.k},
-              {"k_r", q.chain.kr},
-              {"bending", to_string(q.bending)},
-              {"wall_E", q.wall.E},
-              {"wall_thickness_ratio", q.wall.thickness_ratio},
-              {"fix_first", q.chain.fix_first},
-              {"fix_last", q.chain.fix_last},
-              {"k_loc", q.k_loc},
-              {"duffing", duffing_json(q.chain.duffing)},
-              {"frame_mode", to_string(q.frames.mode)},
-              {"frame_anchor", to_string(q.frames.anchor)}};
-    if (q.bending == BendingMode::Constant) params["k_b"] = q.chain.kb;
-  }
-  json model = {{"kind", to_string(m.kind)},
-                {"source", source},
-                {"nonlinear", m.nonlinear},
-                {"surface_nodes", m.surface_nodes},
-                {"parameters", params}};
-  if (m.kind != ModelKind::Surface && m.kind != ModelKind::Volumetric) model["atoms"] = m.atoms;
-  if (m.kind == ModelKind::Volumetric && !m.material)  // E and nu are the model's parameters
-    model["material"] = {{"E_kPa", m.volumetric.E_kPa}, {"nu", m.volumetric.nu}};
-  if (m.material) {
-    if (!m.material->preset.empty())
-      model["material"] = m.material->preset;
-    else
-      model["material"] = {{"E_kPa", m.material->E_kPa}, {"nu", m.material->nu}};
-  }
-
-  json loads = json::array();
-  for (const SceneLoad& L : s.loads) {
-    json l;
-    if (L.pick == SceneLoad::Pick::Node) l["node"] = L.node;
-    if (L.pick == SceneLoad::Pick::Point) l["point"] = vec_json(L.point);
-    if (L.pick == SceneLoad::Pick::RingSpoke) l.update({{"ring", L.ring}, {"spoke", L.spoke}});
-    if (L.direction == SceneLoad::Direction::Vector) l["direction"] = vec_json(L.vector);
-    if (L.direction == SceneLoad::Direction::InwardNormal) l["direction"] = "inward_normal";
-    if (L.direction == SceneLoad::Direction::TowardsAtom) {
-      l["direction"] = "towards_atom";
-      if (L.target_atom >= 0) l["atom"] = L.target_atom;
-    }
-    l.update({{"magnitude", L.magnitude},
-              {"t_on", L.t_on},
-              {"t_ramp", L.t_ramp},
-              {"t_release", std::isfinite(L.t_release) ? json(L.t_release) : json(nullptr)},
-              {"ramp_down", L.ramp_down}});
-    loads.push_back(l);
-  }
-  json local = {{"enabled", s.local.enabled},
-                {"stiffness", stiffness_name(s.local.settings.solver.stiffness)},
-                {"cache", s.local.settings.cache_local},
-                {"guard", s.local.guard},
-                {"patch_nodes", s.local.settings.patch.count},
-                {"half_width", s.local.settings.patch.half_width}};
-  if (!s.local_k_from_body) local["k_loc"] = s.local.settings.patch.k_loc;
-  json j = {{"name", s.name},
-            {"description", s.description},
-            {"model", model},
-            {"loads", loads},
-            {"integrator", params_to_json(s.step)},
-            {"duration", s.duration},
-            {"local", local},
-            {"record",
-             {{"every", s.record.every},
-              {"frames", s.record.frames},
-              {"key_times", s.record.key_times},
-              {"nodes", s.record.nodes},
-              {"atoms", s.record.atoms}}}};
-  if (!s.tools.empty()) {
-    j["tools"] = json::parse(scene_tools_json(s.tools));
-    j["contact"] = json::parse(scene_contact_json(s.contact));
-  }
-  return j.dump(2);
 }
 
 }  // namespace medspring

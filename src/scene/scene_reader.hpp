@@ -65,7 +65,7 @@ inline std::string as_string(const Ctx& c, const json& j, const std::string& pat
   return j.get<std::string>();
 }
 
-Vec3 as_vec3(const Ctx& c, const json& j, const std::string& path) {
+inline Vec3 as_vec3(const Ctx& c, const json& j, const std::string& path) {
   if (!j.is_array() || j.size() != 3) fail(c, path, "must be an array of 3 numbers");
   return {as_number(c, j[0], path + "[0]"), as_number(c, j[1], path + "[1]"),
           as_number(c, j[2], path + "[2]")};

@@ -199,6 +199,14 @@ TEST(CliExport, WebSetIsWrittenAndEveryPackageRebuilds) {
       EXPECT_EQ(m["surface_nodes"], 1200);
       EXPECT_EQ(m["masses"], 40);
     }
+  // With the builders layer (CGAL), the whole tree also comes with its one watertight surface.
+  if (files.count("aorta_tree_blended.msm") > 0)
+    for (const auto& m : j["models"])
+      if (m["file"] == "aorta_tree_blended.msm") {
+        EXPECT_EQ(m["kind"], "smrm_tree");
+        EXPECT_EQ(m["surface_nodes"], 2083);
+        EXPECT_EQ(m["masses"], 60);
+      }
   // without --web or a scene: a usage error
   const Result usage = medspring("export --out " + quote((dir / "x").string()));
   EXPECT_NE(usage.rc, 0);

@@ -197,6 +197,64 @@ TEST(CliBuildVessel, SceneWithAllBranchesRunsTheTreeAndReturnsToRest) {
   EXPECT_FALSE(fs::exists(tmp / "bad_atom"));
 }
 
+TEST(CliBuildVessel, SceneWithABlendedTreeRunsTheWatertightSurfaceAndExportsIt) {
+  // "blend": true in a scene: the tree's one watertight surface (the union of the path tubes) is the
+  // simulated surface; `medspring export SCENE` packages it and the package rebuilds it without CGAL.
+  const fs::path tmp = testing::temp_dir("cli-vessel-tree-blend");
+  const fs::path file = testing::require_data_file("vmr-0159-aorta-centerline.vtp");
+  std::ofstream(tmp / "tree.json")
+      << R"({"name": "tree", "model": {"kind": "smrm", "source": {"centerline": {"file": ")" << file.string()
+      << R"(", "unit": "cm", "branches": "all", "blend": true}}},
+    "loads": [{"node": 1900, "direction": "inward_normal", "magnitude": 0.5, "t_ramp": 20, "t_release": 300}],
+    "duration": 600})";
+  const CliRun r = run_cli(
+      "run \"" + (tmp / "tree.json").string() + "\" --out \"" + (tmp / "run").string() + "\" --quiet --json",
+      tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"kind\": \"smrm_tree\""), std::string::npos) << r.out;
+  EXPECT_EQ(json_number(r.out, "surface_nodes"), 2083);  // the union's nodes, not 7 tubes' 1980
+  EXPECT_NE(r.out.find("one watertight surface"), std::string::npos) << r.out;
+  EXPECT_GT(json_number(r.out, "contact_hold_mm"), 0.5);
+  EXPECT_LT(json_number(r.out, "return_ms"), 200.0);
+  EXPECT_EQ(json_number(r.out, "warnings"), 0);
+  // the scene written back keeps the option
+  std::ifstream back(tmp / "run" / "scene.json");
+  std::stringstream text;
+  text << back.rdbuf();
+  EXPECT_NE(text.str().find("\"blend\": true"), std::string::npos) << text.str();
+
+  const CliRun e = run_cli("export \"" + (tmp / "tree.json").string() + "\" --out \"" +
+                               (tmp / "models").string() + "\" --quiet --json",
+                           tmp);
+  ASSERT_EQ(e.code, 0) << e.err;
+  const ModelPackage pkg = read_model_package(tmp / "models" / "tree.msm");
+  EXPECT_EQ(pkg.kind, "smrm_tree");
+  const BodyPtr rebuilt = make_body(pkg);
+  EXPECT_TRUE(check_fingerprint(pkg, *rebuilt));
+  EXPECT_EQ(rebuilt->num_surface_nodes(), 2083);
+
+  // blend without a tree, and a bad spacing: one line naming the JSON path, nothing written
+  std::ofstream(tmp / "bad.json")
+      << R"({"name": "bad", "model": {"kind": "smrm", "source": {"centerline": {"file": ")" << file.string()
+      << R"(", "unit": "cm", "blend": true}}}, "duration": 10})";
+  const CliRun bad =
+      run_cli("run \"" + (tmp / "bad.json").string() + "\" --out \"" + (tmp / "bad").string() + "\"", tmp);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("model.source.centerline.blend: a watertight (blended) surface applies to a tree"),
+            std::string::npos)
+      << bad.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+  std::ofstream(tmp / "bad2.json")
+      << R"({"name": "bad2", "model": {"kind": "smrm", "source": {"centerline": {"file": ")" << file.string()
+      << R"(", "unit": "cm", "branches": "all", "blend": true, "blend_spacing_mm": -1}}}, "duration": 10})";
+  const CliRun bad2 =
+      run_cli("run \"" + (tmp / "bad2.json").string() + "\" --out \"" + (tmp / "bad2").string() + "\"", tmp);
+  EXPECT_EQ(bad2.code, 1);
+  EXPECT_NE(bad2.err.find("model.source.centerline.blend_spacing_mm: must be > 0 mm"), std::string::npos)
+      << bad2.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad2"));
+}
+
 TEST(CliBuildVessel, FromTheAortaSegmentationReportsItsDistanceToTheInput) {
   const fs::path tmp = testing::temp_dir("cli-vessel-mask");
   const fs::path mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");

@@ -83,6 +83,31 @@ struct VesselBuild {
   VesselSummary summary;
 };
 
+/// The watertight junction surface of a vessel tree (docs/vessels.md, "--blend"): the union (CGAL) of
+/// the closed path tubes of tree_path_tubes, every path with the first ring spacing of spacing x (1, 0.9,
+/// 1.1, 0.8, ...) that gives a simple tube, checked closed and manifold.
+struct TreeSurface {
+  SurfaceMesh mesh;
+  Index path_tubes = 0;
+  double spacing_min_mm = 0.0, spacing_max_mm = 0.0;  // ring spacings the paths took
+  bool closed = false;                                // closed, manifold, consistently oriented
+  Index components = 0;
+  Index self_intersections = -1;  // intersecting triangle pairs
+  double volume_mm3 = 0.0;        // signed volume (> 0: outward)
+  std::vector<std::string> notes, warnings;
+};
+
+/// The watertight surface of `tree` with `spokes` spokes per ring and rings `spacing` mm apart (0 = the
+/// atom spacing of `plain`'s root branch, `plain` = SmrmTree(tree, settings)). Throws InvalidInput for
+/// a spacing < 0 or NaN, a path that intersects itself at every spacing tried (naming the path) or a
+/// union that is not a closed manifold.
+TreeSurface blended_tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing = 0.0);
+
+/// SmrmTree(tree, settings, blended_tree_surface(...).mesh): the tree with its watertight surface;
+/// `report` (if given) receives what the surface is.
+std::shared_ptr<SmrmTree> make_blended_tree(const CenterlineTree& tree, const SmrmTreeSettings& settings,
+                                            double spacing = 0.0, TreeSurface* report = nullptr);
+
 /// Builds the vessel of settings (see the file comment). Deterministic.
 VesselBuild build_vessel(const VesselBuildSettings& settings);
 

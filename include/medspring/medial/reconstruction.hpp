@@ -84,6 +84,9 @@ void segment_rotations(const FrameField& F, MatX3& axis, VecX& angle);
 /// allocation once S and the scratch have their sizes.
 void reconstruct(const SurfaceBinding& b, const MatX3& C, const FrameField& F, ReconstructionScratch& scratch,
                  MatX3& S);
+/// The same into b.size() rows of 3 doubles at `S` (e.g. a branch's rows of a larger row-major surface).
+void reconstruct(const SurfaceBinding& b, const MatX3& C, const FrameField& F, ReconstructionScratch& scratch,
+                 double* S);
 
 /// Validity of the cross-sections (§5.6): rho_i kappa_i < 1 with the discrete curvature
 /// kappa_i = 2 sin(alpha_i / 2) / h_i (alpha_i the turning angle at atom i, h_i the mean adjacent

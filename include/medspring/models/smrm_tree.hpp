@@ -113,7 +113,9 @@ class SmrmTree final : public Body {
   Index node_atom(Index node) const;  // the tree atom a surface node rides on (the nearer one, blended)
 
   struct Workspace {
-    std::vector<MatX3> atoms, surface;
+    std::vector<MatX3> atoms;    // per branch: its atoms (gathered from the tree's)
+    std::vector<MatX3> surface;  // per branch: room for its rows (map_to_surface writes the tree surface
+                                 // directly; e.g. for per-branch normals)
     std::vector<SmrmVessel::Workspace> vessel;
   };
   Workspace make_workspace() const;

@@ -13,6 +13,7 @@
 #include "medspring/geometry/polyline.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/geometry/volume.hpp"
+#include "medspring/models/smrm_tree.hpp"
 #include "medspring/scene/scene.hpp"
 
 namespace medspring {
@@ -38,6 +39,12 @@ class SceneLoader {
   /// triangles as the boundary (TetGen -pqY; the volumetric model kind, issue 23). This default refuses
   /// (a loader without a tetrahedral mesher); the medspring command's and the Python module's mesh.
   virtual VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes);
+  /// The watertight junction surface of a vessel tree ("blend": true; the union of its closed path tubes
+  /// with rings `spacing` mm apart, 0 = the atom spacing of `plain`, builders' blended_tree_surface);
+  /// `notes` receives what it is. This default refuses (a loader without CGAL); the medspring command's
+  /// and the Python module's unite the tubes.
+  virtual SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
+                                   std::vector<std::string>& notes);
 };
 
 /// A scene whose model is built and whose loads are resolved on surface nodes.

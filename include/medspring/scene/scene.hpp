@@ -64,7 +64,9 @@ struct ModelSource {
   std::filesystem::path centerline;
   LengthUnit centerline_unit = LengthUnit::Millimetre;
   Index branch = 0;
-  bool all_branches = false;  // "branches": "all": every polyline, merged into a vessel tree (smrm)
+  bool all_branches = false;   // "branches": "all": every polyline, merged into a vessel tree (smrm)
+  bool blend = false;          // "blend": true: the tree's one watertight surface (docs/vessels.md)
+  double blend_spacing = 0.0;  // "blend_spacing_mm": ring spacing of its path tubes (0 = atom spacing)
   std::string radius_array = "MaximumInscribedSphereRadius";
   double range_start = 0.0;                                    // mm of arc length from the first point
   double range_end = std::numeric_limits<double>::infinity();  // mm (inf = to the end)
