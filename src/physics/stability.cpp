@@ -49,34 +49,44 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
   // assembled matrix.
   const Springs& S = m.springs;
   const Index ns = S.size();
-  // ca, cb per spring; the unit direction is recomputed in every product from x (the same expression, so
-  // the same bits as storing it) to keep a 1M-node build within its memory budget.
-  VecX ca(ns), cb(ns);
+  // K_s = ca n n^T + cb I = ce e e^T + cb I with ce = ca / L^2 and e = x_j - x_i, recomputed from x in
+  // every product: no stored directions (a 1M-node build stays within its memory budget) and no square
+  // root or division per spring and product (they made this loop divider-bound: issue 15, 56 % of the
+  // 3M-node build). The same matrix to rounding.
+  VecX ce(ns), cb(ns);
   for (Index q = 0; q < ns; ++q) {
     const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
-    const double L = e.norm();
+    const double L2 = e.squaredNorm();
+    const double L = std::sqrt(L2);
     if (L < 1e-9) {
-      ca[q] = cb[q] = 0;
+      ce[q] = cb[q] = 0;
       continue;
     }
     const double d = L - S.L0[q];
     cb[q] = spring_tension(S.k[q], S.kp[q], d) / L;
-    ca[q] = spring_tension_derivative(S.k[q], S.kp[q], d) - cb[q];
+    ce[q] = (spring_tension_derivative(S.k[q], S.kp[q], d) - cb[q]) / L2;
   }
-  auto unit = [&](Index q) -> Vec3 {
-    const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
-    const double L = e.norm();
-    return L < 1e-9 ? Vec3::Zero() : Vec3(e / L);
-  };
+  const double* X = x.data();
+  const Index* SI = S.i.data();
+  const Index* SJ = S.j.data();
   auto apply_K = [&](const VecX& p, VecX& y) {
-    for (Index a = 0; a < n; ++a) y.segment<3>(3 * a) = m.kr[a] * p.segment<3>(3 * a);
+    const double* P = p.data();
+    double* Y = y.data();
+    for (Index a = 0; a < n; ++a)
+      for (int c = 0; c < 3; ++c) Y[3 * a + c] = m.kr[a] * P[3 * a + c];
     for (Index q = 0; q < ns; ++q) {
-      const Index i = 3 * S.i[q], j = 3 * S.j[q];
-      const Vec3 dp = p.segment<3>(i) - p.segment<3>(j);
-      const Vec3 nq = unit(q);
-      const Vec3 kd = ca[q] * nq * nq.dot(dp) + cb[q] * dp;
-      y.segment<3>(i) += kd;
-      y.segment<3>(j) -= kd;
+      const Index i = 3 * SI[q], j = 3 * SJ[q];
+      const double ex = X[j] - X[i], ey = X[j + 1] - X[i + 1], ez = X[j + 2] - X[i + 2];
+      const double dx = P[i] - P[j], dy = P[i + 1] - P[j + 1], dz = P[i + 2] - P[j + 2];
+      const double g = ce[q] * (ex * dx + ey * dy + ez * dz);
+      const double c = cb[q];
+      const double kx = g * ex + c * dx, ky = g * ey + c * dy, kz = g * ez + c * dz;
+      Y[i] += kx;
+      Y[i + 1] += ky;
+      Y[i + 2] += kz;
+      Y[j] -= kx;
+      Y[j + 1] -= ky;
+      Y[j + 2] -= kz;
     }
     const BendingTerms& B = m.bending;
     for (Index t = 0; t < B.size(); ++t) {
