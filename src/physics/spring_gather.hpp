@@ -2,7 +2,8 @@
 // substep are computed once per spring into a slot buffer (vectorised, no scatter), then every node
 // gathers its slots in increasing spring index, adds its return spring and load and is advanced at once.
 // The node sums have the same terms in the same order as the scatter pass (forces.cpp): a spring's force
-// on its end j is the negated force on its end i, as `f_j -= f` there.
+// on its end j is the negated force on its end i, as `f_j -= f` there. Equal to rounding (FMA
+// contraction may differ between the vectorised and the scalar loop).
 #pragma once
 
 #include "medspring/physics/model.hpp"
