@@ -20,7 +20,8 @@ bool gather_ready(const Model& m, State& st);
 /// One guarded symplectic substep (§2.1, §2.5) through the gather pass, coefficients st.step_coef
 /// refreshed for h by the caller. With `stiffening`, st.stiffening = max(1, max_s kappa_s / k_s).
 /// Returns 0 (ok), 1 (a velocity over v_max) or 2 (non-finite), the nodes already advanced restored
-/// (as symplectic_substep does). st.f holds the node forces afterwards, as after internal_forces.
+/// (as symplectic_substep does). st.f holds the node forces afterwards, as after internal_forces (after
+/// a failed substep only those of the nodes up to the failing one: f is scratch then).
 int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening);
 
 }  // namespace medspring::detail
