@@ -459,6 +459,7 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
     st.spring_b.setZero(ns);
     st.spring_n.setZero(ns, 3);
   }
+  if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
   const int T = effective_threads(m, s);
   if (T <= 1) return;
   if (!st.threaded.p || st.threaded.p->pool.size() != T) st.threaded.p = std::make_shared<ThreadedStep>(T);

@@ -242,6 +242,7 @@ State make_state(const Model& m) {
   s.spring_a.setZero(ns);
   s.spring_b.setZero(ns);
   s.spring_n.setZero(ns, 3);
+  detail::gather_ready(m, s);  // the gather pass's slot buffer (spring_gather.hpp)
   return s;
 }
 
