@@ -189,6 +189,9 @@ double medspring_bytes_per_node(const Model& m, const State& s) {
        vec(s.step_coef);
   for (const VecX* v : {&s.cg_r, &s.cg_z, &s.cg_p, &s.cg_q, &s.dv, &s.rhs, &s.jacobi}) b += vec(*v);
   b += vec(s.spring_a) + vec(s.spring_b) + mat(s.spring_n);
+  b += vec(s.spring_force) +
+       static_cast<double>(sizeof(Index)) *
+           static_cast<double>(m.gather.row.size() + m.gather.extra_begin.size() + m.gather.extra.size());
   return b / n;
 }
 

@@ -491,8 +491,8 @@ void bind_physics(py::module_& m) {
         return power_iteration_omega(model, x.is_none() ? model.x0 : points_arg(x, "x", model.num_nodes()),
                                      iterations, safety);
       },
-      "model"_a, "x"_a = py::none(), "iterations"_a = 30, "safety"_a = 1.05,
-      "Power-iteration estimate of omega_max (rad/ms) at positions x (x0 if None), times safety.");
+      "model"_a, "x"_a = py::none(), "iterations"_a = 15, "safety"_a = 1.05,
+      "Lanczos estimate (from below) of omega_max (rad/ms) at positions x (x0 if None), times safety.");
   m.def("dt_safe", &dt_safe, "model"_a, "stiffening"_a = 1.0, "safety"_a = 0.8,
         "The run-time stable step safety * 2 / (omega_rest sqrt(stiffening)), ms.");
 }

@@ -8,6 +8,7 @@
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/parallel.hpp"
 #include "medspring/physics/stability.hpp"
+#include "spring_gather.hpp"
 #include "spring_kernel.hpp"
 
 namespace medspring {
@@ -109,21 +110,7 @@ void refresh_step_coefficients(const Model& m, State& st, double h) {
   }
 }
 
-// Undoes the symplectic update of the free nodes fr[0 .. count): x_old = x - h v, v_old = (v / c - h g) / m.
-void undo_symplectic(const Model& m, State& st, double h, const Index* fr, Index count) {
-  const double* G = st.f.data();
-  const double* Mv = m.mass.data();
-  const double* C = st.step_coef.data();
-  double* X = st.x.data();
-  double* V = st.v.data();
-  for (Index r = 0; r < count; ++r) {
-    const Index b = fr[r], p = 3 * b;
-    for (int d = 0; d < 3; ++d) {
-      X[p + d] -= h * V[p + d];
-      V[p + d] = (V[p + d] / C[b] - h * G[p + d]) / Mv[b];
-    }
-  }
-}
+using detail::undo_symplectic;
 
 // One symplectic Euler substep with implicit diagonal damping (§2.1) of the free nodes fr[0 .. nf), forces
 // in st.f, coefficients refreshed for h. Returns TooFast / NonFinite (and restores the previous positions
@@ -472,6 +459,7 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
     st.spring_b.setZero(ns);
     st.spring_n.setZero(ns, 3);
   }
+  if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
   const int T = effective_threads(m, s);
   if (T <= 1) return;
   if (!st.threaded.p || st.threaded.p->pool.size() != T) st.threaded.p = std::make_shared<ThreadedStep>(T);
@@ -500,6 +488,8 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
     prepare_step(m, st, s);  // allocates only on the first threaded step of this state
     par = st.threaded.p.get();
   }
+  // the gather pass (spring_gather.hpp) for the serial symplectic step of a model that has one
+  const bool gather = !par && s.integrator == Integrator::SymplecticEuler && detail::gather_ready(m, st);
   const double T = s.dt;
   const double vmax2 = s.v_max * s.v_max;
   long subs = 1;
@@ -531,6 +521,9 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
       const bool stiffening = left == 1 || rollbacks == s.max_rollbacks;
       if (par) {
         r = threaded_substep(m, st, *par, h, vmax2, s.guard, stiffening);
+      } else if (gather) {
+        refresh_step_coefficients(m, st, h);
+        r = static_cast<Substep>(detail::gather_substep(m, st, h, vmax2, s.guard, stiffening));
       } else {
         const double stiff = detail::internal_forces(m, st.x, st.f_ext, st.f, stiffening);
         if (stiffening) st.stiffening = stiff;

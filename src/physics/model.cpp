@@ -8,6 +8,7 @@
 #include "medspring/geometry/topology.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
+#include "spring_gather.hpp"
 
 namespace medspring {
 
@@ -123,6 +124,7 @@ void finalize(Model& m) {
   m.omega_gershgorin = gershgorin_omega(m, m.x0);
   m.omega_rest = power_iteration_omega(m, m.x0);
   if (!(m.omega_rest > 0)) m.omega_rest = m.omega_gershgorin > 0 ? m.omega_gershgorin : 1e-12;
+  detail::build_spring_gather(m);
   m.finalized = true;
 }
 
@@ -240,6 +242,7 @@ State make_state(const Model& m) {
   s.spring_a.setZero(ns);
   s.spring_b.setZero(ns);
   s.spring_n.setZero(ns, 3);
+  detail::gather_ready(m, s);  // the gather pass's slot buffer (spring_gather.hpp)
   return s;
 }
 

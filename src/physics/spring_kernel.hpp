@@ -4,6 +4,7 @@
 
 #include "medspring/physics/kernels.hpp"
 #include "medspring/physics/model.hpp"
+#include "medspring/physics/state.hpp"
 
 namespace medspring::detail {
 
@@ -45,6 +46,23 @@ inline void return_forces(const Model& m, const double* X, const double* FE, dou
   for (Index a = a0; a < a1; ++a) {
     const Index q = 3 * a;
     hd::return_force(FE + q, X + q, X0 + q, KR[a], Fo + q);
+  }
+}
+
+/// Undoes the symplectic update of the free nodes fr[0 .. count) (the guard, §2.5), from the forces in
+/// st.f and the coefficients st.step_coef: x_old = x - h v, v_old = (v / c - h g) / m.
+inline void undo_symplectic(const Model& m, State& st, double h, const Index* fr, Index count) {
+  const double* G = st.f.data();
+  const double* Mv = m.mass.data();
+  const double* C = st.step_coef.data();
+  double* X = st.x.data();
+  double* V = st.v.data();
+  for (Index r = 0; r < count; ++r) {
+    const Index b = fr[r], p = 3 * b;
+    for (int d = 0; d < 3; ++d) {
+      X[p + d] -= h * V[p + d];
+      V[p + d] = (V[p + d] / C[b] - h * G[p + d]) / Mv[b];
+    }
   }
 }
 

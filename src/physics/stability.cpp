@@ -1,7 +1,10 @@
 #include "medspring/physics/stability.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "medspring/physics/forces.hpp"
 
@@ -49,67 +52,106 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
   // assembled matrix.
   const Springs& S = m.springs;
   const Index ns = S.size();
-  // ca, cb per spring; the unit direction is recomputed in every product from x (the same expression, so
-  // the same bits as storing it) to keep a 1M-node build within its memory budget.
-  VecX ca(ns), cb(ns);
+  // K_s = ca n n^T + cb I = ce e e^T + cb I with ce = ca / L^2 and e = x_j - x_i, recomputed from x in
+  // every product: no stored directions (a 1M-node build stays within its memory budget) and no square
+  // root or division per spring and product (they made this loop divider-bound: issue 15, 56 % of the
+  // 3M-node build). The same matrix to rounding.
+  VecX ce(ns), cb(ns);
   for (Index q = 0; q < ns; ++q) {
     const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
-    const double L = e.norm();
+    const double L2 = e.squaredNorm();
+    const double L = std::sqrt(L2);
     if (L < 1e-9) {
-      ca[q] = cb[q] = 0;
+      ce[q] = cb[q] = 0;
       continue;
     }
     const double d = L - S.L0[q];
     cb[q] = spring_tension(S.k[q], S.kp[q], d) / L;
-    ca[q] = spring_tension_derivative(S.k[q], S.kp[q], d) - cb[q];
+    ce[q] = (spring_tension_derivative(S.k[q], S.kp[q], d) - cb[q]) / L2;
   }
-  auto unit = [&](Index q) -> Vec3 {
-    const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
-    const double L = e.norm();
-    return L < 1e-9 ? Vec3::Zero() : Vec3(e / L);
-  };
-  auto apply_K = [&](const VecX& p, VecX& y) {
-    for (Index a = 0; a < n; ++a) y.segment<3>(3 * a) = m.kr[a] * p.segment<3>(3 * a);
+  const double* X = x.data();
+  const Index* SI = S.i.data();
+  const Index* SJ = S.j.data();
+  VecX sc(n);  // M^-1/2 per node, zero on fixed DOFs (removed from the system, §1.5)
+  for (Index a = 0; a < n; ++a) sc[a] = m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]);
+  const bool extra_terms = m.bending.size() > 0 || m.volume.size() > 0;
+  VecX w(extra_terms ? 3 * n : 0);  // M^-1/2 q, for the bending and volume terms only
+  // y = M^-1/2 K_t M^-1/2 q: springs read M^-1/2 q on the fly (no vector of it for spring models)
+  auto apply_A = [&](const VecX& qv, VecX& y) {
+    const double* Q = qv.data();
+    double* Y = y.data();
+    for (Index a = 0; a < n; ++a)
+      for (int c = 0; c < 3; ++c) Y[3 * a + c] = m.kr[a] * (sc[a] * Q[3 * a + c]);
     for (Index q = 0; q < ns; ++q) {
-      const Index i = 3 * S.i[q], j = 3 * S.j[q];
-      const Vec3 dp = p.segment<3>(i) - p.segment<3>(j);
-      const Vec3 nq = unit(q);
-      const Vec3 kd = ca[q] * nq * nq.dot(dp) + cb[q] * dp;
-      y.segment<3>(i) += kd;
-      y.segment<3>(j) -= kd;
+      const Index i = 3 * SI[q], j = 3 * SJ[q];
+      const double si = sc[SI[q]], sj = sc[SJ[q]];
+      const double ex = X[j] - X[i], ey = X[j + 1] - X[i + 1], ez = X[j + 2] - X[i + 2];
+      const double dx = si * Q[i] - sj * Q[j], dy = si * Q[i + 1] - sj * Q[j + 1],
+                   dz = si * Q[i + 2] - sj * Q[j + 2];
+      const double g = ce[q] * (ex * dx + ey * dy + ez * dz);
+      const double c = cb[q];
+      const double kx = g * ex + c * dx, ky = g * ey + c * dy, kz = g * ez + c * dz;
+      Y[i] += kx;
+      Y[i + 1] += ky;
+      Y[i + 2] += kz;
+      Y[j] -= kx;
+      Y[j + 1] -= ky;
+      Y[j + 2] -= kz;
     }
-    const BendingTerms& B = m.bending;
-    for (Index t = 0; t < B.size(); ++t) {
-      const Vec3 g =
-          B.kb[t] * (p.segment<3>(3 * B.a[t]) - 2.0 * p.segment<3>(3 * B.b[t]) + p.segment<3>(3 * B.c[t]));
-      y.segment<3>(3 * B.a[t]) += g;
-      y.segment<3>(3 * B.b[t]) -= 2.0 * g;
-      y.segment<3>(3 * B.c[t]) += g;
+    if (extra_terms) {
+      for (Index a = 0; a < n; ++a) w.segment<3>(3 * a) = sc[a] * qv.segment<3>(3 * a);
+      const BendingTerms& B = m.bending;
+      for (Index t = 0; t < B.size(); ++t) {
+        const Vec3 g =
+            B.kb[t] * (w.segment<3>(3 * B.a[t]) - 2.0 * w.segment<3>(3 * B.b[t]) + w.segment<3>(3 * B.c[t]));
+        y.segment<3>(3 * B.a[t]) += g;
+        y.segment<3>(3 * B.b[t]) -= 2.0 * g;
+        y.segment<3>(3 * B.c[t]) += g;
+      }
+      if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, w, y);
     }
-    if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, p, y);
+    for (Index a = 0; a < n; ++a)
+      for (int c = 0; c < 3; ++c) Y[3 * a + c] *= sc[a];
   };
-  VecX y(3 * n), w(3 * n);
-  VecX s(n);  // M^-1/2 scaling per node, zero on fixed DOFs (removed from the system, §1.5)
-  for (Index a = 0; a < n; ++a) s[a] = m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]);
-  auto scale = [&](const VecX& in, VecX& out) {  // out = M^-1/2 in
-    for (Index a = 0; a < n; ++a) out.segment<3>(3 * a) = s[a] * in.segment<3>(3 * a);
-  };
-  VecX z(3 * n);
+  // Lanczos (issue 15: the 30 power-iteration products were 56 % of a 3M-node build): `iterations`
+  // products span the Krylov space of the start vector, and the largest eigenvalue of the tridiagonal
+  // projection (a Ritz value) is the largest Rayleigh quotient over that space: at least the power
+  // iteration's estimate after as many products, never above lambda_max (to rounding). It converges
+  // like a Chebyshev polynomial of the spectral gap, far faster than the power iteration, so 15
+  // products replace 30. Still an estimate from below: `safety` (1.05) covers the rest, and
+  // tests/physics/stability_test.cpp checks the bound against Eigen's dense eigenvalues.
+  VecX qv(3 * n), qprev = VecX::Zero(3 * n), y(3 * n);
   std::uint64_t seed = 0x9E3779B97F4A7C15ull;  // deterministic pseudo-random start
   for (Index q = 0; q < 3 * n; ++q) {
     seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-    z[q] = (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * s[q / 3];
+    qv[q] = (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * sc[q / 3];
   }
-  double lambda = 0;
+  const double n0 = qv.norm();
+  if (n0 == 0) return 0.0;
+  qv /= n0;
+  std::vector<double> alpha, beta;
+  double beta_prev = 0;
+  iterations = std::max(iterations, 1);
   for (int it = 0; it < iterations; ++it) {
-    const double nz = z.norm();
-    if (nz == 0) return 0.0;
-    z /= nz;
-    scale(z, w);
-    apply_K(w, y);
-    scale(y, y);
-    lambda = z.dot(y);
-    z.swap(y);
+    apply_A(qv, y);
+    const double al = qv.dot(y);
+    y -= al * qv + beta_prev * qprev;
+    alpha.push_back(al);
+    const double be = y.norm();
+    if (!(be > 1e-12 * std::max(std::abs(al), 1e-300)) || it + 1 == iterations) break;  // invariant space
+    beta.push_back(be);
+    qprev.swap(qv);
+    qv = y / be;
+    beta_prev = be;
+  }
+  const auto k = static_cast<Index>(alpha.size());
+  double lambda = alpha[0];
+  if (k > 1) {
+    VecX d = Eigen::Map<const VecX>(alpha.data(), k);
+    VecX e = Eigen::Map<const VecX>(beta.data(), k - 1);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+    es.computeFromTridiagonal(d, e, Eigen::EigenvaluesOnly);
+    lambda = es.eigenvalues().maxCoeff();
   }
   return safety * std::sqrt(std::max(lambda, 0.0));
 }

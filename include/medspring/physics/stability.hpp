@@ -8,9 +8,11 @@ namespace medspring {
 /// Gershgorin bound on omega_max (rad/ms) of M^-1 K_t at positions x (cheap, conservative).
 double gershgorin_omega(const Model& model, const MatX3& x);
 
-/// Power-iteration estimate of omega_max (rad/ms) at positions x: `iterations` steps of the
-/// symmetrised M^-1/2 K_t M^-1/2, Rayleigh quotient, times `safety` (default 1.05). Deterministic.
-double power_iteration_omega(const Model& model, const MatX3& x, int iterations = 30, double safety = 1.05);
+/// Estimate of omega_max (rad/ms) at positions x from below: `iterations` Lanczos steps (matrix-free
+/// products) of the symmetrised M^-1/2 K_t M^-1/2 from a fixed pseudo-random start, the largest Ritz
+/// value (>= the power iteration's Rayleigh quotient after as many products), times `safety` (default
+/// 1.05). Deterministic. (The name is historical: it was a power iteration of 30 steps.)
+double power_iteration_omega(const Model& model, const MatX3& x, int iterations = 15, double safety = 1.05);
 
 /// The run-time stable step: safety * 2 / (omega_rest * sqrt(stiffening)) (ms).
 inline double dt_safe(const Model& model, double stiffening, double safety = 0.8) {

@@ -1,0 +1,256 @@
+// The gather pass of the serial symplectic step (spring_gather.hpp). Compiled with -fno-math-errno
+// (physics/CMakeLists.txt) so that the square roots of the spring pass vectorise; nothing reads errno.
+#include "spring_gather.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "medspring/physics/kernels.hpp"
+#include "spring_kernel.hpp"
+
+namespace medspring::detail {
+
+namespace {
+
+// Row widths the node pass is unrolled for (build_spring_gather picks one per model).
+constexpr int kWidths[] = {4, 6, 8, 10, 12, 16};
+
+}  // namespace
+
+void build_spring_gather(Model& m) {
+  m.gather = SpringGather{};
+  const Index n = m.num_nodes(), ns = m.num_springs();
+  if (ns == 0 || ns > kSpringGatherMaxSprings || m.has_soft_springs || m.bending.size() > 0 ||
+      m.volume.size() > 0)
+    return;
+  const auto un = static_cast<std::size_t>(n);
+  std::vector<Index> degree(un + 1, 0);
+  for (Index s = 0; s < ns; ++s) {
+    ++degree[static_cast<std::size_t>(m.springs.i[s])];
+    ++degree[static_cast<std::size_t>(m.springs.j[s])];
+  }
+  // the row width of least estimated cost: a row slot costs one vector add (padding included), an
+  // overflow slot about two (a loop of its own), a node that overflows about ten (a mispredicted exit)
+  int W = kWidths[0];
+  double best = -1;
+  for (const int w : kWidths) {
+    double cost = static_cast<double>(n) * w;
+    for (std::size_t a = 0; a < un; ++a)
+      if (degree[a] > w) cost += 2.0 * static_cast<double>(degree[a] - w) + 10.0;
+    if (best < 0 || cost < best) {
+      best = cost;
+      W = w;
+    }
+  }
+  SpringGather& G = m.gather;
+  G.width = W;
+  G.nodes = n;
+  G.springs = ns;
+  const Index zero = 2 * ns;
+  G.row.assign(un * static_cast<std::size_t>(W), zero);
+  // slots of every node in increasing spring index (CSR), then split into the row and the overflow
+  std::vector<Index> begin(un + 1, 0);
+  for (std::size_t a = 0; a < un; ++a) begin[a + 1] = begin[a] + degree[a];
+  std::vector<Index> slots(static_cast<std::size_t>(begin[un]));
+  std::vector<Index> fill(begin.begin(), begin.end() - 1);
+  for (Index s = 0; s < ns; ++s) {
+    slots[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.springs.i[s])]++)] = s;
+    slots[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.springs.j[s])]++)] = ns + s;
+  }
+  G.extra_begin.assign(un + 1, 0);
+  for (std::size_t a = 0; a < un; ++a) {
+    const Index d = degree[a];
+    for (Index e = 0; e < d; ++e) {
+      const Index slot = slots[static_cast<std::size_t>(begin[a] + e)];
+      if (e < W)
+        G.row[a * static_cast<std::size_t>(W) + static_cast<std::size_t>(e)] = slot;
+      else
+        G.extra.push_back(slot);
+    }
+    G.extra_begin[a + 1] = static_cast<Index>(G.extra.size());
+  }
+}
+
+bool gather_ready(const Model& m, State& st) {
+  const SpringGather& G = m.gather;
+  if (G.empty() || G.nodes != m.num_nodes() || G.springs != m.num_springs()) return false;
+  const Index slots = 2 * G.springs + 1;
+  if (st.spring_force.size() != 4 * slots) st.spring_force.setZero(4 * slots);  // once per state
+  return true;
+}
+
+namespace {
+
+constexpr Index kBlock = 128;
+
+// Four doubles (x, y, z, 0) of a slot force: one vector load and add per slot in the node pass. GCC and
+// Clang vector extensions (lane-wise IEEE operations); the buffer is Eigen-allocated (>= 16-byte
+// aligned), so the type asks for 8-byte alignment only.
+typedef double v4d __attribute__((
+    vector_size(32), aligned(8)));  // springs per block of the spring pass (the gathered vectors stay in L1)
+
+// Spring vectors e = x_j - x_i of springs [0, nb) of a block. Scalar loads: the gather instructions
+// the vectoriser would use here are slower than them.
+#if defined(__GNUC__) && !defined(__clang__)
+__attribute__((optimize("no-tree-vectorize")))
+#endif
+void spring_vectors(Index nb, const Index* __restrict I, const Index* __restrict J, const double* __restrict x,
+                    double* __restrict ex, double* __restrict ey, double* __restrict ez) {
+  for (Index q = 0; q < nb; ++q) {
+    const Index a = 3 * I[q], b = 3 * J[q];
+    ex[q] = x[b] - x[a];
+    ey[q] = x[b + 1] - x[a + 1];
+    ez[q] = x[b + 2] - x[a + 2];
+  }
+}
+
+// Forces of springs [0, nb) of a block from their vectors: hd::spring_force's arithmetic written without
+// branches (a spring shorter than kMinSpringLength gets the force 0). The tension over the length t goes
+// to tt (vectorised loop); the force t e is then stored into the slot of the end i and its negation into
+// that of the end j, as (x, y, z, 0). With Stiff, the largest kappa/k of the block is folded into
+// `stiff_bits`: the bit pattern of a non-negative double orders like the double, so the maximum
+// vectorises as an integer maximum.
+template <bool Stiff>
+inline void block_forces(Index nb, const double* __restrict ex, const double* __restrict ey,
+                         const double* __restrict ez, const double* __restrict L0, const double* __restrict K,
+                         const double* __restrict KP, const double* __restrict IK, double* __restrict tt,
+                         std::int64_t& stiff_bits) {
+  std::int64_t sm = stiff_bits;
+  for (Index q = 0; q < nb; ++q) {
+    const double L2 = ex[q] * ex[q] + ey[q] * ey[q] + ez[q] * ez[q];
+    const bool ok = L2 >= hd::kMinSpringLength * hd::kMinSpringLength;  // else skipped (§1.3)
+    const double L = std::sqrt(ok ? L2 : 1.0);
+    const double inv = 1.0 / L;
+    const double d = L - L0[q];
+    const double kp_d2 = KP[q] * d * d;
+    const double phi = d * (K[q] + kp_d2);  // eq. (5)
+    const double t = ok ? phi * inv : 0.0;  // phi / L
+    if constexpr (Stiff) {
+      const double dphi = K[q] + 3.0 * kp_d2;
+      const double at = std::abs(t);
+      double kap = (dphi < at ? at : dphi) * IK[q];  // hd::max_of(dphi, |t|) / k
+      kap = ok && kap >= 0.0 ? kap : 0.0;            // NaN and skipped springs do not count
+      std::int64_t bits;
+      std::memcpy(&bits, &kap, sizeof bits);
+      sm = sm < bits ? bits : sm;
+    }
+    tt[q] = t;
+  }
+  stiff_bits = sm;
+}
+
+// The spring pass: every slot's force into F ((2 #S + 1) x 4: slot s = spring s at its end i, #S + s at
+// its end j, 2 #S zero). Returns max(1, max kappa/k) with Stiff, else 1.
+template <bool Stiff>
+double slot_forces(const Model& m, const double* __restrict x, double* __restrict F) {
+  const Index ns = m.num_springs();
+  const Springs& S = m.springs;
+  v4d* Fi = reinterpret_cast<v4d*>(F);
+  v4d* Fj = Fi + ns;
+  std::int64_t sm = 0;  // bits of +0.0
+  alignas(64) double ex[kBlock], ey[kBlock], ez[kBlock], tt[kBlock];
+  for (Index s0 = 0; s0 < ns; s0 += kBlock) {
+    const Index nb = std::min(kBlock, ns - s0);
+    spring_vectors(nb, S.i.data() + s0, S.j.data() + s0, x, ex, ey, ez);
+    block_forces<Stiff>(nb, ex, ey, ez, S.L0.data() + s0, S.k.data() + s0, S.kp.data() + s0,
+                        m.inv_k.data() + s0, tt, sm);
+    for (Index q = 0; q < nb; ++q) {
+      const double t = tt[q];
+      const v4d f = {t * ex[q], t * ey[q], t * ez[q], 0.0};
+      Fi[s0 + q] = f;
+      Fj[s0 + q] = -f;  // exactly the negated force: f_j -= f of the scatter pass
+    }
+  }
+  if constexpr (!Stiff) return 1.0;
+  double stiff;
+  std::memcpy(&stiff, &sm, sizeof stiff);
+  return hd::max_of(1.0, stiff);
+}
+
+// The node pass: every node's force (load, return spring, its slots in increasing spring index) into
+// st.f and, for a free node, the symplectic update (§2.1) in place: the spring pass has read every
+// position already. Returns 0, or 1 / 2 after restoring the free nodes already advanced.
+template <int W, bool Guard>
+int node_pass(const Model& m, State& st, double h, double vmax2) {
+  const SpringGather& Gt = m.gather;
+  const Index n = m.num_nodes();
+  const v4d* __restrict F4 = reinterpret_cast<const v4d*>(st.spring_force.data());
+  const Index* __restrict row = Gt.row.data();
+  const Index* __restrict xb = Gt.extra_begin.data();
+  const Index* __restrict xs = Gt.extra.data();
+  const double* __restrict FE = st.f_ext.data();
+  const double* __restrict X0 = m.x0.data();
+  const double* __restrict KR = m.kr.data();
+  const double* __restrict Mv = m.mass.data();
+  const double* __restrict C = st.step_coef.data();
+  const std::uint8_t* __restrict fixed = m.fixed.data();
+  double* X = st.x.data();  // not restrict: the guard's undo writes them too
+  double* V = st.v.data();
+  double* G = st.f.data();
+  Index advanced = 0;  // free nodes advanced so far (m.free_nodes is in increasing order)
+  for (Index a = 0; a < n; ++a) {
+    const Index q = 3 * a;
+    double g[3];
+    hd::return_force(FE + q, X + q, X0 + q, KR[a], g);  // load and return spring (§1.4)
+    v4d acc = {g[0], g[1], g[2], 0.0};                  // lane-wise adds: the same sums as three scalar ones
+    const Index* r = row + static_cast<std::size_t>(a) * W;
+#pragma GCC unroll 16
+    for (int k = 0; k < W; ++k) acc += F4[r[k]];
+    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += F4[xs[e]];
+    const double gx = acc[0], gy = acc[1], gz = acc[2];
+    g[0] = gx;
+    g[1] = gy;
+    g[2] = gz;
+    G[q] = gx;
+    G[q + 1] = gy;
+    G[q + 2] = gz;
+    if (fixed[a]) continue;
+    double vn[3];
+    const double v2 = hd::symplectic_velocity(Mv[a], C[a], h, V + q, g, vn);
+    if constexpr (Guard) {
+      if (!hd::velocity_ok(v2, vmax2)) {  // also catches NaN
+        undo_symplectic(m, st, h, m.free_nodes.data(), advanced);
+        return std::isfinite(v2) ? 1 : 2;
+      }
+    }
+    V[q] = vn[0];
+    V[q + 1] = vn[1];
+    V[q + 2] = vn[2];
+    hd::symplectic_position(h, X + q, vn, X + q);
+    ++advanced;
+  }
+  return 0;
+}
+
+template <bool Guard>
+int node_pass_any(const Model& m, State& st, double h, double vmax2) {
+  switch (m.gather.width) {
+    case 4:
+      return node_pass<4, Guard>(m, st, h, vmax2);
+    case 6:
+      return node_pass<6, Guard>(m, st, h, vmax2);
+    case 8:
+      return node_pass<8, Guard>(m, st, h, vmax2);
+    case 10:
+      return node_pass<10, Guard>(m, st, h, vmax2);
+    case 12:
+      return node_pass<12, Guard>(m, st, h, vmax2);
+    default:
+      return node_pass<16, Guard>(m, st, h, vmax2);
+  }
+}
+
+}  // namespace
+
+int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening) {
+  double* F = st.spring_force.data();
+  if (stiffening)
+    st.stiffening = slot_forces<true>(m, st.x.data(), F);
+  else
+    slot_forces<false>(m, st.x.data(), F);
+  return guard ? node_pass_any<true>(m, st, h, vmax2) : node_pass_any<false>(m, st, h, vmax2);
+}
+
+}  // namespace medspring::detail

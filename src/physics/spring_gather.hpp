@@ -1,0 +1,27 @@
+// The gather pass of the serial symplectic step (docs/physics.md, "One update"): the spring forces of a
+// substep are computed once per spring into a slot buffer (vectorised, no scatter), then every node
+// gathers its slots in increasing spring index, adds its return spring and load and is advanced at once.
+// The node sums have the same terms in the same order as the scatter pass (forces.cpp): a spring's force
+// on its end j is the negated force on its end i, as `f_j -= f` there. Equal to rounding (FMA
+// contraction may differ between the vectorised and the scalar loop).
+#pragma once
+
+#include "medspring/physics/model.hpp"
+#include "medspring/physics/state.hpp"
+
+namespace medspring::detail {
+
+/// Fills model.gather (finalize calls it last); leaves it empty where the pass does not apply.
+void build_spring_gather(Model& m);
+
+/// The gather pass applies to m (and st's buffer is sized for it, or is sized now: once per state).
+bool gather_ready(const Model& m, State& st);
+
+/// One guarded symplectic substep (§2.1, §2.5) through the gather pass, coefficients st.step_coef
+/// refreshed for h by the caller. With `stiffening`, st.stiffening = max(1, max_s kappa_s / k_s).
+/// Returns 0 (ok), 1 (a velocity over v_max) or 2 (non-finite), the nodes already advanced restored
+/// (as symplectic_substep does). st.f holds the node forces afterwards, as after internal_forces (after
+/// a failed substep only those of the nodes up to the failing one: f is scratch then).
+int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening);
+
+}  // namespace medspring::detail
