@@ -31,12 +31,13 @@ Pose pose_arg(py::handle position, py::handle rotation) {
 }
 
 py::dict state_dict(const ToolState& s) {
-  return py::dict("force"_a = copy_of(s.force), "torque"_a = copy_of(s.torque), "area"_a = s.area,
-                  "penetration"_a = s.penetration, "triangle_penetration"_a = s.triangle_penetration,
-                  "contacts"_a = s.contacts, "inside"_a = s.inside, "grasping"_a = s.grasping, "attached"_a = s.attached,
-                  "grasp_force"_a = copy_of(s.grasp_force), "position"_a = copy_of(s.pose.position),
-                  "rotation"_a = py::make_tuple(s.pose.rotation.w(), s.pose.rotation.x(), s.pose.rotation.y(),
-                                                s.pose.rotation.z()));
+  return py::dict(
+      "force"_a = copy_of(s.force), "torque"_a = copy_of(s.torque), "area"_a = s.area,
+      "penetration"_a = s.penetration, "triangle_penetration"_a = s.triangle_penetration,
+      "contacts"_a = s.contacts, "inside"_a = s.inside, "grasping"_a = s.grasping, "attached"_a = s.attached,
+      "grasp_force"_a = copy_of(s.grasp_force), "position"_a = copy_of(s.pose.position),
+      "rotation"_a =
+          py::make_tuple(s.pose.rotation.w(), s.pose.rotation.x(), s.pose.rotation.y(), s.pose.rotation.z()));
 }
 
 py::dict contacts_dict(const std::vector<Contact>& c, const std::vector<Index>* update) {
@@ -122,8 +123,9 @@ py::dict record_updates(ToolSimulation& t, long nsteps) {
                   "torque"_a = shaped(torque, n, k, 3), "position"_a = shaped(position, n, k, 3),
                   "grasp_force"_a = shaped(grasp, n, k, 3), "area"_a = shaped(area, n, k, 1),
                   "penetration"_a = shaped(pen, n, k, 1), "triangle_penetration"_a = shaped(tri_pen, n, k, 1),
-                  "contacts"_a = as_int(contacts), "inside"_a = as_bool(inside), "grasping"_a = as_bool(grasping),
-                  "offsets"_a = copy_of(offsets), "contact"_a = contacts_dict(all, &update));
+                  "contacts"_a = as_int(contacts), "inside"_a = as_bool(inside),
+                  "grasping"_a = as_bool(grasping), "offsets"_a = copy_of(offsets),
+                  "contact"_a = contacts_dict(all, &update));
 }
 
 }  // namespace
@@ -208,7 +210,8 @@ void bind_tools(py::module_& m) {
       .def(
           "contacts", [](const ToolSimulation& t) { return contacts_dict(t.contact().contacts(), nullptr); },
           "The contact set of the last update as NumPy arrays (one row per contact): triangle, tool, part "
-          "(grasper jaw), point, normal (out of the tissue), bary, depth (mm), area (rest, mm^2), force on the "
+          "(grasper jaw), point, normal (out of the tissue), bary, depth (mm), area (rest, mm^2), force on "
+          "the "
           "tissue (N).")
       .def("record", &record_updates, "nsteps"_a,
            "Advances nsteps updates and returns what each one gave as NumPy arrays: time (n,) ms, ok (n,), "
@@ -222,7 +225,8 @@ void bind_tools(py::module_& m) {
           "multipliers, the last surface).")
       .def(
           "restore_history",
-          [](ToolSimulation& t, py::bytes b) { t.restore_history(std::string(b), "contact history"); }, "data"_a,
+          [](ToolSimulation& t, py::bytes b) { t.restore_history(std::string(b), "contact history"); },
+          "data"_a,
           "Restores save_history() bytes into a ToolSimulation with the same tools on the same model (its "
           "Simulation restored to the same state): the next updates repeat the saved run's bit for bit.");
 }

@@ -139,7 +139,8 @@ ContactSettings parse_scene_contact(const std::string& text, const std::string& 
   if (j.contains("max_depth")) s.max_depth = number(origin, j["max_depth"], "contact.max_depth");
   if (j.contains("substep")) {
     if (!j["substep"].is_boolean())
-      throw InvalidInput(cat(origin, ": contact.substep: must be true or false (got ", j["substep"].dump(), ")"));
+      throw InvalidInput(
+          cat(origin, ": contact.substep: must be true or false (got ", j["substep"].dump(), ")"));
     s.substep = j["substep"].get<bool>();
   }
   if (j.contains("grasp_angle_deg"))

@@ -463,8 +463,7 @@ void ContactModel::update(const MatX3& S) {
     Capsule caps[2], prev_caps[2];
     const int n = primitives(st.tool, st.pose, caps);
     primitives(st.tool, slot.prev, prev_caps);
-    for (int p = 0; p < n; ++p)
-      collide(caps[p], prev_caps[p], static_cast<int>(k), p, S, caps[p].r, false);
+    for (int p = 0; p < n; ++p) collide(caps[p], prev_caps[p], static_cast<int>(k), p, S, caps[p].r, false);
     // Persistent contact (no tunnelling, docs/tools.md): a tool that touched the tissue at the last
     // update and finds no triangle within r now is either outside (released) or has passed through the
     // surface between two updates while the tissue moved. The winding number tells which; inside, the

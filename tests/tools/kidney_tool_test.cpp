@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 
 #include "medspring/builders/kidney_build.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
@@ -146,8 +149,8 @@ SteadyPress calibrated_press(bool substep) {
   HybridSettings hs = kid.settings();
   apply_tissue(tissue_preset("kidney"), TissueOrgan::RealKidney, hs);
   const MatX3 atoms = kid.model().x0.bottomRows(kid.num_atoms());
-  const auto body =
-      std::make_shared<HybridKidney>(SurfaceMesh{kid.rest_surface(), kid.faces()}, atoms, hs, "calibrated kidney");
+  const auto body = std::make_shared<HybridKidney>(SurfaceMesh{kid.rest_surface(), kid.faces()}, atoms, hs,
+                                                   "calibrated kidney");
   Index n0 = 0;
   Vec3 nrm;
   pick_node(kid, n0, nrm);
@@ -162,12 +165,26 @@ SteadyPress calibrated_press(bool substep) {
   const Index probe = tools.add_tool(Tool::sphere(R), start);
   tools.set_path(probe, {{0.0, start}, {250.0, end}});  // 0.02 mm/ms, then held
   StepStatus last;
+  // MEDSPRING_TOOLS_TRACE_DIR=D writes D/calibrated_press_{held,substep}.csv: the trace of every update
+  std::FILE* trace = nullptr;
+  if (const char* dir = std::getenv("MEDSPRING_TOOLS_TRACE_DIR")) {
+    const std::string file = cat(dir, "/calibrated_press_", substep ? "substep" : "held", ".csv");
+    trace = std::fopen(file.c_str(), "w");
+    if (trace) std::fprintf(trace, "t_ms,force_N,penetration_mm,contacts,substeps\n");
+  }
+  auto update = [&] {
+    last = tools.update();
+    const ToolState& st = tools.contact().state(probe);
+    if (trace)
+      std::fprintf(trace, "%.1f,%.9f,%.6f,%ld,%d\n", sim.time(), st.force.dot(nrm), st.penetration,
+                   static_cast<long>(st.contacts), last.substeps);
+  };
   auto window = [&](double from, double to, double& mean, double& spread) {
-    while (sim.time() < from) last = tools.update();
+    while (sim.time() < from) update();
     double lo = INFINITY, hi = -INFINITY, sum = 0;
     long n = 0;
     while (sim.time() < to) {
-      last = tools.update();
+      update();
       const double f = tools.contact().state(probe).force.dot(nrm);
       lo = std::min(lo, f), hi = std::max(hi, f), sum += f, ++n;
     }
@@ -181,6 +198,7 @@ SteadyPress calibrated_press(bool substep) {
   r.penetration = tools.contact().state(probe).penetration;
   r.max_speed = sim.state().v.cwiseAbs().maxCoeff();
   r.substeps = last.substeps;
+  if (trace) std::fclose(trace);
   EXPECT_EQ(sim.state().warnings.total(), 0u);
   return r;
 }
@@ -188,11 +206,12 @@ SteadyPress calibrated_press(bool substep) {
 TEST(RealKidneyTool, CalibratedKidneySettlesUnderASteadyPressWithContactAtTheSubstepRate) {
   const SteadyPress held = calibrated_press(false), sub = calibrated_press(true);
   for (const auto& [name, p] : {std::pair{"held over the frame", held}, std::pair{"every substep", sub}})
-    std::printf("calibrated kidney, R 12 mm pressed 4 mm, contact %s: %d substeps per frame; reaction spread "
-                "%.2e N over 250-450 ms; at 1500-1700 ms %.6f N, spread %.2e N, penetration %.4f mm (%.2f %% "
-                "of R), max |v| %.2e mm/ms\n",
-                name, p.substeps, p.settle_spread, p.mean, p.spread, p.penetration, 100 * p.penetration / 12.0,
-                p.max_speed);
+    std::printf(
+        "calibrated kidney, R 12 mm pressed 4 mm, contact %s: %d substeps per frame; reaction spread "
+        "%.2e N over 250-450 ms; at 1500-1700 ms %.6f N, spread %.2e N, penetration %.4f mm (%.2f %% "
+        "of R), max |v| %.2e mm/ms\n",
+        name, p.substeps, p.settle_spread, p.mean, p.spread, p.penetration, 100 * p.penetration / 12.0,
+        p.max_speed);
   EXPECT_GT(sub.substeps, 1);  // the case sub-steps
   EXPECT_LE(sub.penetration, 0.05 * 12.0);
   EXPECT_LT(sub.settle_spread, held.settle_spread);  // settles faster
@@ -213,20 +232,21 @@ void replay_sweep_episode(int number) {
   double deepest_node = 0;
   ASSERT_TRUE(sweep.run(ep, c, [&](int leg, const Vec3& at) {
     const ToolState& st = sweep.tools().contact().state(sweep.probe());
-    std::printf("  inside after the hold of leg %d: w %.3f, %ld contacts, deepest node %.3f mm, deepest "
-                "triangle point %.3f mm, reaction %.3f N\n",
-                leg, sweep.inside(at), static_cast<long>(st.contacts), st.penetration, st.triangle_penetration,
-                st.force.norm());
+    std::printf(
+        "  inside after the hold of leg %d: w %.3f, %ld contacts, deepest node %.3f mm, deepest "
+        "triangle point %.3f mm, reaction %.3f N\n",
+        leg, sweep.inside(at), static_cast<long>(st.contacts), st.penetration, st.triangle_penetration,
+        st.force.norm());
     if (st.contacts == 0) ++inside_without_contact;
     deepest_node = std::max(deepest_node, st.penetration);
   }));
-  std::printf("episode %d: node %ld, step %.2f mm, %ld updates, %ld with the contact kept from inside, %ld "
-              "inside after a hold, largest reaction %.3f N\n",
-              number, static_cast<long>(ep.node), ep.step, c.updates, c.persistent, c.inside_after_hold,
-              c.max_force);
+  std::printf(
+      "episode %d: node %ld, step %.2f mm, %ld updates, %ld with the contact kept from inside, %ld "
+      "inside after a hold, largest reaction %.3f N\n",
+      number, static_cast<long>(ep.node), ep.step, c.updates, c.persistent, c.inside_after_hold, c.max_force);
   EXPECT_GT(ep.step, 0.7 * testing::KidneySweep::R);  // the fast slide that used to tunnel
-  EXPECT_GT(c.persistent, 0);                          // the sphere did get inside between two updates
-  EXPECT_EQ(c.lost, 0);                                // but never without contact
+  EXPECT_GT(c.persistent, 0);                         // the sphere did get inside between two updates
+  EXPECT_EQ(c.lost, 0);                               // but never without contact
   EXPECT_EQ(inside_without_contact, 0);
   // At most the "tent" state of docs/tools.md: the sphere's centre behind stretched triangles while the
   // nodes stay near its surface (the 10^4 sweep's deepest such node is 3.3 mm).

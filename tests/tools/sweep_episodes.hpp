@@ -36,7 +36,7 @@ struct SweepEpisode {
 
 struct SweepCounts {
   long updates = 0, transient_inside = 0, inside_after_hold = 0, lost = 0, missed = 0, in_contact = 0;
-  long persistent = 0;  // updates whose contacts were kept from the nearest surface (ToolState::inside)
+  long persistent = 0;   // updates whose contacts were kept from the nearest surface (ToolState::inside)
   double max_force = 0;  // largest reaction on the tool (N)
 };
 
@@ -105,7 +105,10 @@ class KidneySweep {
         if (st.contacts > 0) ++c.in_contact;
         if (st.inside) ++c.persistent;
         c.max_force = std::max(c.max_force, st.force.norm());
-        if (std::getenv("MEDSPRING_SWEEP_TRACE")) std::printf("leg %d i %d contacts %ld inside %d force %.3f pen %.3f tri %.3f\n", leg, i, (long)st.contacts, (int)st.inside, st.force.norm(), st.penetration, st.triangle_penetration);
+        if (std::getenv("MEDSPRING_SWEEP_TRACE"))
+          std::printf("leg %d i %d contacts %ld inside %d force %.3f pen %.3f tri %.3f\n", leg, i,
+                      (long)st.contacts, (int)st.inside, st.force.norm(), st.penetration,
+                      st.triangle_penetration);
         if (i == moves && inside(at) >= 0.5) ++c.transient_inside;
       }
       // after the hold, the tool must be on the outside of the deformed surface

@@ -31,10 +31,11 @@ TEST(ToolSweep, TenThousandRandomPressesAndSlidesNeverTunnel) {
       const ToolState& st = sweep.tools().contact().state(sweep.probe());
       if (verbose)
         std::printf(
-            "episode %d leg %d node %d step %.2f depth %.2f pen %.3f tri %.3f contacts %ld inside %d w %.3f\n", e,
-            leg, static_cast<int>(ep.node), ep.step, (ep.x + testing::KidneySweep::R * ep.normal - ep.pressed).norm(),
-            st.penetration, st.triangle_penetration, static_cast<long>(st.contacts), st.inside ? 1 : 0,
-            sweep.inside(at));
+            "episode %d leg %d node %d step %.2f depth %.2f pen %.3f tri %.3f contacts %ld inside %d w "
+            "%.3f\n",
+            e, leg, static_cast<int>(ep.node), ep.step,
+            (ep.x + testing::KidneySweep::R * ep.normal - ep.pressed).norm(), st.penetration,
+            st.triangle_penetration, static_cast<long>(st.contacts), st.inside ? 1 : 0, sweep.inside(at));
     });
     if (ran) ++episodes;
   }
@@ -42,7 +43,8 @@ TEST(ToolSweep, TenThousandRandomPressesAndSlidesNeverTunnel) {
       "%ld episodes, %ld updates (%ld in contact): centre inside the surface at the end of a move %ld times, "
       "after the 8 ms hold %ld times (%ld of them without contact); missed contacts %ld; contact kept from "
       "inside in %ld updates\n",
-      episodes, c.updates, c.in_contact, c.transient_inside, c.inside_after_hold, c.lost, c.missed, c.persistent);
+      episodes, c.updates, c.in_contact, c.transient_inside, c.inside_after_hold, c.lost, c.missed,
+      c.persistent);
   EXPECT_EQ(sweep.failed_updates(), 0);
   EXPECT_GT(episodes, 9000);
   EXPECT_GT(c.in_contact, c.updates / 4);

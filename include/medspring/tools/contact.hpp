@@ -187,10 +187,10 @@ class ContactModel {
   std::vector<Index> lambda_nodes_;  // nodes with lambda > 0 after the last update
   MatX3 prev_;
   bool have_prev_ = false;
-  struct SubContact {  // substep evaluation of contacts_[i] (substep(), end_frame())
-    Vec3 p0;           // the contact point from the barycentric weights at the frame start
-    double fn0 = 0;    // normal force of the update (N)
-    double fn = 0;     // normal force now applied
+  struct SubContact {         // substep evaluation of contacts_[i] (substep(), end_frame())
+    Vec3 p0;                  // the contact point from the barycentric weights at the frame start
+    double fn0 = 0;           // normal force of the update (N)
+    double fn = 0;            // normal force now applied
     double depth = 0, t = 0;  // depth at the last evaluation and its time
     double impulse = 0;       // integral of fn over the frame so far (N ms)
   };
