@@ -158,7 +158,7 @@ void bind_tools(py::module_& m) {
              s.substep = substep;
              return std::make_unique<ToolSimulation>(sim, s);
            }),
-           "sim"_a, "friction"_a = 0.0, "stiffness"_a = 0.0, "substep"_a = true, py::keep_alive<1, 2>())
+           "sim"_a, "friction"_a = 0.0, "stiffness"_a = 0.0, "substep"_a = false, py::keep_alive<1, 2>())
       .def(
           "add_tool",
           [](ToolSimulation& t, const Tool& tool, py::handle position, py::handle rotation) {

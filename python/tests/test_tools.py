@@ -117,6 +117,6 @@ def test_contact_history_round_trips_through_bytes_bit_for_bit():
         ms.ToolSimulation(ms.Simulation(ms.hybrid_kidney_phantom())).restore_history(b"garbage")
 
 
-def test_substep_contact_can_be_switched_off():
+def test_substep_contact_can_be_switched_on():
     sim = ms.Simulation(ms.hybrid_kidney_phantom())
-    assert ms.ToolSimulation(sim, substep=False).num_tools == 0
+    assert ms.ToolSimulation(sim, substep=True).num_tools == 0

@@ -45,7 +45,7 @@ TEST(ToolNoAllocation, ContactAtTheSubstepRateDoesNotAllocate) {
   SimulationSettings ss;
   ss.step.dt = 4.0;
   Simulation sim(body, ss);
-  ToolSimulation tools(sim, {.friction = 0.3});
+  ToolSimulation tools(sim, {.friction = 0.3, .substep = true});
   Index top = 0;
   body->rest_surface().col(2).maxCoeff(&top);
   Pose probe;

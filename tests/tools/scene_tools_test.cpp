@@ -33,10 +33,10 @@ std::string error_of(const std::string& tools_json) {
 }
 
 TEST(SceneTools, ContactSubstepIsABooleanThatRoundTrips) {
-  EXPECT_TRUE(parse_scene_contact("{}", "s.json").substep);  // default: contact at the substep rate
-  const ContactSettings off = parse_scene_contact(R"({"substep": false})", "s.json");
-  EXPECT_FALSE(off.substep);
-  EXPECT_FALSE(parse_scene_contact(scene_contact_json(off), "s.json").substep);
+  EXPECT_FALSE(parse_scene_contact("{}", "s.json").substep);  // default: held over the update
+  const ContactSettings on = parse_scene_contact(R"({"substep": true})", "s.json");
+  EXPECT_TRUE(on.substep);
+  EXPECT_TRUE(parse_scene_contact(scene_contact_json(on), "s.json").substep);
   try {
     parse_scene_contact(R"({"substep": 1})", "s.json");
     FAIL() << "a number was accepted";

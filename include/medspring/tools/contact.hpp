@@ -44,7 +44,7 @@ struct ContactSettings {
   double slip_velocity = 0.01;  // mm/ms: below it friction is viscous (regularised Coulomb)
   double max_depth = 2.0;       // contacts are reported up to a depth of max_depth x r (tunnelling guard)
   double grasp_angle = 0.15;    // rad: a grasper with opening <= this holds what its jaws touch
-  bool substep = true;  // re-evaluate the normal penalty forces at every substep of the model (substep())
+  bool substep = false;  // re-evaluate the normal penalty forces at every substep of the model (substep())
 };
 
 /// Throws InvalidInput naming the field.
