@@ -479,7 +479,8 @@ State make_state(const Model& m, const StepSettings& s) {
   return st;
 }
 
-StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vector<PointLoad>* loads) {
+StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vector<PointLoad>* loads,
+                const SubstepForce* per_substep) {
   StepStatus status;
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st))
     prepare_step(m, st, s);  // a state from make_state(model, symplectic settings): allocates once
@@ -513,6 +514,7 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   int rollbacks = 0;
   while (left > 0) {
     if (loads) accumulate_loads(*loads, t, st.f_ext);
+    if (per_substep) per_substep->fn(per_substep->ctx, st, t);
     Substep r;
     if (s.integrator == Integrator::SymplecticEuler) {
       // The stiffening (max kappa/k over the springs) sets the substeps of the next frame, so only the

@@ -129,13 +129,20 @@ std::vector<SceneTool> parse_scene_tools(const std::string& text, const std::fil
 
 ContactSettings parse_scene_contact(const std::string& text, const std::string& origin) {
   const json j = json::parse(text);
-  known(origin, j, "contact", {"friction", "stiffness", "kappa", "damping", "max_depth", "grasp_angle_deg"});
+  known(origin, j, "contact",
+        {"friction", "stiffness", "kappa", "damping", "max_depth", "grasp_angle_deg", "substep"});
   ContactSettings s;
   if (j.contains("friction")) s.friction = number(origin, j["friction"], "contact.friction");
   if (j.contains("stiffness")) s.stiffness = number(origin, j["stiffness"], "contact.stiffness");
   if (j.contains("kappa")) s.kappa = number(origin, j["kappa"], "contact.kappa");
   if (j.contains("damping")) s.damping = number(origin, j["damping"], "contact.damping");
   if (j.contains("max_depth")) s.max_depth = number(origin, j["max_depth"], "contact.max_depth");
+  if (j.contains("substep")) {
+    if (!j["substep"].is_boolean())
+      throw InvalidInput(
+          cat(origin, ": contact.substep: must be true or false (got ", j["substep"].dump(), ")"));
+    s.substep = j["substep"].get<bool>();
+  }
   if (j.contains("grasp_angle_deg"))
     s.grasp_angle = number(origin, j["grasp_angle_deg"], "contact.grasp_angle_deg") * std::numbers::pi / 180;
   try {
@@ -173,7 +180,8 @@ std::string scene_contact_json(const ContactSettings& s) {
                {"kappa", s.kappa},
                {"damping", s.damping},
                {"max_depth", s.max_depth},
-               {"grasp_angle_deg", s.grasp_angle * 180 / std::numbers::pi}})
+               {"grasp_angle_deg", s.grasp_angle * 180 / std::numbers::pi},
+               {"substep", s.substep}})
       .dump();
 }
 

@@ -76,7 +76,7 @@ StepStatus Simulation::update() {
   if (surface_forces_)
     for (const Index n : surface_forces_->nodes)
       body_->transfer_force(n, surface_forces_->force.row(n).transpose(), state_.f_ext);
-  const StepStatus st = step(body_->model(), state_, settings_.step);
+  const StepStatus st = step(body_->model(), state_, settings_.step, nullptr, substep_force_);
   refresh_surface();
   return st;
 }

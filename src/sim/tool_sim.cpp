@@ -116,10 +116,26 @@ ContactSettings contact_settings_for(const Simulation& sim, ContactSettings base
 }
 
 ToolSimulation::ToolSimulation(Simulation& sim, const ContactSettings& base)
-    : sim_(sim), contact_(sim.body().faces(), sim.body().rest_surface(), contact_settings_for(sim, base)) {}
+    : sim_(sim), contact_(sim.body().faces(), sim.body().rest_surface(), contact_settings_for(sim, base)) {
+  substep_surface_ = sim.global_surface();
+  substep_delta_ = MatX3::Zero(substep_surface_.rows(), 3);
+  substep_ = {&ToolSimulation::substep_contact, this};
+}
 
 ToolSimulation::~ToolSimulation() {
   sim_.set_surface_forces(nullptr);
+  sim_.set_substep_force(nullptr);
+}
+
+// The contact at the substep rate: the body's surface at this substep, the change of the contact's
+// normal forces, transferred to the DOFs like the update's forces.
+void ToolSimulation::substep_contact(void* self, State& state, double t) {
+  auto& me = *static_cast<ToolSimulation*>(self);
+  const Body& body = me.sim_.body();
+  body.map_to_surface(state, me.substep_surface_);
+  if (!me.contact_.substep(me.substep_surface_, t, me.substep_delta_)) return;
+  for (const Index n : me.contact_.forces().nodes)
+    body.transfer_force(n, me.substep_delta_.row(n).transpose(), state.f_ext);
 }
 
 Index ToolSimulation::add_tool(const Tool& tool, const Pose& pose) {
@@ -150,7 +166,10 @@ StepStatus ToolSimulation::update() {
   }
   contact_.update(sim_.global_surface());
   sim_.set_surface_forces(&contact_.forces());
-  return sim_.update();
+  sim_.set_substep_force(contact_.settings().substep && !contact_.contacts().empty() ? &substep_ : nullptr);
+  const StepStatus s = sim_.update();
+  contact_.end_frame(sim_.time());
+  return s;
 }
 
 StepStatus ToolSimulation::advance(long frames) {

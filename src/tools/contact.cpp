@@ -207,6 +207,7 @@ Index ContactModel::add_tool(const Tool& tool, const Pose& pose) {
   slot.held.reserve(static_cast<std::size_t>(2 * F_.rows()));  // both jaws
   tools_.push_back(std::move(slot));
   contacts_.reserve(static_cast<std::size_t>(2 * F_.rows()) * tools_.size());
+  sub_.reserve(contacts_.capacity());
   return k;
 }
 
@@ -217,7 +218,10 @@ void ContactModel::set_pose(Index k, const Pose& pose) {
 
 void ContactModel::reset_history() {
   have_prev_ = false;
-  for (ToolSlot& t : tools_) t.prev = t.state.pose;
+  for (ToolSlot& t : tools_) {
+    t.prev = t.state.pose;
+    t.touching = false;
+  }
   for (const Index n : lambda_nodes_) lambda_[n] = 0;
   lambda_nodes_.clear();
 }
@@ -240,13 +244,28 @@ void ContactModel::check_outside(const MatX3& S, const Tool& tool, const Pose& p
   const int n = primitives(tool, checked_pose(pose, what), caps);
   for (int p = 0; p < n; ++p)
     for (const Vec3& q : {caps[p].a, caps[p].b}) {
-      double w = 0;
-      for (Index t = 0; t < F_.rows(); ++t)
-        w += solid_angle(row(S, F_(t, 0)) - q, row(S, F_(t, 1)) - q, row(S, F_(t, 2)) - q);
-      w *= orient_ / (4 * std::numbers::pi);
+      const double w = winding(S, q);
       require(w < 0.5, what, " starts inside the organ (axis point ", q.x(), ", ", q.y(), ", ", q.z(),
               " mm): place it outside the surface");
     }
+}
+
+double ContactModel::winding(const MatX3& S, const Vec3& q) const {
+  double w = 0;
+  for (Index t = 0; t < F_.rows(); ++t)
+    w += solid_angle(row(S, F_(t, 0)) - q, row(S, F_(t, 1)) - q, row(S, F_(t, 2)) - q);
+  return w * orient_ / (4 * std::numbers::pi);
+}
+
+double ContactModel::nearest_distance(const MatX3& S, const Vec3& q) const {
+  double best = std::numeric_limits<double>::infinity();
+  Vec3 bary;
+  int region = 0;
+  for (Index t = 0; t < F_.rows(); ++t)
+    best = std::min(
+        best, (q - closest_on_triangle(q, row(S, F_(t, 0)), row(S, F_(t, 1)), row(S, F_(t, 2)), bary, region))
+                  .squaredNorm());
+  return std::sqrt(best);
 }
 
 Vec3 ContactModel::pseudo_normal(const MatX3& S, Index tri, int region) const {
@@ -279,12 +298,13 @@ void ContactModel::add_force(Index tri, const Vec3& bary, const Vec3& f) {
   }
 }
 
-bool ContactModel::collide(const Capsule& cap, const Capsule& cap_prev, int tool, int part, const MatX3& S) {
+bool ContactModel::collide(const Capsule& cap, const Capsule& cap_prev, int tool, int part, const MatX3& S,
+                           double reach, bool inside) {
   ToolSlot& slot = tools_[static_cast<std::size_t>(tool)];
   const double r = cap.r, max_depth = settings_.max_depth * r, dt = settings_.dt;
   // candidates: boxes overlapping the swept capsule (this pose and the last update's)
-  const Vec3 lo = cap.a.cwiseMin(cap.b).cwiseMin(cap_prev.a).cwiseMin(cap_prev.b).array() - r;
-  const Vec3 hi = cap.a.cwiseMax(cap.b).cwiseMax(cap_prev.a).cwiseMax(cap_prev.b).array() + r;
+  const Vec3 lo = cap.a.cwiseMin(cap.b).cwiseMin(cap_prev.a).cwiseMin(cap_prev.b).array() - reach;
+  const Vec3 hi = cap.a.cwiseMax(cap.b).cwiseMax(cap_prev.a).cwiseMax(cap_prev.b).array() + reach;
   candidates_.clear();
   bvh_.query(lo, hi, candidates_);
   const Pose& pose = slot.state.pose;
@@ -342,7 +362,7 @@ bool ContactModel::collide(const Capsule& cap, const Capsule& cap_prev, int tool
           }
         }
       const double dist = std::sqrt(best);
-      if (dist >= r) continue;
+      if (dist >= reach) continue;
       const Vec3 pn = pseudo_normal(S, t, best_region);
       const double lpn = pn.norm();
       const bool outside = pn.dot(q - p) >= 0;
@@ -354,8 +374,9 @@ bool ContactModel::collide(const Capsule& cap, const Capsule& cap_prev, int tool
         signed_dist = normal.dot(q - p);
       }
     }
-    const double depth = r - signed_dist;
-    if (!(depth > 0 && depth <= max_depth)) continue;
+    double depth = r - signed_dist;
+    if (!(depth > 0 && (depth <= max_depth || inside))) continue;
+    depth = std::min(depth, max_depth);  // inside: the kept contacts push with at most max_depth
     // velocities: surface point and the tool's material point at the axis point nearest to it
     Vec3 v_surf = Vec3::Zero();
     for (int k = 0; k < 3; ++k) v_surf += best_bary[k] * (row(S, F_(t, k)) - row(prev_, F_(t, k)));
@@ -384,7 +405,13 @@ bool ContactModel::collide(const Capsule& cap, const Capsule& cap_prev, int tool
     c.depth = depth;
     c.area = A;
     c.force = f;
-    if (contacts_.size() < contacts_.capacity()) contacts_.push_back(c);
+    if (contacts_.size() < contacts_.capacity()) {
+      contacts_.push_back(c);
+      SubContact sc;
+      sc.fn0 = sc.fn = fn;
+      sc.depth = depth;
+      sub_.push_back(sc);
+    }
     add_force(t, best_bary, f);
     for (int j = 0; j < 3; ++j) {
       const Index nd = F_(t, j);
@@ -420,6 +447,8 @@ void ContactModel::update(const MatX3& S) {
   }
   forces_.nodes.clear();
   contacts_.clear();
+  sub_.clear();
+  sub_open_ = sub_changed_ = false;
   const double dt = settings_.dt;
   for (Index k = 0; k < num_tools(); ++k) {
     ToolSlot& slot = tools_[static_cast<std::size_t>(k)];
@@ -430,10 +459,27 @@ void ContactModel::update(const MatX3& S) {
     st.grasp_force.setZero();
     st.area = st.penetration = st.triangle_penetration = 0;
     st.contacts = 0;
+    st.inside = false;
     Capsule caps[2], prev_caps[2];
     const int n = primitives(st.tool, st.pose, caps);
     primitives(st.tool, slot.prev, prev_caps);
-    for (int p = 0; p < n; ++p) collide(caps[p], prev_caps[p], static_cast<int>(k), p, S);
+    for (int p = 0; p < n; ++p) collide(caps[p], prev_caps[p], static_cast<int>(k), p, S, caps[p].r, false);
+    // Persistent contact (no tunnelling, docs/tools.md): a tool that touched the tissue at the last
+    // update and finds no triangle within r now is either outside (released) or has passed through the
+    // surface between two updates while the tissue moved. The winding number tells which; inside, the
+    // contacts are kept with the triangles that the axis is behind, within r/4 of the nearest surface's
+    // distance, with their depth capped at max_depth r, until regular contacts are found again or the
+    // tool is outside.
+    if (st.contacts == 0 && slot.touching)
+      for (int p = 0; p < n; ++p) {
+        double d_near = std::numeric_limits<double>::infinity();
+        for (const Vec3& q : {caps[p].a, caps[p].b})
+          if (winding(S, q) >= 0.5) d_near = std::min(d_near, nearest_distance(S, q));
+        if (!std::isfinite(d_near)) continue;
+        st.inside = true;
+        collide(caps[p], prev_caps[p], static_cast<int>(k), p, S, d_near + 0.25 * caps[p].r, true);
+      }
+    slot.touching = st.contacts > 0;
     if (st.tool.kind == ToolKind::Grasper) {
       const bool closed = st.tool.opening <= settings_.grasp_angle;
       if (closed && !st.grasping) {  // the jaws close: hold what they touch
@@ -509,8 +555,63 @@ void ContactModel::update(const MatX3& S) {
   prev_ = S;
 }
 
+bool ContactModel::substep(const MatX3& S, double t, MatX3& delta) {
+  if (!settings_.substep || contacts_.empty()) return false;
+  auto at = [&](const Contact& c) {
+    Vec3 p = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) p += c.bary[k] * row(S, F_(c.triangle, k));
+    return p;
+  };
+  if (!sub_open_) {  // the frame start: the forces are the update's
+    sub_open_ = true;
+    sub_t0_ = sub_t_ = t;
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      sub_[i].p0 = at(contacts_[i]);
+      sub_[i].t = t;
+    }
+    return false;
+  }
+  for (const Index n : forces_.nodes) delta.row(n).setZero();
+  const double c_p = settings_.damping * settings_.dt;
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    const Contact& c = contacts_[i];
+    SubContact& sc = sub_[i];
+    sc.impulse += sc.fn * (t - sub_t_);
+    const double d = c.depth + c.normal.dot(at(c) - sc.p0);  // re-projected along the held normal
+    const double rate = t > sc.t ? (d - sc.depth) / (t - sc.t) : 0.0;
+    if (t > sc.t) sc.depth = d, sc.t = t;
+    const double fn = std::max(0.0, c.area * k_p_ * (d + c_p * rate));
+    const Vec3 df = -(fn - sc.fn) * c.normal;  // change of the force on the tissue
+    sc.fn = fn;
+    for (int k = 0; k < 3; ++k) delta.row(F_(c.triangle, k)) += c.bary[k] * df.transpose();
+  }
+  sub_t_ = t;
+  sub_changed_ = true;
+  return true;
+}
+
+void ContactModel::end_frame(double t) {
+  if (!sub_changed_) return;
+  sub_changed_ = sub_open_ = false;
+  const double T = t - sub_t0_;
+  if (!(T > 0)) return;
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    Contact& c = contacts_[i];
+    SubContact& sc = sub_[i];
+    sc.impulse += sc.fn * (t - sub_t_);
+    const Vec3 df = -(sc.impulse / T - sc.fn0) * c.normal;  // average minus the update's, on the tissue
+    c.force += df;
+    forces_.total += df;
+    ToolState& st = tools_[static_cast<std::size_t>(c.tool)].state;
+    st.force -= df;
+    st.torque += (c.point - st.pose.position).cross(-df);
+  }
+}
+
 namespace {
-constexpr char kHistoryTag[] = "medspring-contact-history-v1";
+// v2 adds each tool's `touching` flag (persistent contact); v1 histories resume with it false.
+constexpr char kHistoryTag[] = "medspring-contact-history-v2";
+constexpr char kHistoryTagV1[] = "medspring-contact-history-v1";
 }  // namespace
 
 std::string ContactModel::save_history() const {
@@ -531,6 +632,7 @@ std::string ContactModel::save_history() const {
       w.doubles(p->rotation.coeffs().data(), 4);
     }
     w.flag(st.grasping);
+    w.flag(t.touching);
     w.u64(t.held.size());
     for (const Attachment& h : t.held) {
       w.i64(h.triangle);
@@ -548,7 +650,9 @@ std::string ContactModel::save_history() const {
 
 void ContactModel::restore_history(std::string_view bytes, const std::string& what) {
   ByteReader r(bytes, what, "contact history");
-  if (r.str("tag") != kHistoryTag) r.fail("not a contact history");
+  const std::string tag = r.str("tag");
+  if (tag != kHistoryTag && tag != kHistoryTagV1) r.fail("not a contact history");
+  const bool v1 = tag == kHistoryTagV1;
   const Index nv = static_cast<Index>(forces_.force.rows());
   const Index rows = static_cast<Index>(r.i64());
   if (rows != nv)
@@ -576,6 +680,7 @@ void ContactModel::restore_history(std::string_view bytes, const std::string& wh
       if (!p->position.allFinite() || !p->rotation.coeffs().allFinite()) r.fail("non-finite pose");
     }
     t.state.grasping = r.flag("grasping");
+    t.touching = v1 ? false : r.flag("touching");
     const Index nh = r.count("held", 8 + 6 * 8);
     t.held.clear();
     for (Index j = 0; j < nh; ++j) {

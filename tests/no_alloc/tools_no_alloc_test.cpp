@@ -3,6 +3,8 @@
 // Not built under AddressSanitizer, which owns malloc itself.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "alloc_counter.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/sim/tool_sim.hpp"
@@ -34,6 +36,33 @@ TEST(ToolNoAllocation, PressSlideAndGraspUpdatesDoNotAllocate) {
   }
   EXPECT_EQ(testing::heap_allocations() - before, 0);
   EXPECT_GT(tools.contact().state(k).contacts, 0);
+}
+
+TEST(ToolNoAllocation, ContactAtTheSubstepRateDoesNotAllocate) {
+  // a 4 ms frame sub-steps the phantom: the contact's normal force is re-evaluated at every substep
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  auto body = std::make_shared<HybridKidney>(hybrid_kidney_phantom());
+  SimulationSettings ss;
+  ss.step.dt = 4.0;
+  Simulation sim(body, ss);
+  ToolSimulation tools(sim, {.friction = 0.3, .substep = true});
+  Index top = 0;
+  body->rest_surface().col(2).maxCoeff(&top);
+  Pose probe;
+  probe.position = body->rest_surface().row(top).transpose() + Vec3(0, 0, 4.0);
+  const Index k = tools.add_tool(Tool::sphere(5.0), probe);
+  for (int i = 0; i < 5; ++i) tools.update();
+  const long before = testing::heap_allocations();
+  int substeps = 0;
+  for (int i = 0; i < 100; ++i) {
+    probe.position += Vec3(0.02, 0.01, -0.01);
+    tools.set_pose(k, probe);
+    substeps = std::max(substeps, tools.update().substeps);
+  }
+  EXPECT_EQ(testing::heap_allocations() - before, 0);
+  EXPECT_GT(substeps, 1);
+  EXPECT_GT(tools.contact().state(k).contacts, 0);
+  EXPECT_TRUE(tools.contact().state(k).force.allFinite());
 }
 
 }  // namespace

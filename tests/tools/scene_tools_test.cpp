@@ -1,5 +1,7 @@
 // "tools" in scene files (docs/tools.md): parsing, bad input with JSON paths, and runs of the two
 // example scenes (examples/tools) with their force, torque, area, penetration and grasp traces.
+#include "medspring/scene/scene_tools.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,6 +30,20 @@ std::string error_of(const std::string& tools_json) {
     return e.what();
   }
   return "(no error)";
+}
+
+TEST(SceneTools, ContactSubstepIsABooleanThatRoundTrips) {
+  EXPECT_FALSE(parse_scene_contact("{}", "s.json").substep);  // default: held over the update
+  const ContactSettings on = parse_scene_contact(R"({"substep": true})", "s.json");
+  EXPECT_TRUE(on.substep);
+  EXPECT_TRUE(parse_scene_contact(scene_contact_json(on), "s.json").substep);
+  try {
+    parse_scene_contact(R"({"substep": 1})", "s.json");
+    FAIL() << "a number was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("s.json: contact.substep: must be true or false"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(SceneTools, BadToolsAreNamedByTheirJsonPath) {

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "medspring/core/error.hpp"
+#include "medspring/geometry/phantoms.hpp"
 #include "medspring/tools/contact.hpp"
 
 namespace medspring {
@@ -246,6 +247,56 @@ TEST(Contact, ATriangleTheCentreCrossedInOneStepIsStillInContact) {
   EXPECT_NEAR(cm.state(k).triangle_penetration, 1.9, 1e-12);
   EXPECT_GT(cm.state(k).force.z(), 0);  // the tool is pushed back out, the tissue down past it
   for (const Contact& c : cm.contacts()) EXPECT_GT(c.normal.z(), 0.99);
+}
+
+TEST(Contact, ASphereThatPassedThroughTheSurfaceKeepsItsContactUntilItIsOutside) {
+  // Persistent contact (docs/tools.md, "No tunnelling"): a sphere touching a closed ball of tissue that
+  // gets 2 r behind the surface in one update finds no triangle within r; the winding number says it is
+  // inside, so the contacts are kept from the nearest surface, capped at 2 r deep, and push it back out.
+  const SurfaceMesh ball = icosphere(3, 20.0);
+  const double r = 1.0;
+  ContactModel cm(ball.F, ball.V, {.min_mass = 0.3, .dt = 0.5});
+  Pose pose;
+  pose.position = Vec3(0, 0, 20.5);
+  const Index k = cm.add_tool(Tool::sphere(r), pose);
+  cm.update(ball.V);
+  ASSERT_GT(cm.state(k).contacts, 0);
+  EXPECT_FALSE(cm.state(k).inside);
+  // the checkpoint of the history carries the touch (a resumed run keeps the contact too)
+  ContactModel resumed(ball.F, ball.V, {.min_mass = 0.3, .dt = 0.5});
+  resumed.add_tool(Tool::sphere(r), pose);
+  resumed.restore_history(cm.save_history());
+  pose.position = Vec3(0.3, -0.2, 17.0);  // 3 r below the surface
+  for (ContactModel* m : {&cm, &resumed}) {
+    m->set_pose(k, pose);
+    m->update(ball.V);
+    const ToolState& st = m->state(k);
+    EXPECT_TRUE(st.inside);
+    ASSERT_GT(st.contacts, 0);
+    EXPECT_GT(st.force.z(), 0.9 * st.force.norm());  // pushed back out along the outward normal
+    for (const Contact& c : m->contacts()) {
+      EXPECT_LE(c.depth, 2 * r + 1e-12);
+      EXPECT_GT(c.normal.z(), 0.9);
+    }
+  }
+  EXPECT_EQ(resumed.state(k).force, cm.state(k).force);
+  // still inside at the next update: still in contact
+  cm.update(ball.V);
+  EXPECT_TRUE(cm.state(k).inside);
+  EXPECT_GT(cm.state(k).contacts, 0);
+  // out again: released
+  pose.position = Vec3(0, 0, 25.0);
+  cm.set_pose(k, pose);
+  cm.update(ball.V);
+  EXPECT_EQ(cm.state(k).contacts, 0);
+  EXPECT_FALSE(cm.state(k).inside);
+  // a sphere that never touched the surface is not searched for (the check costs O(#F)): placed inside
+  // directly, it is refused by ToolSimulation::add_tool (check_outside) instead
+  pose.position = Vec3(0, 0, 17.0);
+  cm.set_pose(k, pose);
+  cm.update(ball.V);
+  EXPECT_EQ(cm.state(k).contacts, 0);
+  EXPECT_FALSE(cm.state(k).inside);
 }
 
 TEST(Contact, CapsuleThroughThePlateReportsTheCrossing) {

@@ -90,9 +90,19 @@ struct StepStatus {
   bool ok() const { return code == StepCode::Ok || code == StepCode::RolledBack; }
 };
 
+/// A force re-evaluated at the start of every substep of a frame (contact at the substep rate,
+/// sim/tool_sim.hpp): fn(ctx, state, t) is called before each substep's force evaluation, the first
+/// one included, with the substep's start time t (again, with the same t, after a rollback) and may
+/// change state.f_ext. It must not allocate or throw.
+struct SubstepForce {
+  void (*fn)(void* ctx, State& state, double t) = nullptr;
+  void* ctx = nullptr;
+};
+
 /// Advances the state by one frame of duration settings.dt. External force: `loads` evaluated at the
-/// start of every substep if given, else state.f_ext held constant. No heap allocation.
+/// start of every substep if given, else state.f_ext held constant; then `per_substep` if given. No heap
+/// allocation.
 StepStatus step(const Model& model, State& state, const StepSettings& settings,
-                const std::vector<PointLoad>* loads = nullptr);
+                const std::vector<PointLoad>* loads = nullptr, const SubstepForce* per_substep = nullptr);
 
 }  // namespace medspring

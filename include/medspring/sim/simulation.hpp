@@ -54,6 +54,9 @@ class Simulation {
   /// local patch when its total force is the largest load. nullptr: none. The pointee must outlive its
   /// use. A new centre's patch is factored here (throws InvalidInput like set_tool_force).
   void set_surface_forces(const SurfaceForces* forces);
+  /// A force re-evaluated at every substep of update() (physics/integrators.hpp; the tools' contact at
+  /// the substep rate, sim/tool_sim.hpp). nullptr: none. The pointee must outlive its use.
+  void set_substep_force(const SubstepForce* force) { substep_force_ = force; }
 
   /// Advances one frame of settings.step.dt and refreshes the displayed surface. Never throws;
   /// numerical trouble is in the returned status and state().warnings.
@@ -105,6 +108,7 @@ class Simulation {
   Index tool_node_ = -1;
   Vec3 tool_force_ = Vec3::Zero();
   const SurfaceForces* surface_forces_ = nullptr;
+  const SubstepForce* substep_force_ = nullptr;
 };
 
 }  // namespace medspring

@@ -65,7 +65,9 @@ class ToolSimulation {
   void set_opening(Index k, double opening) { contact_.set_opening(k, opening); }
 
   /// One update: poses from the paths at sim.time(), collision and response on the global surface,
-  /// then Simulation::update() with the contact forces. Never throws after the first call.
+  /// then Simulation::update() with the contact forces, their normal penalty part re-evaluated at every
+  /// substep of the model (ContactModel::substep; the reactions are the frame's averages). Never throws
+  /// after the first call.
   StepStatus update();
   StepStatus advance(long frames);
   /// Simulation::reset() and the contact's velocity history (tools keep their poses).
@@ -83,9 +85,13 @@ class ToolSimulation {
   const Simulation& simulation() const { return sim_; }
 
  private:
+  static void substep_contact(void* self, State& state, double t);
+
   Simulation& sim_;
   ContactModel contact_;
   std::vector<ToolPath> paths_;
+  SubstepForce substep_{};
+  MatX3 substep_surface_, substep_delta_;  // the surface at a substep, the change of the contact forces
 };
 
 /// The 1 kHz haptic loop with a tool: the device position places the tool (orientation kept) and

@@ -44,6 +44,7 @@ struct ContactSettings {
   double slip_velocity = 0.01;  // mm/ms: below it friction is viscous (regularised Coulomb)
   double max_depth = 2.0;       // contacts are reported up to a depth of max_depth x r (tunnelling guard)
   double grasp_angle = 0.15;    // rad: a grasper with opening <= this holds what its jaws touch
+  bool substep = false;  // re-evaluate the normal penalty forces at every substep of the model (substep())
 };
 
 /// Throws InvalidInput naming the field.
@@ -73,6 +74,8 @@ struct ToolState {
   double triangle_penetration = 0;  // deepest contact point on a triangle (mm): adds the flat
                                     // triangles' chord sagitta, about h^2 / (8 r) for edges h
   Index contacts = 0;               // contacts of this tool
+  bool inside = false;              // its axis was inside the organ with no triangle within r: the
+                                    // contacts were kept from the nearest surface (persistent contact)
   bool grasping = false;            // grasper holds tissue
   Index attached = 0;               // surface points held by the jaws
   Vec3 grasp_force = Vec3::Zero();  // force of the held points on the jaws (N)
@@ -120,6 +123,19 @@ class ContactModel {
   /// surface or tool set (node count, tool kinds and sizes); the model is unchanged then.
   void restore_history(std::string_view bytes, const std::string& what = "contact history");
 
+  /// Contact at the substep rate (docs/tools.md): while the model sub-steps a frame, re-evaluates the
+  /// normal penalty force of every contact of the last update() on S, the surface at time t inside the
+  /// frame, with the contact set, the normals and the tools' poses held and the depth re-projected along
+  /// the held normal (d = depth + n . (p(S) - p(frame start))), its rate by finite differences over the
+  /// substeps. Writes the change of the per-node forces since the previous call into the rows
+  /// forces().nodes of `delta` (#S x 3; other rows untouched) and returns true, or returns false when
+  /// nothing changes: the first call after update() (the frame's forces are the update's), no contact,
+  /// or settings().substep off. No allocation.
+  bool substep(const MatX3& S, double t, MatX3& delta);
+  /// Ends the frame at time t after substep() calls: every contact's force, the tools' reactions and
+  /// forces().total become the frame's time averages (the impulse over the frame / its duration).
+  void end_frame(double t);
+
   const SurfaceForces& forces() const { return forces_; }
   const std::vector<Contact>& contacts() const { return contacts_; }
   const ToolState& state(Index k) const { return tools_[static_cast<std::size_t>(k)].state; }
@@ -139,8 +155,16 @@ class ContactModel {
     ToolState state;
     Pose prev;
     std::vector<Attachment> held;
+    bool touching = false;  // it had contacts at the last update
   };
-  bool collide(const Capsule& c, const Capsule& c_prev, int tool, int part, const MatX3& S);
+  /// Contacts of capsule c with the triangles whose closest point is within `reach` of its axis; depths
+  /// above max_depth r are dropped, or with `inside` (persistent contact) capped to it.
+  bool collide(const Capsule& c, const Capsule& c_prev, int tool, int part, const MatX3& S, double reach,
+               bool inside);
+  /// Generalized winding number of the closed surface S around q (>= 1/2: q is inside).
+  double winding(const MatX3& S, const Vec3& q) const;
+  /// Distance from q to the nearest triangle of S (all triangles: used only for a tool found inside).
+  double nearest_distance(const MatX3& S, const Vec3& q) const;
   void add_force(Index tri, const Vec3& bary, const Vec3& f);
   Vec3 pseudo_normal(const MatX3& S, Index tri, int region) const;
 
@@ -163,6 +187,17 @@ class ContactModel {
   std::vector<Index> lambda_nodes_;  // nodes with lambda > 0 after the last update
   MatX3 prev_;
   bool have_prev_ = false;
+  struct SubContact {         // substep evaluation of contacts_[i] (substep(), end_frame())
+    Vec3 p0;                  // the contact point from the barycentric weights at the frame start
+    double fn0 = 0;           // normal force of the update (N)
+    double fn = 0;            // normal force now applied
+    double depth = 0, t = 0;  // depth at the last evaluation and its time
+    double impulse = 0;       // integral of fn over the frame so far (N ms)
+  };
+  std::vector<SubContact> sub_;  // parallel to contacts_
+  bool sub_open_ = false;        // substep() has been called since update()
+  bool sub_changed_ = false;     // a substep changed the forces
+  double sub_t0_ = 0, sub_t_ = 0;
 };
 
 }  // namespace medspring
