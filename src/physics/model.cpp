@@ -116,7 +116,10 @@ void finalize(Model& m) {
     require_index(B.c[t], n, w, ": bending[", t, "].c");
     require_nonnegative(B.kb[t], w, ": bending[", t, "].kb");
   }
-  if (m.volume.size() > 0) finalize_volume_terms(m.volume, m.x0, w);
+  if (m.volume.size() > 0) {
+    finalize_volume_terms(m.volume, m.x0, w);
+    plan_owned_springs(m.volume, S.i, S.j, n);  // the fused force pass (forces.cpp)
+  }
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) m.free_nodes.push_back(a);
