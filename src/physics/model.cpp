@@ -117,8 +117,9 @@ void finalize(Model& m) {
     require_nonnegative(B.kb[t], w, ": bending[", t, "].kb");
   }
   if (m.volume.size() > 0) {
+    // The records alone: letting them own springs too (plan_owned_springs, the fused pass) measured
+    // slower than the packed volume pass followed by the plain spring pass (docs/volumetric.md, "Speed").
     finalize_volume_terms(m.volume, m.x0, w);
-    plan_owned_springs(m.volume, S.i, S.j, n);  // the fused force pass (forces.cpp)
   }
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)

@@ -70,8 +70,9 @@ template <int Own, bool Soft, bool Stiff>
       l2 = q > l2 ? q : l2;
     }
     const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (2.0 / 9.0);  // |V - V0| 4 L / 3
-    const double ratio = cur * r.iG0;
-    sv = ratio > sv ? ratio : sv;
+    // a branch, not a max: rarely taken, so no iteration waits on the previous one's square root
+    if (cur * r.iG0 > sv) [[unlikely]]
+      sv = cur * r.iG0;
   }
   // Owned springs, without indexing the corner arrays by a run-time corner (that would keep them in
   // memory): weights w_k = [k == p] - [k == q] select the spring's ends, so that e = x_q - x_p exactly
