@@ -102,8 +102,8 @@ double former_volume_forces(const VolumeTerms& T, const double* x, double* f, bo
     }
     if (!stiffening) continue;
     const double gg = g[0].squaredNorm() + g[1].squaredNorm() + g[2].squaredNorm() + g[3].squaredNorm();
-    const double L = std::max({e1.norm(), e2.norm(), e3.norm(), (e2 - e1).norm(), (e3 - e1).norm(),
-                               (e3 - e2).norm()});
+    const double L =
+        std::max({e1.norm(), e2.norm(), e3.norm(), (e2 - e1).norm(), (e3 - e1).norm(), (e3 - e2).norm()});
     const double cur = gg + std::abs(V - V0) * L / 3.0 * 4.0;
     const double rest = T.G0[static_cast<std::size_t>(t)];
     if (rest > 0 && cur > rest * stiff) stiff = cur / rest;
@@ -144,7 +144,12 @@ void BM_VolumetricKidneyForcesUnfused(benchmark::State& st) {
     benchmark::DoNotOptimize(f.data());
   }
 }
-BENCHMARK(BM_VolumetricKidneyForcesUnfused)->Args({0, 0})->Args({0, 1})->Args({1, 0})->Args({1, 1})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_VolumetricKidneyForcesUnfused)
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 #endif

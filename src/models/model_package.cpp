@@ -372,7 +372,7 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     s.duffing = get_duffing(r);
     s.fixed = get_indices(r, "fixed", nv);
     s.mass_scaling_dt = version >= 4 ? r.f64() : 0.0;  // earlier packages were built without it
-  } else {  // smrm_tree
+  } else {                                             // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));
     for (Index b = 0; b < nb; ++b) {

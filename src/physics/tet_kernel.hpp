@@ -30,8 +30,8 @@ inline void cross3(const double* u, const double* v, double* w) {
 /// Stiff: sv = max(sv, the term's curvature bound |dV/dx|^2 + |V - V0| 4 L_max / 3 over its rest value)
 /// and ss = max(ss, kappa/k of its springs), as the separate passes compute them.
 template <int Own, bool Soft, bool Stiff>
-[[gnu::always_inline]] inline void tet_record(const VolumeTerms::Packed& r, const SpringParams& S, const double* x, double* f,
-                       double& ss, double& sv) {
+[[gnu::always_inline]] inline void tet_record(const VolumeTerms::Packed& r, const SpringParams& S,
+                                              const double* x, double* f, double& ss, double& sv) {
   double P[4][3];
   for (int k = 0; k < 4; ++k) {
     const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);

@@ -48,7 +48,9 @@ inline double longest_edge(const Tet& q) {
   return l;
 }
 
-inline double volume_of(const Tet& q) { return q.e1.dot(q.e2.cross(q.e3)) / 6.0; }
+inline double volume_of(const Tet& q) {
+  return q.e1.dot(q.e2.cross(q.e3)) / 6.0;
+}
 
 // The per-term set-up every pass shares: corners, edges, volume gradient, V, V0 and kv of term t at x.
 struct TermAt {
@@ -142,11 +144,13 @@ void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& si, const std:
   const std::vector<Index>* corner[4] = {&T.a, &T.b, &T.c, &T.d};
   for (const auto* c : corner)
     for (Index v : *c) ++start[static_cast<std::size_t>(v) + 1];
-  for (Index v = 0; v < nodes; ++v) start[static_cast<std::size_t>(v) + 1] += start[static_cast<std::size_t>(v)];
+  for (Index v = 0; v < nodes; ++v)
+    start[static_cast<std::size_t>(v) + 1] += start[static_cast<std::size_t>(v)];
   {
     std::vector<Index> fill(start.begin(), start.end() - 1);
     for (Index t = 0; t < nt; ++t)
-      for (const auto* c : corner) around[static_cast<std::size_t>(fill[static_cast<std::size_t>((*c)[t])]++)] = t;
+      for (const auto* c : corner)
+        around[static_cast<std::size_t>(fill[static_cast<std::size_t>((*c)[t])]++)] = t;
   }
   // each spring to the term on its edge that owns the fewest so far (at most two), else loose
   std::vector<VolumeTerms::Packed> rec(static_cast<std::size_t>(nt));
@@ -255,7 +259,8 @@ void add_volume_gershgorin(const VolumeTerms& T, const MatX3& x, const VecX& mas
                            const std::vector<std::uint8_t>& fixed, VecX& diag, VecX& off) {
   for (Index t = 0; t < T.size(); ++t) {
     const TermAt r = term_at(T, x.data(), t);
-    const double hb = std::abs(r.kv * (r.V - r.V0) / r.V0) * longest_edge(r.q) / 3.0;  // bound of a d^2V block
+    const double hb =
+        std::abs(r.kv * (r.V - r.V0) / r.V0) * longest_edge(r.q) / 3.0;  // bound of a d^2V block
     for (int k = 0; k < 4; ++k) {
       const Index i = r.id[k];
       diag[i] += r.kv / r.V0 * r.g[k].squaredNorm() + hb;

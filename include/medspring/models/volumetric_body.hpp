@@ -58,9 +58,9 @@ struct VolumetricStats {
   Index nodes = 0, surface_nodes = 0, interior_nodes = 0, tetrahedra = 0, springs = 0;
   double volume_mm3 = 0, mu = 0, lambda = 0, kv = 0;  // moduli in N/mm^2
   double min_tet_volume = 0;
-  double mass_g = 0;              // total mass of the nodes, after the floor and the mass scaling
-  double added_mass_fraction = 0; // mass added by min_mass_fraction and mass_scaling_dt / lumped mass
-  Index scaled_nodes = 0;         // nodes whose mass mass_scaling_dt raised
+  double mass_g = 0;               // total mass of the nodes, after the floor and the mass scaling
+  double added_mass_fraction = 0;  // mass added by min_mass_fraction and mass_scaling_dt / lumped mass
+  Index scaled_nodes = 0;          // nodes whose mass mass_scaling_dt raised
 };
 
 class VolumetricBody final : public Body {
