@@ -10,6 +10,8 @@ namespace medspring::cli {
 
 // Real-anatomy cases built by the builders layer (cmd_build.cpp); empty without it or without the data.
 std::vector<bench::BenchCase> builder_bench_cases(const std::string& filter);
+// The volumetric kidney (cmd_bench_volumetric.cpp); empty without the fem layer (TetGen).
+std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter);
 
 // bench_compare.cpp: --compare and --scaling.
 int cmd_bench_compare(const Args& args);
@@ -30,6 +32,7 @@ int cmd_bench(const Args& args) {
                 "springs", "ns/spring");
   std::vector<bench::BenchCase> cases = bench::all_cases({.large = !quick});
   for (auto& c : builder_bench_cases(filter)) cases.push_back(std::move(c));
+  for (auto& c : volumetric_bench_cases(filter)) cases.push_back(std::move(c));
   for (const auto& c : cases) {
     if (!filter.empty() && c.name.find(filter) == std::string::npos) continue;
     const bench::Timing t = bench::time_case(c, quick ? 50 : 200, samples, quick ? 0.5 : 2.0);

@@ -5,6 +5,8 @@
 #include <benchmark/benchmark.h>
 
 #ifdef MEDSPRING_BENCH_HAVE_FEM
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "medspring/fem/organ.hpp"
@@ -14,21 +16,27 @@
 #include "medspring/physics/forces.hpp"
 #include "medspring/sim/simulation.hpp"
 
+namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
+}  // namespace medspring::detail
+
 namespace {
 
 using namespace medspring;
 
-std::shared_ptr<const VolumetricBody> kidney(Index nodes) {
+std::shared_ptr<const VolumetricBody> kidney(Index nodes, double mass_scaling_dt = 0.25) {
   const SurfaceMesh s = kidney_phantom();
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = nodes});
   const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
   VolumetricSettings st;  // 10 kPa, nu = 0.45
+  st.mass_scaling_dt = mass_scaling_dt;
   st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
   return std::make_shared<VolumetricBody>(vm, st, "volumetric kidney");
 }
 
+// Args: nodes, mass_scaling_dt in microseconds (0 = off: the masses as lumped, with the 0.5 floor).
 void BM_VolumetricKidneyUpdate(benchmark::State& st) {
-  const auto body = kidney(static_cast<Index>(st.range(0)));
+  const auto body = kidney(static_cast<Index>(st.range(0)), 1e-3 * static_cast<double>(st.range(1)));
   SimulationSettings ss;
   ss.normals = false;
   ss.local.enabled = false;
@@ -46,8 +54,15 @@ void BM_VolumetricKidneyUpdate(benchmark::State& st) {
   st.counters["tets"] = static_cast<double>(body->model().volume.size());
   st.counters["substeps_per_update"] =
       static_cast<double>(sim.state().substeps - s0) / static_cast<double>(sim.state().frames - f0);
+  st.counters["dt_rest_ms"] = body->model().dt_safe_rest();
+  st.counters["added_mass_pct"] = 100.0 * body->stats().added_mass_fraction;
 }
-BENCHMARK(BM_VolumetricKidneyUpdate)->Arg(1000)->Arg(2000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_VolumetricKidneyUpdate)
+    ->Args({1000, 250})
+    ->Args({2000, 250})
+    ->Args({2000, 500})
+    ->Args({2000, 0})
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_VolumetricKidneyForces(benchmark::State& st) {
   const auto body = kidney(2000);
@@ -61,6 +76,80 @@ void BM_VolumetricKidneyForces(benchmark::State& st) {
   st.counters["nodes"] = static_cast<double>(m.num_nodes());
 }
 BENCHMARK(BM_VolumetricKidneyForces)->Unit(benchmark::kMicrosecond);
+
+// The force pass as it was before the fused tetrahedron pass (commit 39af8e7), for an A/B in one run: the
+// plain spring pass (internal_forces of the model without its volume terms) and the former per-term loop
+// (Eigen 3-vectors, corner lookup by branch, a division and six edge lengths per term), copied here.
+double former_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
+  auto row = [&](Index i) { return Vec3(x[3 * i], x[3 * i + 1], x[3 * i + 2]); };
+  auto node = [&](Index t, int k) { return k == 0 ? T.a[t] : k == 1 ? T.b[t] : k == 2 ? T.c[t] : T.d[t]; };
+  double stiff = 1.0;
+  for (Index t = 0; t < T.size(); ++t) {
+    const Vec3 xa = row(T.a[t]), e1 = row(T.b[t]) - xa, e2 = row(T.c[t]) - xa, e3 = row(T.d[t]) - xa;
+    Vec3 g[4];
+    g[1] = e2.cross(e3) / 6.0;
+    g[2] = e3.cross(e1) / 6.0;
+    g[3] = e1.cross(e2) / 6.0;
+    g[0] = -(g[1] + g[2] + g[3]);
+    const double V = e1.dot(e2.cross(e3)) / 6.0;
+    const double V0 = T.V0[static_cast<std::size_t>(t)];
+    const double s = -T.kv[static_cast<std::size_t>(t)] * (V - V0) / V0;
+    for (int k = 0; k < 4; ++k) {
+      const Index i = 3 * node(t, k);
+      f[i] += s * g[k][0];
+      f[i + 1] += s * g[k][1];
+      f[i + 2] += s * g[k][2];
+    }
+    if (!stiffening) continue;
+    const double gg = g[0].squaredNorm() + g[1].squaredNorm() + g[2].squaredNorm() + g[3].squaredNorm();
+    const double L =
+        std::max({e1.norm(), e2.norm(), e3.norm(), (e2 - e1).norm(), (e3 - e1).norm(), (e3 - e2).norm()});
+    const double cur = gg + std::abs(V - V0) * L / 3.0 * 4.0;
+    const double rest = T.G0[static_cast<std::size_t>(t)];
+    if (rest > 0 && cur > rest * stiff) stiff = cur / rest;
+  }
+  return stiff;
+}
+
+// Arg: 1 = with the stiffening bound (the last force evaluation of a frame), 0 = without (the others).
+void BM_VolumetricKidneyForcesFormer(benchmark::State& st) {
+  const bool stiff = st.range(0) != 0;
+  const auto body = kidney(2000);
+  const Model& m = body->model();
+  Model springs_only = m;
+  springs_only.volume = VolumeTerms{};
+  MatX3 x = m.x0, f(m.num_nodes(), 3), fe = MatX3::Zero(m.num_nodes(), 3), g = f;
+  x.col(2) *= 0.98;
+  for (auto _ : st) {
+    detail::internal_forces(springs_only, x, fe, f, stiff);
+    former_volume_forces(m.volume, x.data(), f.data(), stiff);
+    benchmark::DoNotOptimize(f.data());
+  }
+  internal_forces(m, x, fe, g);  // the fused pass gives the same forces (to rounding)
+  st.counters["max_rel_diff"] = (f - g).cwiseAbs().maxCoeff() / g.cwiseAbs().maxCoeff();
+}
+BENCHMARK(BM_VolumetricKidneyForcesFormer)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// Arg: 0 = the fused pass (the terms own springs), 1 = the packed volume pass then the plain spring pass (the
+// default); Arg 2: the stiffening.
+void BM_VolumetricKidneyForcesUnfused(benchmark::State& st) {
+  const auto body = kidney(2000);
+  Model m = body->model();
+  if (st.range(0) == 0) plan_owned_springs(m.volume, m.springs.i, m.springs.j, m.num_nodes());
+  const bool stiff = st.range(1) != 0;
+  MatX3 x = m.x0, f(m.num_nodes(), 3), fe = MatX3::Zero(m.num_nodes(), 3);
+  x.col(2) *= 0.98;
+  for (auto _ : st) {
+    detail::internal_forces(m, x, fe, f, stiff);
+    benchmark::DoNotOptimize(f.data());
+  }
+}
+BENCHMARK(BM_VolumetricKidneyForcesUnfused)
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 #endif

@@ -262,6 +262,7 @@ std::string encode_model_package(const ModelPackage& p) {
     w.f64(s.return_k.value_or(0.0));
     put_duffing(w, s.duffing);
     put_indices(w, s.fixed);
+    w.f64(s.mass_scaling_dt);  // version 4
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -370,7 +371,8 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     if (has_kr) s.return_k = kr;
     s.duffing = get_duffing(r);
     s.fixed = get_indices(r, "fixed", nv);
-  } else {  // smrm_tree
+    s.mass_scaling_dt = version >= 4 ? r.f64() : 0.0;  // earlier packages were built without it
+  } else {                                             // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));
     for (Index b = 0; b < nb; ++b) {

@@ -5,6 +5,7 @@
 
 #include "medspring/core/check.hpp"
 #include "spring_kernel.hpp"
+#include "tet_kernel.hpp"
 
 namespace medspring {
 
@@ -33,6 +34,35 @@ double spring_forces(const Model& m, const double* x, double* f) {
   return stiff;
 }
 
+// Fused pass of a model with volume terms (issue 23): one loop over the tetrahedra evaluates each volume
+// term and the (at most two) springs it owns from its four corners, loaded and scattered once; the loose
+// springs (on no tetrahedron edge, or beyond two per tetrahedron) follow in the plain loop. Returns the
+// larger of the springs' max kappa/k and the terms' stiffening (1 without Stiff).
+template <bool Soft, bool Stiff>
+double fused_forces(const Model& m, const double* x, double* f) {
+  const VolumeTerms& T = m.volume;
+  const detail::SpringParams P{m.springs.L0.data(), m.springs.k.data(), m.springs.kp.data(), m.inv_k.data()};
+  const VolumeTerms::Packed* R = T.packed.data();
+  double ss = 1.0, sv = 1.0;
+  Index t = 0;
+  for (; t < T.owned_end[0]; ++t) detail::tet_record<0, Soft, Stiff>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[1]; ++t) detail::tet_record<1, Soft, Stiff>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[2]; ++t) detail::tet_record<2, Soft, Stiff>(R[t], P, x, f, ss, sv);
+  const detail::SpringArrays S(m);
+  for (const Index s : T.loose_springs) {
+    double fx, fy, fz;
+    if (!detail::spring_force<Soft, Stiff>(S, s, x, ss, fx, fy, fz)) continue;
+    const Index a = 3 * S.I[s], b = 3 * S.J[s];
+    f[a] += fx;
+    f[a + 1] += fy;
+    f[a + 2] += fz;
+    f[b] -= fx;
+    f[b + 1] -= fy;
+    f[b + 2] -= fz;
+  }
+  return std::max(ss, sv);
+}
+
 // §5.2 bending option: g = k_b (D - D0), f_a -= g, f_b += 2 g, f_c -= g.
 void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
   for (Index t = 0; t < B.size(); ++t) {
@@ -53,6 +83,14 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
   double* Fo = f.data();
   return_forces(m, X, f_ext.data(), Fo, 0, m.num_nodes());  // external force and return springs (§1.4)
   double stiff = 1.0;
+  if (m.volume.size() > 0 && m.volume.planned_springs == m.num_springs()) {  // fused pass (issue 23)
+    if (m.has_soft_springs)
+      stiff = stiffening ? fused_forces<true, true>(m, X, Fo) : fused_forces<true, false>(m, X, Fo);
+    else
+      stiff = stiffening ? fused_forces<false, true>(m, X, Fo) : fused_forces<false, false>(m, X, Fo);
+    if (m.bending.size() > 0) bending_forces(m.bending, x, f);
+    return stiff;
+  }
   if (m.has_soft_springs)
     stiff = stiffening ? spring_forces<true, true>(m, X, Fo) : spring_forces<true, false>(m, X, Fo);
   else

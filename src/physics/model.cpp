@@ -117,7 +117,11 @@ void finalize(Model& m) {
     require_index(B.c[t], n, w, ": bending[", t, "].c");
     require_nonnegative(B.kb[t], w, ": bending[", t, "].kb");
   }
-  if (m.volume.size() > 0) finalize_volume_terms(m.volume, m.x0, w);
+  if (m.volume.size() > 0) {
+    // The records alone: letting them own springs too (plan_owned_springs, the fused pass) measured
+    // slower than the packed volume pass followed by the plain spring pass (docs/volumetric.md, "Speed").
+    finalize_volume_terms(m.volume, m.x0, w);
+  }
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) m.free_nodes.push_back(a);

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 #include "medspring/core/check.hpp"
+#include "tet_kernel.hpp"
 
 namespace medspring {
 
@@ -45,8 +48,38 @@ inline double longest_edge(const Tet& q) {
   return l;
 }
 
-inline Index node(const VolumeTerms& T, Index t, int k) {
-  return k == 0 ? T.a[t] : k == 1 ? T.b[t] : k == 2 ? T.c[t] : T.d[t];
+inline double volume_of(const Tet& q) {
+  return q.e1.dot(q.e2.cross(q.e3)) / 6.0;
+}
+
+// The per-term set-up every pass shares: corners, edges, volume gradient, V, V0 and kv of term t at x.
+struct TermAt {
+  Index id[4];
+  Tet q;
+  Vec3 g[4];
+  double V, V0, kv;
+};
+
+inline TermAt term_at(const VolumeTerms& T, const double* x, Index t) {
+  const auto u = static_cast<std::size_t>(t);
+  TermAt r{{T.a[u], T.b[u], T.c[u], T.d[u]}, corners(T, x, t), {}, 0.0, T.V0[u], T.kv[u]};
+  volume_gradient(r.q, r.g);
+  r.V = volume_of(r.q);
+  return r;
+}
+
+// The packed record of term t (no owned springs).
+VolumeTerms::Packed record(const VolumeTerms& T, Index t) {
+  const auto u = static_cast<std::size_t>(t);
+  VolumeTerms::Packed r{};
+  const Index id[4] = {T.a[u], T.b[u], T.c[u], T.d[u]};
+  for (int k = 0; k < 4; ++k) r.n[k] = static_cast<std::int32_t>(id[k]);
+  r.s[0] = r.s[1] = -1;
+  r.alpha = T.kv[u] / (36.0 * T.V0[u]);
+  r.V06 = 6.0 * T.V0[u];
+  r.iG0 = T.G0[u] > 0 ? 1.0 / T.G0[u] : 0.0;
+  r.kv = T.kv[u];
+  return r;
 }
 
 }  // namespace
@@ -56,28 +89,14 @@ double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const V
 }
 
 double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
-  double stiff = 1.0;
-  for (Index t = 0; t < T.size(); ++t) {
-    const Tet q = corners(T, x, t);
-    Vec3 g[4];
-    volume_gradient(q, g);
-    const double V = q.e1.dot(q.e2.cross(q.e3)) / 6.0;
-    const double V0 = T.V0[static_cast<std::size_t>(t)];
-    const double s = -T.kv[static_cast<std::size_t>(t)] * (V - V0) / V0;
-    for (int k = 0; k < 4; ++k) {
-      const Index i = 3 * node(T, t, k);
-      f[i] += s * g[k][0];
-      f[i + 1] += s * g[k][1];
-      f[i + 2] += s * g[k][2];
-    }
-    // curvature bound |g|^2 + |V - V0| |d^2V| against the rest |g0|^2 (|d^2V| <= 2 L_max / 6 per block)
-    if (!stiffening) continue;
-    const double gg = g[0].squaredNorm() + g[1].squaredNorm() + g[2].squaredNorm() + g[3].squaredNorm();
-    const double rest = T.G0[static_cast<std::size_t>(t)];
-    const double cur = gg + std::abs(V - V0) * longest_edge(q) / 3.0 * 4.0;
-    if (rest > 0 && cur > rest * stiff) stiff = cur / rest;
-  }
-  return stiff;
+  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
+  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
+  double ss = 1.0, sv = 1.0;
+  if (stiffening)
+    for (const auto& r : T.packed) detail::tet_record<0, false, true>(r, none, x, f, ss, sv);
+  else
+    for (const auto& r : T.packed) detail::tet_record<0, false, false>(r, none, x, f, ss, sv);
+  return sv;
 }
 
 void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& w) {
@@ -96,26 +115,90 @@ void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& w
     }
     const double kv = T.kv[static_cast<std::size_t>(t)];
     require(std::isfinite(kv) && kv >= 0, w, ": volume[", t, "].kv: must be >= 0 (got ", kv, ")");
-    const Tet q = corners(T, x0.data(), t);
-    const double V = q.e1.dot(q.e2.cross(q.e3)) / 6.0;
-    const double L = longest_edge(q);
+    const TermAt r = term_at(T, x0.data(), t);
+    const double V = r.V;
+    const double L = longest_edge(r.q);
     require(std::abs(V) > 1e-12 * L * L * L, w, ": volume[", t, "]: degenerate tetrahedron (nodes ", id[0],
             " ", id[1], " ", id[2], " ", id[3], ", volume ", V, " mm^3)");
     require(V > 0, w, ": volume[", t, "]: inverted tetrahedron (nodes ", id[0], " ", id[1], " ", id[2], " ",
             id[3], ", volume ", V, " mm^3)");
-    Vec3 g[4];
-    volume_gradient(q, g);
     T.V0[static_cast<std::size_t>(t)] = V;
     T.G0[static_cast<std::size_t>(t)] =
-        g[0].squaredNorm() + g[1].squaredNorm() + g[2].squaredNorm() + g[3].squaredNorm();
+        r.g[0].squaredNorm() + r.g[1].squaredNorm() + r.g[2].squaredNorm() + r.g[3].squaredNorm();
   }
+  require(n <= std::numeric_limits<std::int32_t>::max(), w, ": volume terms need node indices below 2^31");
+  T.packed.resize(nt);
+  for (Index t = 0; t < T.size(); ++t) T.packed[static_cast<std::size_t>(t)] = record(T, t);
+  T.owned_end[0] = T.owned_end[1] = T.owned_end[2] = T.size();
+  T.loose_springs.clear();
+  T.planned_springs = -1;
+}
+
+void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& si, const std::vector<Index>& sj,
+                        Index nodes) {
+  const Index nt = T.size(), ns = static_cast<Index>(si.size());
+  require(static_cast<Index>(T.packed.size()) == nt, "volume terms: plan before finalize");
+  require(ns <= std::numeric_limits<std::int32_t>::max(), "volume terms: more than 2^31 springs");
+  // terms around each node (CSR)
+  std::vector<Index> start(static_cast<std::size_t>(nodes) + 1, 0), around(static_cast<std::size_t>(4 * nt));
+  const std::vector<Index>* corner[4] = {&T.a, &T.b, &T.c, &T.d};
+  for (const auto* c : corner)
+    for (Index v : *c) ++start[static_cast<std::size_t>(v) + 1];
+  for (Index v = 0; v < nodes; ++v)
+    start[static_cast<std::size_t>(v) + 1] += start[static_cast<std::size_t>(v)];
+  {
+    std::vector<Index> fill(start.begin(), start.end() - 1);
+    for (Index t = 0; t < nt; ++t)
+      for (const auto* c : corner)
+        around[static_cast<std::size_t>(fill[static_cast<std::size_t>((*c)[t])]++)] = t;
+  }
+  // each spring to the term on its edge that owns the fewest so far (at most two), else loose
+  std::vector<VolumeTerms::Packed> rec(static_cast<std::size_t>(nt));
+  std::vector<int> owned(static_cast<std::size_t>(nt), 0);
+  for (Index t = 0; t < nt; ++t) rec[static_cast<std::size_t>(t)] = record(T, t);
+  T.loose_springs.clear();
+  for (Index s = 0; s < ns; ++s) {
+    const Index a = si[static_cast<std::size_t>(s)], b = sj[static_cast<std::size_t>(s)];
+    Index best = -1;
+    int p = 0, q = 0;
+    for (Index k = start[static_cast<std::size_t>(a)]; k < start[static_cast<std::size_t>(a) + 1]; ++k) {
+      const Index t = around[static_cast<std::size_t>(k)];
+      const auto& r = rec[static_cast<std::size_t>(t)];
+      int lp = -1, lq = -1;
+      for (int c = 0; c < 4; ++c) {
+        if (r.n[c] == a) lp = c;
+        if (r.n[c] == b) lq = c;
+      }
+      if (lq < 0 || owned[static_cast<std::size_t>(t)] >= 2) continue;
+      if (best < 0 || owned[static_cast<std::size_t>(t)] < owned[static_cast<std::size_t>(best)]) {
+        best = t;
+        p = lp;
+        q = lq;
+      }
+    }
+    if (best < 0) {
+      T.loose_springs.push_back(s);
+      continue;
+    }
+    auto& r = rec[static_cast<std::size_t>(best)];
+    const int o = owned[static_cast<std::size_t>(best)]++;
+    r.s[o] = static_cast<std::int32_t>(s);
+    r.pq[o] = static_cast<std::uint8_t>(4 * p + q);
+  }
+  // grouped by the number owned, each group in term order
+  T.packed.clear();
+  for (int g = 0; g < 3; ++g) {
+    for (Index t = 0; t < nt; ++t)
+      if (owned[static_cast<std::size_t>(t)] == g) T.packed.push_back(rec[static_cast<std::size_t>(t)]);
+    T.owned_end[g] = static_cast<Index>(T.packed.size());
+  }
+  T.planned_springs = ns;
 }
 
 double volume_energy(const VolumeTerms& T, const MatX3& x) {
   double e = 0;
   for (Index t = 0; t < T.size(); ++t) {
-    const Tet q = corners(T, x.data(), t);
-    const double V = q.e1.dot(q.e2.cross(q.e3)) / 6.0;
+    const double V = volume_of(corners(T, x.data(), t));
     const double V0 = T.V0[static_cast<std::size_t>(t)];
     e += 0.5 * T.kv[static_cast<std::size_t>(t)] * (V - V0) * (V - V0) / V0;
   }
@@ -125,8 +208,7 @@ double volume_energy(const VolumeTerms& T, const MatX3& x) {
 std::uint64_t count_inverted(const VolumeTerms& T, const MatX3& x) {
   std::uint64_t n = 0;
   for (Index t = 0; t < T.size(); ++t) {
-    const Tet q = corners(T, x.data(), t);
-    if (!(q.e1.dot(q.e2.cross(q.e3)) > 0)) ++n;
+    if (!(volume_of(corners(T, x.data(), t)) > 0)) ++n;
   }
   return n;
 }
@@ -134,49 +216,40 @@ std::uint64_t count_inverted(const VolumeTerms& T, const MatX3& x) {
 void add_volume_stiffness_product(const VolumeTerms& T, const MatX3& x, const VecX& p, VecX& y,
                                   bool gauss_newton) {
   for (Index t = 0; t < T.size(); ++t) {
-    const Tet q = corners(T, x.data(), t);
-    Vec3 g[4], pk[4], h[4];
-    volume_gradient(q, g);
+    const TermAt r = term_at(T, x.data(), t);
+    Vec3 pk[4], h[4];
     double gp = 0;
     for (int k = 0; k < 4; ++k) {
-      pk[k] = p.segment<3>(3 * node(T, t, k));
-      gp += g[k].dot(pk[k]);
+      pk[k] = p.segment<3>(3 * r.id[k]);
+      gp += r.g[k].dot(pk[k]);
     }
-    const double V = q.e1.dot(q.e2.cross(q.e3)) / 6.0;
-    const double V0 = T.V0[static_cast<std::size_t>(t)];
-    const double kv = T.kv[static_cast<std::size_t>(t)];
-    const double c1 = kv / V0 * gp;
+    const double c1 = r.kv / r.V0 * gp;
     if (gauss_newton) {
-      for (int k = 0; k < 4; ++k) y.segment<3>(3 * node(T, t, k)) += c1 * g[k];
+      for (int k = 0; k < 4; ++k) y.segment<3>(3 * r.id[k]) += c1 * r.g[k];
       continue;
     }
-    volume_gradient_derivative(q, pk, h);
-    const double c2 = kv * (V - V0) / V0;
-    for (int k = 0; k < 4; ++k) y.segment<3>(3 * node(T, t, k)) += c1 * g[k] + c2 * h[k];
+    volume_gradient_derivative(r.q, pk, h);
+    const double c2 = r.kv * (r.V - r.V0) / r.V0;
+    for (int k = 0; k < 4; ++k) y.segment<3>(3 * r.id[k]) += c1 * r.g[k] + c2 * h[k];
   }
 }
 
 void add_volume_stiffness_triplets(const VolumeTerms& T, const MatX3& x,
                                    std::vector<Eigen::Triplet<double>>& out) {
   for (Index t = 0; t < T.size(); ++t) {
-    const Tet q = corners(T, x.data(), t);
-    Vec3 g[4];
-    volume_gradient(q, g);
-    const double V = q.e1.dot(q.e2.cross(q.e3)) / 6.0;
-    const double V0 = T.V0[static_cast<std::size_t>(t)];
-    const double kv = T.kv[static_cast<std::size_t>(t)];
-    const double c2 = kv * (V - V0) / V0;
+    const TermAt r = term_at(T, x.data(), t);
+    const double c2 = r.kv * (r.V - r.V0) / r.V0;
     for (int l = 0; l < 4; ++l)
       for (int cl = 0; cl < 3; ++cl) {
         Vec3 pk[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
         pk[l][cl] = 1.0;
         Vec3 h[4];
-        volume_gradient_derivative(q, pk, h);
-        const Index col = 3 * node(T, t, l) + cl;
+        volume_gradient_derivative(r.q, pk, h);
+        const Index col = 3 * r.id[l] + cl;
         for (int k = 0; k < 4; ++k)
-          for (int r = 0; r < 3; ++r) {
-            const double v = kv / V0 * g[k][r] * g[l][cl] + c2 * h[k][r];
-            if (v != 0.0) out.emplace_back(3 * node(T, t, k) + r, col, v);
+          for (int c = 0; c < 3; ++c) {
+            const double v = r.kv / r.V0 * r.g[k][c] * r.g[l][cl] + c2 * h[k][c];
+            if (v != 0.0) out.emplace_back(3 * r.id[k] + c, col, v);
           }
       }
   }
@@ -185,21 +258,17 @@ void add_volume_stiffness_triplets(const VolumeTerms& T, const MatX3& x,
 void add_volume_gershgorin(const VolumeTerms& T, const MatX3& x, const VecX& mass,
                            const std::vector<std::uint8_t>& fixed, VecX& diag, VecX& off) {
   for (Index t = 0; t < T.size(); ++t) {
-    const Tet q = corners(T, x.data(), t);
-    Vec3 g[4];
-    volume_gradient(q, g);
-    const double V = q.e1.dot(q.e2.cross(q.e3)) / 6.0;
-    const double V0 = T.V0[static_cast<std::size_t>(t)];
-    const double kv = T.kv[static_cast<std::size_t>(t)];
-    const double hb = std::abs(kv * (V - V0) / V0) * longest_edge(q) / 3.0;  // bound of a d^2V block norm
+    const TermAt r = term_at(T, x.data(), t);
+    const double hb =
+        std::abs(r.kv * (r.V - r.V0) / r.V0) * longest_edge(r.q) / 3.0;  // bound of a d^2V block
     for (int k = 0; k < 4; ++k) {
-      const Index i = node(T, t, k);
-      diag[i] += kv / V0 * g[k].squaredNorm() + hb;
+      const Index i = r.id[k];
+      diag[i] += r.kv / r.V0 * r.g[k].squaredNorm() + hb;
       for (int l = 0; l < 4; ++l) {
         if (l == k) continue;
-        const Index j = node(T, t, l);
+        const Index j = r.id[l];
         if (fixed[static_cast<std::size_t>(j)]) continue;
-        off[i] += (kv / V0 * g[k].norm() * g[l].norm() + hb) / std::sqrt(mass[i] * mass[j]);
+        off[i] += (r.kv / r.V0 * r.g[k].norm() * r.g[l].norm() + hb) / std::sqrt(mass[i] * mass[j]);
       }
     }
   }

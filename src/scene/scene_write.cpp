@@ -98,6 +98,7 @@ std::string scene_to_json(const Scene& s) {
               {"beta", v.beta},
               {"spring_scale", v.spring_scale},
               {"volume_scale", v.volume_scale},
+              {"mass_scaling_dt", v.mass_scaling_dt},
               {"duffing", duffing_json(v.duffing)},
               {"fixed", v.fixed}};
     if (v.return_k) params["k_r"] = *v.return_k;

@@ -18,7 +18,13 @@
 #include "medspring/models/smrm_tree.hpp"
 #include "medspring/models/smrm_vessel.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/models/tube_hybrid.hpp"
 #include "medspring/sim/tool_sim.hpp"
+#ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
+#include "medspring/fem/organ.hpp"
+#include "medspring/fem/volumetric.hpp"
+#include "medspring/models/volumetric_body.hpp"
+#endif
 
 namespace medspring {
 namespace {
@@ -156,6 +162,34 @@ TEST(UpdateNoAllocation, SmrmTree) {
   auto body = std::make_shared<SmrmTree>(tree_from_parents(atoms, parent, radii));
   const Index m = body->num_surface_nodes();
   expect_no_allocation("smrm_tree", body, {m / 7, m / 3, m / 2, (5 * m) / 6});
+}
+
+TEST(UpdateNoAllocation, TubeHybrid) {  // the paper's "MS" vessel (Tables I and II)
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  auto body = std::make_shared<TubeHybridBody>(TubeHybridSettings{.nonlinear = true});
+  const Index s = body->settings().spokes;
+  expect_no_allocation("tube_hybrid", body, {20 * s + 7, 12 * s + 20, 28 * s + 3, 16 * s + 15}, s);
+}
+
+TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron pass, volume terms, supports
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+#ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
+  const SurfaceMesh s = kidney_phantom();
+  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+  VolumetricSettings st;  // 10 kPa, nu = 0.45, supports on the bottom 20 %
+  st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
+  ASSERT_GT(body->model().volume.size(), 0);
+  // four sites on the upper half of the surface, away from the supports
+  std::vector<Index> sites;
+  const Index ns = body->num_surface_nodes();
+  for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
+    if (body->rest_surface()(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
+  ASSERT_EQ(sites.size(), 4u);
+  expect_no_allocation("volumetric", body, sites);
+#else
+  GTEST_SKIP() << "built without the fem layer (TetGen)";
+#endif
 }
 
 }  // namespace

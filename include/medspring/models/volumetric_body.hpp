@@ -44,6 +44,9 @@ struct VolumetricSettings {
   double min_mass_fraction = 0.5;  // mass scaling: every node weighs at least this fraction of the mean node
                                    // mass (small elements would otherwise set a tiny stable step; statics
                                    // unaffected)
+  double mass_scaling_dt = 0.25;   // ms: selective mass scaling for this sub-step (0 = off). A node whose
+                                   // block-Gershgorin row at rest would need a smaller step gets the mass
+                                   // for it (slivers; statics unaffected, the added mass is in stats)
   std::optional<double> return_k;  // N/mm per surface node; default: 0 with supports, else 0.02
   double spring_scale = 1.0;       // calibration multipliers of the spring and volume families
   double volume_scale = 1.0;
@@ -55,6 +58,9 @@ struct VolumetricStats {
   Index nodes = 0, surface_nodes = 0, interior_nodes = 0, tetrahedra = 0, springs = 0;
   double volume_mm3 = 0, mu = 0, lambda = 0, kv = 0;  // moduli in N/mm^2
   double min_tet_volume = 0;
+  double mass_g = 0;               // total mass of the nodes, after the floor and the mass scaling
+  double added_mass_fraction = 0;  // mass added by min_mass_fraction and mass_scaling_dt / lumped mass
+  Index scaled_nodes = 0;          // nodes whose mass mass_scaling_dt raised
 };
 
 class VolumetricBody final : public Body {

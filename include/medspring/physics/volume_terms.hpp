@@ -22,6 +22,27 @@ struct VolumeTerms {
   std::vector<double> kv;         // (#T) modulus, N/mm^2 (= MPa), >= 0
   std::vector<double> V0;         // (#T) rest volume, mm^3 (set by finalize from the rest positions)
   std::vector<double> G0;         // (#T) rest sum over corners of |dV/dx|^2, mm^4 (set by finalize)
+
+  /// Rest data of one term for the fused force pass, packed (one record per term, 64 bytes): the corners,
+  /// up to two springs of the model that lie on its edges ("owned": evaluated with the term, from the same
+  /// four loaded corners, and scattered once), and the precomputed constants.
+  struct Packed {
+    std::int32_t n[4];   // corners a, b, c, d
+    std::int32_t s[2];   // owned springs (-1: none)
+    std::uint8_t pq[2];  // local corners (p, q) of owned spring k: 4 p + q, spring i = n[p], j = n[q]
+    double alpha;        // kv / (36 V0): f_k = -alpha (6V - 6V0) (e_k+1 x e_k+2), 1/mm
+    double V06;          // 6 V0, mm^3
+    double iG0;          // 1 / rest sum of |dV/dx|^2 (stiffening bound; 0 when that sum is 0)
+    double kv;           // modulus (the order of the records is not the order of the terms)
+  };
+  // Derived by finalize_volume_terms (records) and plan_owned_springs (owned springs): the records
+  // grouped by the number of springs they own (0, 1, 2), so that the fused pass runs three loops without
+  // a branch per record; loose springs are those of the model that no term owns.
+  std::vector<Packed> packed;
+  Index owned_end[3] = {0, 0, 0};    // ends of the groups owning 0, 1, 2 springs in `packed`
+  std::vector<Index> loose_springs;  // springs evaluated by the plain spring pass
+  Index planned_springs = -1;        // number of springs of the plan (-1: none; every spring is loose)
+
   Index size() const { return static_cast<Index>(a.size()); }
   void add(Index na, Index nb, Index nc, Index nd, double modulus) {
     a.push_back(na);
@@ -42,6 +63,12 @@ double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const V
 /// corner is out of range, repeated, kv is negative or not finite, or the rest tetrahedron is inverted
 /// or degenerate (volume <= 1e-12 of its longest edge cubed).
 void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& what);
+
+/// Lets the terms own springs (i[s], j[s]) of the model that lie on their edges, at most two per term, so
+/// that the fused pass (add_volume_and_owned_spring_forces) evaluates them; the others become loose.
+/// Call after finalize_volume_terms with the model's final spring arrays (Model's finalize does).
+void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& i, const std::vector<Index>& j,
+                        Index nodes);
 
 /// Adds the volume forces -dE/dx to f (flat 3N arrays). With `stiffening`, returns the stiffening of the
 /// terms (>= 1): the largest ratio of a term's current curvature bound to its rest one, for the stable

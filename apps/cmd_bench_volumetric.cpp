@@ -1,0 +1,58 @@
+// `medspring bench` cases of the volumetric spring kidney (issue 23, docs/volumetric.md "Speed"): the
+// kidney phantom meshed inside by TetGen to about 1,000 and 2,000 nodes, 10 kPa, nu = 0.45, supports on the
+// bottom 20 %, 0.5 N on the top node; one update = Simulation::update (a 0.5 ms frame with the sub-steps
+// its stable step needs). The same set-up as bench/volumetric_bench.cpp. Needs the fem layer (TetGen).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cases.hpp"
+
+#ifdef MEDSPRING_HAVE_FEM
+#include "medspring/core/check.hpp"
+#include "medspring/fem/organ.hpp"
+#include "medspring/fem/volumetric.hpp"
+#include "medspring/geometry/phantoms.hpp"
+#include "medspring/models/volumetric_body.hpp"
+#include "medspring/sim/simulation.hpp"
+#endif
+
+namespace medspring::cli {
+
+std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) {
+  std::vector<bench::BenchCase> cases;
+#ifdef MEDSPRING_HAVE_FEM
+  for (const Index target : {1000, 2000}) {
+    const std::string name = cat("kidney_volumetric_", target, "_explicit_linear");
+    if (!filter.empty() && name.find(filter) == std::string::npos) continue;
+    const SurfaceMesh s = kidney_phantom();
+    const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+    VolumetricSettings st;  // 10 kPa, nu = 0.45
+    st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+    auto body = std::make_shared<const VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = target}), st,
+                                                       "volumetric kidney");
+    bench::BenchCase b;
+    b.name = name;
+    b.group = "kidney";
+    b.nodes = body->model().num_nodes();
+    b.springs = body->model().num_springs();
+    b.setup = [body] {
+      SimulationSettings ss;
+      ss.normals = false;
+      ss.local.enabled = false;
+      auto sim = std::make_shared<Simulation>(body, ss);
+      Index top = 0;
+      for (Index i = 0; i < body->num_surface_nodes(); ++i)
+        if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
+      sim->set_loads({{.node = top, .force = Vec3(0, 0, -0.5), .t_ramp = 0}});
+      return std::function<void()>([sim] { sim->update(); });
+    };
+    cases.push_back(std::move(b));
+  }
+#else
+  (void)filter;
+#endif
+  return cases;
+}
+
+}  // namespace medspring::cli

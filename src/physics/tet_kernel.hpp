@@ -1,0 +1,103 @@
+// The per-tetrahedron kernel of the fused force pass (issue 23, docs/volumetric.md "Speed"): the volume
+// term of one tetrahedron and the springs it owns (0, 1 or 2), evaluated from its four corners loaded once
+// and scattered once. Shared by add_volume_forces (volume_terms.cpp, no springs) and the force pass of
+// models with volume terms (forces.cpp).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+
+#include "medspring/physics/kernels.hpp"
+#include "medspring/physics/volume_terms.hpp"
+
+namespace medspring::detail {
+
+/// Raw spring parameters, indexed by spring.
+struct SpringParams {
+  const double* L0;
+  const double* K;
+  const double* KP;
+  const double* IK;
+};
+
+inline void cross3(const double* u, const double* v, double* w) {
+  w[0] = u[1] * v[2] - u[2] * v[1];
+  w[1] = u[2] * v[0] - u[0] * v[2];
+  w[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+/// Adds the forces of record r (its volume term and its first Own owned springs) to f (flat 3N). With
+/// Stiff: sv = max(sv, the term's curvature bound |dV/dx|^2 + |V - V0| 4 L_max / 3 over its rest value)
+/// and ss = max(ss, kappa/k of its springs), as the separate passes compute them.
+template <int Own, bool Soft, bool Stiff>
+[[gnu::always_inline]] inline void tet_record(const VolumeTerms::Packed& r, const SpringParams& S,
+                                              const double* x, double* f, double& ss, double& sv) {
+  double P[4][3];
+  for (int k = 0; k < 4; ++k) {
+    const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
+    P[k][0] = p[0];
+    P[k][1] = p[1];
+    P[k][2] = p[2];
+  }
+  double e[3][3];
+  for (int k = 0; k < 3; ++k)
+    for (int d = 0; d < 3; ++d) e[k][d] = P[k + 1][d] - P[0][d];
+  double c[3][3];  // 6 dV/dx of corners b, c, d: e2 x e3, e3 x e1, e1 x e2
+  cross3(e[1], e[2], c[0]);
+  cross3(e[2], e[0], c[1]);
+  cross3(e[0], e[1], c[2]);
+  const double dv6 = e[0][0] * c[0][0] + e[0][1] * c[0][1] + e[0][2] * c[0][2] - r.V06;  // 6 (V - V0)
+  const double s = -r.alpha * dv6;
+  double F[4][3];
+  for (int d = 0; d < 3; ++d) {
+    F[1][d] = s * c[0][d];
+    F[2][d] = s * c[1][d];
+    F[3][d] = s * c[2][d];
+    F[0][d] = -(F[1][d] + F[2][d] + F[3][d]);
+  }
+  if constexpr (Stiff) {
+    double gg = 0, l2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double c0 = c[0][d] + c[1][d] + c[2][d];
+      gg += c[0][d] * c[0][d] + c[1][d] * c[1][d] + c[2][d] * c[2][d] + c0 * c0;
+    }
+    for (int k = 0; k < 3; ++k) {
+      const double a = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
+      l2 = a > l2 ? a : l2;
+      const int j = (k + 1) % 3;
+      double q = 0;
+      for (int d = 0; d < 3; ++d) q += (e[j][d] - e[k][d]) * (e[j][d] - e[k][d]);
+      l2 = q > l2 ? q : l2;
+    }
+    const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (2.0 / 9.0);  // |V - V0| 4 L / 3
+    // a branch, not a max: rarely taken, so no iteration waits on the previous one's square root
+    if (cur * r.iG0 > sv) [[unlikely]]
+      sv = cur * r.iG0;
+  }
+  // Owned springs, without indexing the corner arrays by a run-time corner (that would keep them in
+  // memory): weights w_k = [k == p] - [k == q] select the spring's ends, so that e = x_q - x_p exactly
+  // (the other terms add zeros) and the corners get +f at p and -f at q.
+#pragma GCC unroll 2
+  for (int o = 0; o < Own; ++o) {
+    const int p = r.pq[o] >> 2, q = r.pq[o] & 3;
+    const std::ptrdiff_t sp = r.s[o];
+    double w[4];
+    for (int k = 0; k < 4; ++k) w[k] = static_cast<double>(k == p) - static_cast<double>(k == q);
+    double ev[3];
+    for (int d = 0; d < 3; ++d) ev[d] = -w[0] * P[0][d] - w[1] * P[1][d] - w[2] * P[2][d] - w[3] * P[3][d];
+    double fo[3];
+    if (!hd::spring_force<Soft, Stiff>(ev[0], ev[1], ev[2], S.L0[sp], S.K[sp], S.KP[sp], S.IK[sp], ss, fo[0],
+                                       fo[1], fo[2]))
+      continue;
+    for (int k = 0; k < 4; ++k)
+      for (int d = 0; d < 3; ++d) F[k][d] += w[k] * fo[d];
+  }
+  for (int k = 0; k < 4; ++k) {
+    double* o = f + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
+    o[0] += F[k][0];
+    o[1] += F[k][1];
+    o[2] += F[k][2];
+  }
+}
+
+}  // namespace medspring::detail
