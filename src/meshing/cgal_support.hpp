@@ -1,8 +1,7 @@
 // Private to the meshing layer: the CGAL types and helpers that cgal_meshing.cpp (distances, hole
-// filling) and cgal_balloon.cpp (the balloon surface) share; the mesh conversions are in cgal_mesh.hpp. CMake
-// compiles the two files as ONE unity translation unit (UNITY_GROUP cgal): a CGAL translation unit takes ~25
-// s and ~1.6 GB to compile
-// (../shared/TOOLCHAIN.md).
+// filling) and cgal_balloon.cpp (the balloon surface) share; the mesh conversions are in cgal_mesh.hpp.
+// CMake compiles the two files as ONE unity translation unit (UNITY_GROUP cgal): a CGAL translation unit
+// takes ~25 s and ~1.6 GB to compile (../shared/TOOLCHAIN.md).
 #pragma once
 
 #include <CGAL/AABB_traits.h>
