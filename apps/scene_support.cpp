@@ -37,80 +37,47 @@ using nlohmann::json;
 // ---------------------------------------------------------------------------------------------------
 // FileLoader
 
-SurfaceMesh FileLoader::read_mesh(const fs::path& file, LengthUnit unit) {
-  const std::string key = file.string() + "|" + to_string(unit);
-  auto it = meshes_.find(key);
-  if (it == meshes_.end()) it = meshes_.emplace(key, medspring::read_mesh(file, {.unit = unit})).first;
-  return it->second;
-}
+namespace {
 
-std::vector<Centerline> FileLoader::read_centerlines(const fs::path& file, LengthUnit unit,
-                                                     const std::string& radius_array) {
-  return medspring::read_centerlines(file, unit, radius_array);
-}
-
-LabelVolume FileLoader::read_label_volume(const fs::path& file) {
-  return medspring::read_label_volume(file);
-}
-
-SurfaceMesh FileLoader::isosurface(const MaskVolume& mask) {
+SceneFileAccess file_access() {
+  SceneFileAccess a;
+  a.read_mesh = [](const fs::path& file, LengthUnit unit) {
+    return medspring::read_mesh(file, {.unit = unit});
+  };
+  a.read_centerlines = [](const fs::path& file, LengthUnit unit, const std::string& radius_array) {
+    return medspring::read_centerlines(file, unit, radius_array);
+  };
+  a.read_label_volume = [](const fs::path& file) { return medspring::read_label_volume(file); };
 #ifdef MEDSPRING_HAVE_MESHING
-  return medspring::isosurface(mask);
-#else
-  (void)mask;
-  throw InvalidInput("isosurfaces need the meshing layer (build with MEDSPRING_WITH_CGAL=ON)");
-#endif
-}
-
-VolumetricMesh FileLoader::tetrahedralize(const SurfaceMesh& organ, Index nodes) {
+  a.isosurface = [](const MaskVolume& mask) { return medspring::isosurface(mask); };
+  a.balloon = [](const SurfaceMesh& organ, Index nodes) {
+    const BalloonResult r = build_balloon_surface(organ, {.target_nodes = nodes});
+    return BalloonSurface{r.mesh, r.report.note_lines()};
+  };
 #ifdef MEDSPRING_HAVE_FEM
-  return fem::volumetric_mesh(organ, {.target_nodes = nodes});
-#else
-  return SceneLoader::tetrahedralize(organ, nodes);
+  a.tetrahedralize = [](const SurfaceMesh& organ, Index nodes) {
+    return fem::volumetric_mesh(organ, {.target_nodes = nodes});
+  };
 #endif
-}
-
-SurfaceMesh FileLoader::tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
-                                     std::vector<std::string>& notes) {
+#endif
 #ifdef MEDSPRING_HAVE_BUILDERS
-  TreeSurface r = blended_tree_surface(tree, plain, spacing);
-  notes.push_back(cat("union of ", r.path_tubes, " closed path tubes: ", r.mesh.num_vertices(), " nodes, ",
-                      r.closed ? "closed and manifold" : "NOT closed", ", ", r.components, " component(s), ",
-                      r.self_intersections, " self-intersecting triangle pairs"));
-  for (const auto& n : r.notes) notes.push_back(n);
-  for (const auto& w : r.warnings) notes.push_back("warning: " + w);
-  return std::move(r.mesh);
-#else
-  return SceneLoader::tree_surface(tree, plain, spacing, notes);
+  a.tree_surface = [](const CenterlineTree& tree, const SmrmTree& plain, double spacing,
+                      std::vector<std::string>& notes) {
+    TreeSurface r = blended_tree_surface(tree, plain, spacing);
+    notes.push_back(cat("union of ", r.path_tubes, " closed path tubes: ", r.mesh.num_vertices(), " nodes, ",
+                        r.closed ? "closed and manifold" : "NOT closed", ", ", r.components, " component(s), ",
+                        r.self_intersections, " self-intersecting triangle pairs"));
+    for (const auto& n : r.notes) notes.push_back(n);
+    for (const auto& w : r.warnings) notes.push_back("warning: " + w);
+    return std::move(r.mesh);
+  };
 #endif
+  return a;
 }
 
-SurfaceMesh FileLoader::balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) {
-#ifdef MEDSPRING_HAVE_MESHING
-  for (const Balloon& b : balloons_)
-    if (b.mesh.num_vertices() == nodes && b.organ.V == organ.V && b.organ.F == organ.F) {
-      notes = b.notes;
-      notes.push_back("(reused from an earlier scene of this run)");
-      return b.mesh;
-    }
-  const BalloonResult r = build_balloon_surface(organ, {.target_nodes = nodes});
-  std::vector<std::string> n;
-  n.push_back(cat(r.report.nodes, " nodes, ", r.report.faces, " triangles, ",
-                  std::round(1000 * r.report.valence6_fraction) / 10, " % with six neighbours, Hausdorff ",
-                  r.report.hausdorff_mm, " mm, mean distance ", r.report.mean_distance_mm,
-                  " mm to the organ, ", r.report.seconds, " s"));
-  for (const auto& w : r.report.warnings) n.push_back("warning: " + w);
-  balloons_.push_back({organ, r.mesh, n});
-  notes = n;
-  return r.mesh;
-#else
-  (void)organ;
-  (void)nodes;
-  (void)notes;
-  throw InvalidInput(
-      "model.surface_nodes: balloon remeshing needs the meshing layer (MEDSPRING_WITH_CGAL=ON)");
-#endif
-}
+}  // namespace
+
+FileLoader::FileLoader() : CachingSceneLoader(file_access()) {}
 
 // ---------------------------------------------------------------------------------------------------
 // Progress

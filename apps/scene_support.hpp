@@ -13,32 +13,17 @@
 #include <vector>
 
 #include "medspring/scene/build.hpp"
+#include "medspring/scene/file_loader.hpp"
 #include "medspring/scene/runner.hpp"
 
 namespace medspring::cli {
 
-/// SceneLoader on the io layer (VTK readers) and, when built, the meshing layer (CGAL balloon,
-/// isosurfaces). Meshes and balloon surfaces are cached per file, unit and node count, so the paper's
-/// four kidney scenes remesh the kidney once.
-class FileLoader final : public SceneLoader {
+/// The scene loader of the command (scene/file_loader.hpp) on the io layer (VTK readers) and, when
+/// built, the meshing layer (CGAL balloon, isosurfaces) and the fem layer (TetGen). Meshes and balloon
+/// surfaces are cached per file, unit and node count, so the paper's four kidney scenes remesh once.
+class FileLoader final : public CachingSceneLoader {
  public:
-  SurfaceMesh read_mesh(const std::filesystem::path& file, LengthUnit unit) override;
-  std::vector<Centerline> read_centerlines(const std::filesystem::path& file, LengthUnit unit,
-                                           const std::string& radius_array) override;
-  LabelVolume read_label_volume(const std::filesystem::path& file) override;
-  SurfaceMesh isosurface(const MaskVolume& mask) override;
-  SurfaceMesh balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) override;
-  VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override;  // TetGen (fem layer)
-  SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
-                           std::vector<std::string>& notes) override;  // CGAL union (builders layer)
-
- private:
-  std::map<std::string, SurfaceMesh> meshes_;
-  struct Balloon {
-    SurfaceMesh organ, mesh;
-    std::vector<std::string> notes;
-  };
-  std::vector<Balloon> balloons_;
+  FileLoader();
 };
 
 /// Progress on stderr: a bar when stderr is a terminal and the task has run for more than a second,

@@ -41,6 +41,7 @@ void def_params(py::class_<T, Extra...>& cls) {
     d["hi"] = spec.hi;
     d["lo_open"] = spec.lo_open;
     d["hi_open"] = spec.hi_open;
+    d["derived"] = spec.derived;  // set by the program, not a scene key
     specs.append(d);
     using F = std::remove_cvref_t<decltype(def)>;
     const std::string name(spec.name);
@@ -79,6 +80,16 @@ void def_params(py::class_<T, Extra...>& cls) {
     cls.def_property(name.c_str(), get_field, set_field, doc);
   });
   cls.attr("_params") = py::tuple(specs);  // the declarations, in order (tests, tools)
+  cls.def(
+      "_param_text",
+      [](const T& t, const std::string& name) {
+        std::string out;
+        for_each_field(t, [&](const ParamSpec& s, const auto& f) {
+          if (s.name == name) out = param_value_text(f);
+        });
+        return out;
+      },
+      py::arg("name"), "A field's value as a scene file writes it (enums by their scene names).");
 }
 
 }  // namespace medspring::python

@@ -249,6 +249,7 @@ void bind_physics(py::module_& m) {
       .def_readwrite("duffing", &SurfaceBodyParams::duffing, "DuffingSettings (Strain by default).")
       .def_readwrite("fixed", &SurfaceBodyParams::fixed,
                      "Pinned nodes (list of indices; assign a new list).");
+  def_params(sbp);  // mass, beta, k_r, k, duffing, fixed: declared in physics/model.hpp
   settings_helpers(sbp);
   m.def("make_surface_model", &make_surface_model, "mesh"_a, "params"_a = SurfaceBodyParams{},
         "name"_a = "surface",

@@ -19,6 +19,7 @@
 #include "bind_common.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/scene/build.hpp"
+#include "medspring/scene/file_loader.hpp"
 #include "medspring/scene/runner.hpp"
 #include "medspring/scene/scene.hpp"
 #ifdef MEDSPRING_PYTHON_WITH_FEM
@@ -29,12 +30,12 @@
 #include "medspring/io/mesh_io.hpp"
 #include "medspring/io/volume_io.hpp"
 #endif
-#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
-#include "medspring/builders/vessel_build.hpp"
-#endif
 #ifdef MEDSPRING_PYTHON_WITH_MESHING
 #include "medspring/meshing/balloon.hpp"
 #include "medspring/meshing/isosurface.hpp"
+#endif
+#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
+#include "medspring/builders/vessel_build.hpp"
 #endif
 
 namespace medspring::python {
@@ -43,93 +44,45 @@ void bind_scene(py::module_& m);
 
 namespace {
 
-// File access of scenes with file sources: the io layer's readers and, when built, the meshing layer's
-// balloon surfaces and isosurfaces. Meshes and balloons are cached for the life of the runner, so a
-// worker builds the real kidney's 458-node balloon once for a whole study.
-class FileLoader final : public SceneLoader {
- public:
-  SurfaceMesh read_mesh(const std::filesystem::path& file, LengthUnit unit) override {
+// File access of scenes with file sources (scene/file_loader.hpp): the io layer's readers and, when
+// built, the meshing layer's balloon surfaces and isosurfaces and the fem layer's TetGen. Meshes and
+// balloons are cached for the life of the runner, so a worker builds the real kidney's 458-node balloon
+// once for a whole study.
+SceneFileAccess file_access() {
+  SceneFileAccess a;
 #ifdef MEDSPRING_PYTHON_WITH_IO
-    const std::string key = file.string() + "|" + to_string(unit);
-    auto it = meshes_.find(key);
-    if (it == meshes_.end()) it = meshes_.emplace(key, medspring::read_mesh(file, {.unit = unit})).first;
-    return it->second;
-#else
-    (void)unit;
-    throw InvalidInput(cat(file.string(), ": reading meshes needs the io layer (VTK) in this build"));
-#endif
-  }
-  std::vector<Centerline> read_centerlines(const std::filesystem::path& file, LengthUnit unit,
-                                           const std::string& radius_array) override {
-#ifdef MEDSPRING_PYTHON_WITH_IO
+  a.read_mesh = [](const std::filesystem::path& file, LengthUnit unit) {
+    return medspring::read_mesh(file, {.unit = unit});
+  };
+  a.read_centerlines = [](const std::filesystem::path& file, LengthUnit unit,
+                          const std::string& radius_array) {
     return medspring::read_centerlines(file, unit, radius_array);
-#else
-    (void)unit;
-    (void)radius_array;
-    throw InvalidInput(cat(file.string(), ": reading centerlines needs the io layer (VTK) in this build"));
+  };
+  a.read_label_volume = [](const std::filesystem::path& file) { return medspring::read_label_volume(file); };
 #endif
-  }
-  LabelVolume read_label_volume(const std::filesystem::path& file) override {
-#ifdef MEDSPRING_PYTHON_WITH_IO
-    return medspring::read_label_volume(file);
-#else
-    throw InvalidInput(cat(file.string(), ": reading volumes needs the io layer (VTK) in this build"));
+#ifdef MEDSPRING_PYTHON_WITH_MESHING
+  a.isosurface = [](const MaskVolume& mask) { return medspring::isosurface(mask); };
+  a.balloon = [](const SurfaceMesh& organ, Index nodes) {
+    const BalloonResult r = build_balloon_surface(organ, {.target_nodes = nodes});
+    return BalloonSurface{r.mesh, r.report.note_lines()};
+  };
 #endif
-  }
 #ifdef MEDSPRING_PYTHON_WITH_FEM
-  VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override {  // volumetric kind (TetGen)
+  a.tetrahedralize = [](const SurfaceMesh& organ, Index nodes) {
     return fem::volumetric_mesh(organ, {.target_nodes = nodes});
-  }
+  };
 #endif
 #ifdef MEDSPRING_PYTHON_WITH_BUILDERS
-  SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
-                           std::vector<std::string>& notes) override {  // "blend": true (CGAL union)
+  a.tree_surface = [](const CenterlineTree& tree, const SmrmTree& plain, double spacing,
+                      std::vector<std::string>& notes) {  // "blend": true (CGAL union)
     TreeSurface r = blended_tree_surface(tree, plain, spacing);
     for (const auto& n : r.notes) notes.push_back(n);
     for (const auto& w : r.warnings) notes.push_back("warning: " + w);
     return std::move(r.mesh);
-  }
-#endif
-  SurfaceMesh isosurface(const MaskVolume& mask) override {
-#ifdef MEDSPRING_PYTHON_WITH_MESHING
-    return medspring::isosurface(mask);
-#else
-    (void)mask;
-    throw InvalidInput("isosurfaces need the meshing layer (build with MEDSPRING_WITH_CGAL=ON)");
-#endif
-  }
-  SurfaceMesh balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) override {
-#ifdef MEDSPRING_PYTHON_WITH_MESHING
-    for (const Balloon& b : balloons_)
-      if (b.mesh.num_vertices() == nodes && b.organ.V == organ.V && b.organ.F == organ.F) {
-        notes = b.notes;
-        return b.mesh;
-      }
-    const BalloonResult r = build_balloon_surface(organ, {.target_nodes = nodes});
-    std::vector<std::string> n;
-    n.push_back(
-        cat(r.report.nodes, " nodes, Hausdorff ", r.report.hausdorff_mm, " mm, ", r.report.seconds, " s"));
-    for (const auto& w : r.report.warnings) n.push_back("warning: " + w);
-    balloons_.push_back({organ, r.mesh, n});
-    notes = n;
-    return r.mesh;
-#else
-    (void)organ;
-    (void)nodes;
-    (void)notes;
-    throw InvalidInput(
-        "model.surface_nodes: balloon remeshing needs the meshing layer (MEDSPRING_WITH_CGAL=ON)");
-#endif
-  }
-
- private:
-  std::map<std::string, SurfaceMesh> meshes_;
-  struct Balloon {
-    SurfaceMesh organ, mesh;
-    std::vector<std::string> notes;
   };
-  std::vector<Balloon> balloons_;
-};
+#endif
+  return a;
+}
 
 // The part of a scene that decides its model: equal keys build equal models.
 std::string model_key(const Scene& scene) {
@@ -231,14 +184,14 @@ class SceneRunner {
   std::size_t cached_models() const { return models_.size(); }
 
  private:
-  FileLoader loader_;
+  CachingSceneLoader loader_{file_access()};
   std::map<std::string, BuiltScene> models_;
 };
 
 }  // namespace
 
 std::unique_ptr<SceneLoader> make_file_loader() {
-  return std::make_unique<FileLoader>();
+  return std::make_unique<CachingSceneLoader>(file_access());
 }
 
 namespace {

@@ -1,6 +1,7 @@
 // Sim layer: Simulation, the main user API (loads on surface nodes -> step -> surface map -> local
 // overlay -> normals). update / advance release the GIL. Positions and velocities are zero-copy views.
 #include "bind_common.hpp"
+#include "bind_params.hpp"
 #include "medspring/sim/checkpoint.hpp"
 #include "medspring/sim/simulation.hpp"
 
@@ -66,6 +67,7 @@ void bind_sim(py::module_& m) {
                      "k_loc = body.local_stiffness (True).")
       .def_readwrite("guard", &LocalOptions::guard,
                      "Limit |U_c| to 0.9 x the contact's spoke length (False).");
+  def_params(lo);  // enabled, stiffness, k_loc, cache, ...: declared in sim/simulation.hpp
   settings_helpers(lo);
 
   py::class_<SimulationSettings> sset(m, "SimulationSettings", "Settings of a Simulation.");

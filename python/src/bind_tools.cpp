@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bind_common.hpp"
+#include "bind_params.hpp"
 #include "medspring/sim/tool_sim.hpp"
 
 namespace medspring::python {
@@ -147,18 +148,27 @@ void bind_tools(py::module_& m) {
                    ", opening=", t.opening, ")");
       });
 
+  py::class_<ContactSettings> contact(m, "ContactSettings",
+                                      "Contact response of rigid tools (docs/tools.md, docs/parameters.md).");
+  def_params(contact);  // friction, stiffness, kappa, ...: declared in tools/contact.hpp
+  settings_helpers(contact);
+
   py::class_<ToolSimulation>(
       m, "ToolSimulation",
       "Rigid tools acting on a Simulation: every update collides them with the deformed surface and adds the "
       "contact forces to the update. Keeps the Simulation alive.")
-      .def(py::init([](Simulation& sim, double friction, double stiffness, bool substep) {
-             ContactSettings s;
-             s.friction = friction;
-             s.stiffness = stiffness;
-             s.substep = substep;
+      .def(py::init([](Simulation& sim, std::optional<double> friction, std::optional<double> stiffness,
+                       std::optional<ContactSettings> settings, std::optional<bool> substep) {
+             ContactSettings s = settings.value_or(ContactSettings{});
+             if (friction) s.friction = *friction;
+             if (stiffness) s.stiffness = *stiffness;
+             if (substep) s.substep = *substep;
              return std::make_unique<ToolSimulation>(sim, s);
            }),
-           "sim"_a, "friction"_a = 0.0, "stiffness"_a = 0.0, "substep"_a = false, py::keep_alive<1, 2>())
+           "sim"_a, "friction"_a = py::none(), "stiffness"_a = py::none(), "settings"_a = py::none(),
+           "substep"_a = py::none(), py::keep_alive<1, 2>(),
+           "settings: ContactSettings (defaults when None); friction, stiffness and substep (penalty forces "
+           "re-evaluated every substep), when given, override it.")
       .def(
           "add_tool",
           [](ToolSimulation& t, const Tool& tool, py::handle position, py::handle rotation) {

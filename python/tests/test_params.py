@@ -93,3 +93,67 @@ def test_hybrid_and_step_fields_round_trip_through_a_scene_file():
         want = as_json(getattr(step, spec["name"]))
         got = got_integrator[spec["key"]]
         assert norm(got) == norm(want), spec["name"]
+
+
+@pytest.mark.parametrize("cls", [m.SurfaceBodyParams, m.SmrmSettings, m.LocalOptions, m.ContactSettings])
+def test_surface_smrm_local_and_contact_fields_are_keywords_and_properties(cls):
+    test_every_declared_field_is_a_keyword_and_property(cls)
+
+
+def _perturbed(obj):
+    """Changes every declared field of obj (nested DuffingSettings by reference) and returns the scene
+    file's object of the fields a file holds."""
+    out = {}
+    for spec in type(obj)._params:
+        value = getattr(obj, spec["name"])
+        if isinstance(value, m.DuffingSettings):
+            out[spec["key"]] = _perturbed(value)
+            continue
+        new = changed(spec, value)
+        setattr(obj, spec["name"], new)
+        if not spec["derived"]:
+            out[spec["key"]] = obj._param_text(spec["name"]) if hasattr(new, "name") else new
+    return out
+
+
+def _expect_same(obj, got):
+    for spec in type(obj)._params:
+        if spec["derived"]:
+            assert spec["key"] not in got, spec["name"]  # set by the program, never in a file
+            continue
+        want = getattr(obj, spec["name"])
+        if isinstance(want, m.DuffingSettings):
+            _expect_same(want, got[spec["key"]])
+        elif hasattr(want, "name") and not isinstance(want, (bool, int)):  # an enum
+            assert got[spec["key"]] == obj._param_text(spec["name"]), spec["name"]
+        else:
+            assert got[spec["key"]] == want, spec["name"]
+
+
+def test_surface_smrm_local_and_contact_fields_round_trip_through_scene_files():
+    surface, local, contact = m.SurfaceBodyParams(), m.LocalOptions(), m.ContactSettings()
+    tool = {"shape": "sphere", "radius": 8, "path": [{"t": 0, "position": [0, 0, 60]}]}
+    doc = {"model": {"kind": "surface", "source": {"phantom": "kidney"}, "parameters": _perturbed(surface)},
+           "local": _perturbed(local), "contact": _perturbed(contact), "tools": [tool], "duration": 10}
+    back = json.loads(m.scene_json(json.dumps(doc)))
+    _expect_same(surface, back["model"]["parameters"])
+    _expect_same(local, back["local"])
+    _expect_same(contact, back["contact"])
+
+    smrm = m.SmrmSettings()
+    doc = {"model": {"kind": "smrm", "source": {"phantom": {"name": "vessel", "path": "straight_x"}},
+                     "parameters": _perturbed(smrm)}, "duration": 10}
+    assert smrm.bending == m.BendingMode.Constant  # so that k_b is written back
+    back = json.loads(m.scene_json(json.dumps(doc)))
+    _expect_same(smrm, back["model"]["parameters"])
+
+
+def test_flat_properties_share_the_nested_settings():
+    s = m.SmrmSettings(k_cl=0.3, wall_E=0.8)
+    assert s.chain.k == 0.3 and s.wall.E == 0.8
+    s.chain = m.ChainSettings(k=0.4)
+    assert s.k_cl == 0.4
+    p = m.SurfaceBodyParams(mass=0.6, k_r=0.01)
+    assert p.node.mass == 0.6 and p.node.return_k == 0.01
+    lo = m.LocalOptions(stiffness="linearized", patch_nodes=12)
+    assert lo.settings.solver.stiffness == m.LocalStiffness.Linearized and lo.settings.patch.count == 12

@@ -9,6 +9,28 @@
 
 namespace medspring {
 
+const char* param_enum_name(LocalStiffness mode) {
+  switch (mode) {
+    case LocalStiffness::Isotropic:
+      return "isotropic";
+    case LocalStiffness::Linearized:
+      return "linearized";
+    case LocalStiffness::AxisProjected:
+      return "axis_projected";
+    case LocalStiffness::PaperLiteral:
+      return "paper_literal";
+  }
+  return "unknown";
+}
+
+LocalStiffness parse_enum(const std::string& text, LocalStiffness*) {
+  for (LocalStiffness m : {LocalStiffness::Isotropic, LocalStiffness::Linearized,
+                           LocalStiffness::AxisProjected, LocalStiffness::PaperLiteral})
+    if (text == param_enum_name(m)) return m;
+  throw InvalidInput(
+      cat("unknown value '", text, "' (expected isotropic, linearized, axis_projected or paper_literal)"));
+}
+
 const char* to_string(LocalStiffness mode) {
   switch (mode) {
     case LocalStiffness::Isotropic:

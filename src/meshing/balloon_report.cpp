@@ -33,4 +33,13 @@ std::string BalloonReport::summary() const {
   return s;
 }
 
+std::vector<std::string> BalloonReport::note_lines() const {
+  std::vector<std::string> n;
+  n.push_back(cat(nodes, " nodes, ", faces, " triangles, ", std::round(1000 * valence6_fraction) / 10,
+                  " % with six neighbours, Hausdorff ", hausdorff_mm, " mm, mean distance ", mean_distance_mm,
+                  " mm to the organ, ", seconds, " s"));
+  for (const auto& w : warnings) n.push_back("warning: " + w);
+  return n;
+}
+
 }  // namespace medspring

@@ -1,7 +1,7 @@
-// Private to the meshing layer: the CGAL types and conversions that cgal_meshing.cpp (distances, hole
-// filling) and cgal_balloon.cpp (the balloon surface) share. CMake compiles the two files as ONE unity
-// translation unit (UNITY_GROUP cgal): a CGAL translation unit takes ~25 s and ~1.6 GB to compile
-// (../shared/TOOLCHAIN.md).
+// Private to the meshing layer: the CGAL types and helpers that cgal_meshing.cpp (distances, hole
+// filling) and cgal_balloon.cpp (the balloon surface) share; the mesh conversions are in cgal_mesh.hpp.
+// CMake compiles the two files as ONE unity translation unit (UNITY_GROUP cgal): a CGAL translation unit
+// takes ~25 s and ~1.6 GB to compile (../shared/TOOLCHAIN.md).
 #pragma once
 
 #include <CGAL/AABB_traits.h>
@@ -24,6 +24,7 @@
 #include <random>
 #include <vector>
 
+#include "cgal_mesh.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/geometry/locality.hpp"
 #include "medspring/geometry/topology.hpp"
@@ -34,24 +35,15 @@
 namespace medspring::cgal_detail {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = K::Point_3;
 using Vector = K::Vector_3;
 using Triangle = K::Triangle_3;
-using Mesh = CGAL::Surface_mesh<Point>;
-using VD = Mesh::Vertex_index;
 using HD = Mesh::Halfedge_index;
 using ED = Mesh::Edge_index;
-using FD = Mesh::Face_index;
 using Triangles = std::vector<Triangle>;
 using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 
 inline constexpr double kPi = 3.14159265358979323846;
-
-inline Point to_point(const MatX3& V, Index i) {
-  return {V(i, 0), V(i, 1), V(i, 2)};
-}
 
 inline Triangles to_triangles(const SurfaceMesh& s) {
   Triangles t;
@@ -76,44 +68,6 @@ class SurfaceQuery {
   Triangles triangles_;
   Tree tree_;
 };
-
-/// A Surface_mesh from an engine mesh (which must be valid and manifold; InvalidInput otherwise).
-inline Mesh to_cgal(const SurfaceMesh& s, const std::string& what) {
-  Mesh m;
-  m.reserve(static_cast<Mesh::size_type>(s.num_vertices()),
-            static_cast<Mesh::size_type>(3 * s.num_faces() / 2 + 8),
-            static_cast<Mesh::size_type>(s.num_faces()));
-  for (Index i = 0; i < s.num_vertices(); ++i) m.add_vertex(to_point(s.V, i));
-  for (Index f = 0; f < s.num_faces(); ++f) {
-    const FD fd =
-        m.add_face(VD(static_cast<Mesh::size_type>(s.F(f, 0))), VD(static_cast<Mesh::size_type>(s.F(f, 1))),
-                   VD(static_cast<Mesh::size_type>(s.F(f, 2))));
-    require(fd != Mesh::null_face(), what, ": face ", f,
-            " cannot be added to a manifold, consistently oriented surface (non-manifold or flipped)");
-  }
-  return m;
-}
-
-/// The engine mesh of a Surface_mesh (removed elements skipped, vertices numbered in index order).
-inline SurfaceMesh from_cgal(const Mesh& m) {
-  SurfaceMesh s;
-  std::vector<Index> id(m.num_vertices(), -1);
-  s.V.resize(static_cast<Index>(m.number_of_vertices()), 3);
-  Index n = 0;
-  for (const VD v : m.vertices()) {
-    const Point& p = m.point(v);
-    s.V.row(n) << p.x(), p.y(), p.z();
-    id[v] = n++;
-  }
-  s.F.resize(static_cast<Index>(m.number_of_faces()), 3);
-  Index k = 0;
-  for (const FD f : m.faces()) {
-    int c = 0;
-    for (const VD v : CGAL::vertices_around_face(m.halfedge(f), m)) s.F(k, c++) = id[v];
-    ++k;
-  }
-  return s;
-}
 
 inline int sq(int x) {
   return x * x;

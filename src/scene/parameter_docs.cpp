@@ -4,9 +4,13 @@
 #include <algorithm>
 
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/smrm_vessel.hpp"
 #include "medspring/physics/integrators.hpp"
+#include "medspring/physics/model.hpp"
 #include "medspring/physics/spring_law.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/sim/simulation.hpp"
+#include "medspring/tools/contact.hpp"
 
 namespace medspring {
 
@@ -16,8 +20,16 @@ std::vector<ParamSet> parameter_sets() {
        "include/medspring/models/hybrid_kidney.hpp", param_rows<HybridSettings>()},
       {"Duffing spring law", "DuffingSettings", "`duffing` inside `model.parameters` (every kind)",
        "include/medspring/physics/spring_law.hpp", param_rows<DuffingSettings>()},
+      {"Surface model", "SurfaceBodyParams", "`model.parameters` (kind `surface`)",
+       "include/medspring/physics/model.hpp", param_rows<SurfaceBodyParams>()},
+      {"SMRM vessel", "SmrmSettings", "`model.parameters` (kind `smrm`)",
+       "include/medspring/models/smrm_vessel.hpp", param_rows<SmrmSettings>()},
       {"Step settings", "StepSettings", "`integrator`", "include/medspring/physics/integrators.hpp",
        param_rows<StepSettings>()},
+      {"Local deformation", "LocalOptions", "`local`", "include/medspring/sim/simulation.hpp",
+       param_rows<LocalOptions>()},
+      {"Tool contact", "ContactSettings", "`contact` (with `tools`)", "include/medspring/tools/contact.hpp",
+       param_rows<ContactSettings>()},
   };
 }
 
@@ -33,8 +45,9 @@ std::string parameter_tables_markdown() {
       "and this page. The name is the JSON key; in Python the property of the same name (`integrator` "
       "for the key `method`). A nested name `duffing.eta` is the key `eta` of the object `duffing`. Numbers "
       "and names can also be set on the command line: `medspring run SCENE --set integrator.dt=0.25`.\n\n"
-      "Declared so far: the sets below. The parameters of the surface and SMRM models, the local "
-      "deformation, tools and studies are still read by hand; [scenes.md](scenes.md) describes them.\n";
+      "Declared so far: the sets below. Still read by hand ([scenes.md](scenes.md), [tools.md](tools.md)): "
+      "the volumetric model's parameters, each tool's shape and path, loads, `record`, and the parameter "
+      "studies' specification ([studies.md](studies.md)).\n";
   for (ParamSet p : parameter_sets()) {
     for (ParamRow& r : p.rows) {  // a '|' would end the table cell
       std::string doc;
@@ -58,10 +71,24 @@ void set_scene_parameter(Scene& scene, const std::string& path, const std::strin
     } else if (starts("model.parameters.") && scene.model.kind == ModelKind::Hybrid) {
       name = path.substr(17);
       set_param(scene.model.hybrid, name, value);
+    } else if (starts("model.parameters.") && scene.model.kind == ModelKind::Surface) {
+      name = path.substr(17);
+      set_param(scene.model.surface, name, value);
+    } else if (starts("model.parameters.") && scene.model.kind == ModelKind::Smrm) {
+      name = path.substr(17);
+      set_param(scene.model.smrm, name, value);
+      if (name == "k_b") scene.model.smrm.bending = BendingMode::Constant;  // as in a scene file
+    } else if (starts("local.")) {
+      name = path.substr(6);
+      set_param(scene.local, name, value);
+      if (name == "k_loc") scene.local_k_from_body = scene.local.use_body_stiffness = false;
+    } else if (starts("contact.")) {
+      name = path.substr(8);
+      set_param(scene.contact, name, value);
     } else {
       throw InvalidInput(
-          "not a declared parameter of this scene (integrator.NAME, or model.parameters.NAME of a hybrid "
-          "model; see docs/parameters.md)");
+          "not a declared parameter of this scene (integrator.NAME, local.NAME, contact.NAME, or "
+          "model.parameters.NAME of a hybrid, surface or smrm model; see docs/parameters.md)");
     }
   } catch (const InvalidInput& e) {
     std::string what = e.what();

@@ -54,6 +54,7 @@ void params_from_json(const nlohmann::json& j, const std::string& path, T& p) {
   if (!j.is_object()) fail(path, cat("must be an object (got ", type_name(j), ")"));
   std::vector<std::string> known;
   for_each_field(p, [&](const ParamSpec& s, auto& f) {
+    if (s.derived) return;  // set by the program: an unknown key in a file
     const std::string key(s.json_name());
     known.push_back(key);
     const auto it = j.find(key);
@@ -76,11 +77,12 @@ nlohmann::json params_to_json(const T& p) {
   nlohmann::json j = nlohmann::json::object();
   for_each_field(p, [&](const ParamSpec& s, const auto& f) {
     using F = std::remove_cvref_t<decltype(f)>;
+    if (s.derived) return;
     const std::string key(s.json_name());
     if constexpr (ParamStruct<F>)
       j[key] = params_to_json(f);
     else if constexpr (std::is_enum_v<F>)
-      j[key] = to_string(f);
+      j[key] = enum_text(f);
     else
       j[key] = f;
   });

@@ -62,19 +62,6 @@ LengthUnit parse_unit(Obj& o, const std::string& key) {
   return with_path(o.ctx(), o.at(key), [&] { return parse_length_unit(s); });
 }
 
-DuffingSettings parse_duffing(const Ctx& c, const json& j, const std::string& path, DuffingSettings d) {
-  Obj o(c, j, path);
-  if (const json* v = o.get("mode")) {
-    const std::string s = as_string(c, *v, o.at("mode"));
-    d.mode = with_path(c, o.at("mode"), [&] { return parse_duffing_mode(s); });
-  }
-  d.eta = o.positive("eta", d.eta);
-  d.length = o.positive("length", d.length);
-  d.soft = o.boolean("soft", d.soft);
-  o.finish();
-  return d;
-}
-
 std::vector<Index> parse_index_list(const Ctx& c, const json& j, const std::string& path) {
   if (!j.is_array()) fail(c, path, "must be an array of node indices");
   std::vector<Index> out;
@@ -196,49 +183,18 @@ void parse_parameters(const Ctx& c, const json& j, const std::string& path, Scen
       // Declared once (models/hybrid_kidney.hpp, for_each_field): every key, type and range checked there.
       with_origin(c, [&] { params_from_json(j, path, m.hybrid); });
       return;
-    case ModelKind::Surface: {
-      SurfaceBodyParams& p = m.surface;
-      p.node.mass = o.positive("mass", p.node.mass);
-      p.node.beta = o.nonnegative("beta", p.node.beta);
-      p.node.return_k = o.nonnegative("k_r", p.node.return_k);
-      p.k = o.positive("k", p.k);
-      if (const json* d = o.get("duffing")) p.duffing = parse_duffing(c, *d, o.at("duffing"), p.duffing);
-      if (const json* f = o.get("fixed")) p.fixed = parse_index_list(c, *f, o.at("fixed"));
-      break;
-    }
-    case ModelKind::Smrm: {
+    case ModelKind::Surface:  // declared in physics/model.hpp
+      with_origin(c, [&] { params_from_json(j, path, m.surface); });
+      return;
+    case ModelKind::Smrm: {  // declared in models/smrm_vessel.hpp
       SmrmSettings& s = m.smrm;
-      s.spokes = o.index("spokes", s.spokes, 3);
-      s.chain.mass = o.positive("mass", s.chain.mass);
-      s.chain.beta = o.nonnegative("beta", s.chain.beta);
-      s.chain.k = o.positive("k_cl", s.chain.k);
-      s.chain.kr = o.nonnegative("k_r", s.chain.kr);
-      s.chain.kb = o.nonnegative("k_b", s.chain.kb);
+      with_origin(c, [&] { params_from_json(j, path, s); });
       // Bending (issue 17): "wall" (default, E I of the wall) or "constant" (k_b; 0 = the paper's chain).
       // A k_b without "bending" means "constant".
-      if (o.get("k_b")) s.bending = BendingMode::Constant;
-      if (const json* bm = o.get("bending")) {
-        const std::string t = as_string(c, *bm, o.at("bending"));
-        s.bending = with_path(c, o.at("bending"), [&] { return parse_bending_mode(t); });
-        if (s.bending == BendingMode::Wall && o.get("k_b"))
-          fail(c, o.at("k_b"), "applies to \"bending\": \"constant\" only");
-      }
-      s.wall.E = o.positive("wall_E", s.wall.E);
-      s.wall.thickness_ratio = o.positive("wall_thickness_ratio", s.wall.thickness_ratio);
-      s.chain.fix_first = o.boolean("fix_first", s.chain.fix_first);
-      s.chain.fix_last = o.boolean("fix_last", s.chain.fix_last);
-      s.k_loc = o.positive("k_loc", s.k_loc);
-      if (const json* d = o.get("duffing"))
-        s.chain.duffing = parse_duffing(c, *d, o.at("duffing"), s.chain.duffing);
-      if (const json* f = o.get("frame_mode")) {
-        const std::string t = as_string(c, *f, o.at("frame_mode"));
-        s.frames.mode = with_path(c, o.at("frame_mode"), [&] { return parse_frame_mode(t); });
-      }
-      if (const json* f = o.get("frame_anchor")) {
-        const std::string t = as_string(c, *f, o.at("frame_anchor"));
-        s.frames.anchor = with_path(c, o.at("frame_anchor"), [&] { return parse_frame_anchor(t); });
-      }
-      break;
+      if (j.contains("k_b") && !j.contains("bending")) s.bending = BendingMode::Constant;
+      if (j.contains("k_b") && s.bending == BendingMode::Wall)
+        fail(c, o.at("k_b"), "applies to \"bending\": \"constant\" only");
+      return;
     }
     case ModelKind::Volumetric: {  // issue 23: E and nu come from "material"
       VolumetricSettings& v = m.volumetric;
@@ -249,7 +205,8 @@ void parse_parameters(const Ctx& c, const json& j, const std::string& path, Scen
       v.spring_scale = o.positive("spring_scale", v.spring_scale);
       v.volume_scale = o.nonnegative("volume_scale", v.volume_scale);
       v.mass_scaling_dt = o.nonnegative("mass_scaling_dt", v.mass_scaling_dt);
-      if (const json* d = o.get("duffing")) v.duffing = parse_duffing(c, *d, o.at("duffing"), v.duffing);
+      if (const json* d = o.get("duffing"))  // declared in physics/spring_law.hpp
+        with_origin(c, [&] { params_from_json(*d, o.at("duffing"), v.duffing); });
       if (const json* f = o.get("fixed")) v.fixed = parse_index_list(c, *f, o.at("fixed"));
       break;
     }
@@ -403,32 +360,10 @@ void parse_local(const Ctx& c, const json& j, Scene& scene) {
     L.enabled = j.get<bool>();
     return;
   }
-  Obj o(c, j, "local");
-  L.enabled = o.boolean("enabled", true);
-  if (const json* m = o.get("stiffness")) {
-    const std::string t = as_string(c, *m, "local.stiffness");
-    if (t == "isotropic")
-      L.settings.solver.stiffness = LocalStiffness::Isotropic;
-    else if (t == "linearized")
-      L.settings.solver.stiffness = LocalStiffness::Linearized;
-    else if (t == "axis_projected")
-      L.settings.solver.stiffness = LocalStiffness::AxisProjected;
-    else if (t == "paper_literal")
-      L.settings.solver.stiffness = LocalStiffness::PaperLiteral;
-    else
-      fail(c, "local.stiffness",
-           cat("unknown value '", t, "' (expected isotropic, linearized, axis_projected or paper_literal)"));
-  }
-  if (o.has("k_loc")) {
-    L.settings.patch.k_loc = o.positive("k_loc", L.settings.patch.k_loc);
-    scene.local_k_from_body = false;
-  }
+  L.enabled = true;  // a "local" object means on unless it says "enabled": false
+  with_origin(c, [&] { params_from_json(j, "local", L); });  // declared in sim/simulation.hpp
+  if (j.contains("k_loc")) scene.local_k_from_body = false;
   L.use_body_stiffness = scene.local_k_from_body;
-  L.settings.cache_local = o.boolean("cache", L.settings.cache_local);
-  L.guard = o.boolean("guard", L.guard);
-  L.settings.patch.count = o.index("patch_nodes", L.settings.patch.count, 2);
-  L.settings.patch.half_width = o.index("half_width", L.settings.patch.half_width, 1);
-  o.finish();
 }
 
 void parse_record(const Ctx& c, const json& j, Scene& scene) {

@@ -6,6 +6,7 @@
 
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
+#include "params_json.hpp"
 
 namespace medspring {
 
@@ -128,25 +129,21 @@ std::vector<SceneTool> parse_scene_tools(const std::string& text, const std::fil
 }
 
 ContactSettings parse_scene_contact(const std::string& text, const std::string& origin) {
-  const json j = json::parse(text);
-  known(origin, j, "contact",
-        {"friction", "stiffness", "kappa", "damping", "max_depth", "grasp_angle_deg", "substep"});
+  json j = json::parse(text);
   ContactSettings s;
-  if (j.contains("friction")) s.friction = number(origin, j["friction"], "contact.friction");
-  if (j.contains("stiffness")) s.stiffness = number(origin, j["stiffness"], "contact.stiffness");
-  if (j.contains("kappa")) s.kappa = number(origin, j["kappa"], "contact.kappa");
-  if (j.contains("damping")) s.damping = number(origin, j["damping"], "contact.damping");
-  if (j.contains("max_depth")) s.max_depth = number(origin, j["max_depth"], "contact.max_depth");
-  if (j.contains("substep")) {
-    if (!j["substep"].is_boolean())
-      throw InvalidInput(
-          cat(origin, ": contact.substep: must be true or false (got ", j["substep"].dump(), ")"));
-    s.substep = j["substep"].get<bool>();
-  }
-  if (j.contains("grasp_angle_deg"))
-    s.grasp_angle = number(origin, j["grasp_angle_deg"], "contact.grasp_angle_deg") * std::numbers::pi / 180;
   try {
-    validate_contact_settings(s);
+    // The grasp angle may be given in degrees (the form of scenes written before it was declared).
+    if (j.is_object() && j.contains("grasp_angle_deg")) {
+      if (j.contains("grasp_angle"))
+        throw InvalidInput("contact.grasp_angle_deg: give grasp_angle (rad) or grasp_angle_deg, not both");
+      const json& g = j["grasp_angle_deg"];
+      const double deg = g.is_number() ? g.get<double>() : -1;
+      if (!(deg >= 0 && deg < 180))
+        throw InvalidInput(cat("contact.grasp_angle_deg: must be a number in [0, 180) (got ", g.dump(), ")"));
+      j.erase("grasp_angle_deg");
+      j["grasp_angle"] = deg * std::numbers::pi / 180;
+    }
+    params_from_json(j, "contact", s);  // declared in tools/contact.hpp
   } catch (const InvalidInput& e) {
     throw InvalidInput(cat(origin, ": ", e.what()));
   }
@@ -175,14 +172,7 @@ std::string scene_tools_json(const std::vector<SceneTool>& tools) {
 }
 
 std::string scene_contact_json(const ContactSettings& s) {
-  return json({{"friction", s.friction},
-               {"stiffness", s.stiffness},
-               {"kappa", s.kappa},
-               {"damping", s.damping},
-               {"max_depth", s.max_depth},
-               {"grasp_angle_deg", s.grasp_angle * 180 / std::numbers::pi},
-               {"substep", s.substep}})
-      .dump();
+  return params_to_json(s).dump();
 }
 
 }  // namespace medspring

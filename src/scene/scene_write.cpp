@@ -20,24 +20,6 @@ json vec_json(const Vec3& v) {
   return json::array({v.x(), v.y(), v.z()});
 }
 
-json duffing_json(const DuffingSettings& d) {
-  return {{"mode", to_string(d.mode)}, {"eta", d.eta}, {"length", d.length}, {"soft", d.soft}};
-}
-
-const char* stiffness_name(LocalStiffness s) {
-  switch (s) {
-    case LocalStiffness::Isotropic:
-      return "isotropic";
-    case LocalStiffness::Linearized:
-      return "linearized";
-    case LocalStiffness::AxisProjected:
-      return "axis_projected";
-    case LocalStiffness::PaperLiteral:
-      return "paper_literal";
-  }
-  return "?";
-}
-
 }  // namespace
 
 std::string scene_to_json(const Scene& s) {
@@ -84,13 +66,7 @@ std::string scene_to_json(const Scene& s) {
   if (m.kind == ModelKind::Hybrid) {
     params = params_to_json(m.hybrid);
   } else if (m.kind == ModelKind::Surface) {
-    const SurfaceBodyParams& p = m.surface;
-    params = {{"mass", p.node.mass},
-              {"beta", p.node.beta},
-              {"k_r", p.node.return_k},
-              {"k", p.k},
-              {"duffing", duffing_json(p.duffing)},
-              {"fixed", p.fixed}};
+    params = params_to_json(m.surface);
   } else if (m.kind == ModelKind::Volumetric) {
     const VolumetricSettings& v = m.volumetric;
     params = {{"nodes", m.volumetric_nodes},
@@ -99,26 +75,12 @@ std::string scene_to_json(const Scene& s) {
               {"spring_scale", v.spring_scale},
               {"volume_scale", v.volume_scale},
               {"mass_scaling_dt", v.mass_scaling_dt},
-              {"duffing", duffing_json(v.duffing)},
+              {"duffing", params_to_json(v.duffing)},
               {"fixed", v.fixed}};
     if (v.return_k) params["k_r"] = *v.return_k;
   } else {
-    const SmrmSettings& q = m.smrm;
-    params = {{"spokes", q.spokes},
-              {"mass", q.chain.mass},
-              {"beta", q.chain.beta},
-              {"k_cl", q.chain.k},
-              {"k_r", q.chain.kr},
-              {"bending", to_string(q.bending)},
-              {"wall_E", q.wall.E},
-              {"wall_thickness_ratio", q.wall.thickness_ratio},
-              {"fix_first", q.chain.fix_first},
-              {"fix_last", q.chain.fix_last},
-              {"k_loc", q.k_loc},
-              {"duffing", duffing_json(q.chain.duffing)},
-              {"frame_mode", to_string(q.frames.mode)},
-              {"frame_anchor", to_string(q.frames.anchor)}};
-    if (q.bending == BendingMode::Constant) params["k_b"] = q.chain.kb;
+    params = params_to_json(m.smrm);
+    if (m.smrm.bending != BendingMode::Constant) params.erase("k_b");
   }
   json model = {{"kind", to_string(m.kind)},
                 {"source", source},
@@ -154,13 +116,8 @@ std::string scene_to_json(const Scene& s) {
               {"ramp_down", L.ramp_down}});
     loads.push_back(l);
   }
-  json local = {{"enabled", s.local.enabled},
-                {"stiffness", stiffness_name(s.local.settings.solver.stiffness)},
-                {"cache", s.local.settings.cache_local},
-                {"guard", s.local.guard},
-                {"patch_nodes", s.local.settings.patch.count},
-                {"half_width", s.local.settings.patch.half_width}};
-  if (!s.local_k_from_body) local["k_loc"] = s.local.settings.patch.k_loc;
+  json local = params_to_json(s.local);
+  if (s.local_k_from_body) local.erase("k_loc");
   json j = {{"name", s.name},
             {"description", s.description},
             {"model", model},

@@ -114,20 +114,7 @@ double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 }  // namespace
 
 void validate_contact_settings(const ContactSettings& s) {
-  require_positive(s.min_mass, "contact.min_mass (g)");
-  require_positive(s.dt, "contact.dt (ms)");
-  require_nonnegative(s.stiffness, "contact.stiffness (N/mm^3)");
-  require(std::isfinite(s.kappa) && s.kappa > 0 && s.kappa <= 4, "contact.kappa: must be in (0, 4] (got ",
-          s.kappa, ")");
-  require_nonnegative(s.damping, "contact.damping");
-  require(std::isfinite(s.multiplier) && s.multiplier >= 0 && s.multiplier <= 1,
-          "contact.multiplier: must be in [0, 1] (got ", s.multiplier, ")");
-  require_nonnegative(s.friction, "contact.friction");
-  require_positive(s.slip_velocity, "contact.slip_velocity (mm/ms)");
-  require(std::isfinite(s.max_depth) && s.max_depth >= 1, "contact.max_depth: must be >= 1 (got ",
-          s.max_depth, ")");
-  require(std::isfinite(s.grasp_angle) && s.grasp_angle >= 0 && s.grasp_angle < std::numbers::pi,
-          "contact.grasp_angle: must be in [0, pi) rad (got ", s.grasp_angle, ")");
+  validate_params(s, "contact");  // the ranges declared in contact.hpp
 }
 
 ContactModel::ContactModel(const MatX3i& faces, const MatX3& rest, const ContactSettings& settings)

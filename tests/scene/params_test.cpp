@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -13,9 +14,13 @@
 #include "medspring/core/check.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/model_package.hpp"
+#include "medspring/models/smrm_vessel.hpp"
 #include "medspring/physics/integrators.hpp"
+#include "medspring/physics/model.hpp"
 #include "medspring/scene/parameter_docs.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/sim/simulation.hpp"
+#include "medspring/tools/contact.hpp"
 
 namespace medspring {
 namespace {
@@ -45,13 +50,43 @@ void perturb(T& p) {
   });
 }
 
-/// Every field of a and b as "name=value" lines.
+/// Every field of p as "name=value" lines (fields the program sets, which no file holds, left out).
 template <ParamStruct T>
-std::string dump(const T& p) {
+std::string dump(const T& p, const std::string& prefix = "") {
   std::string out;
-  for (const ParamRow& r : param_rows(p)) out += r.name + "=" + r.default_value + "\n";
+  for_each_field(p, [&](const ParamSpec& s, const auto& f) {
+    using F = std::remove_cvref_t<decltype(f)>;
+    if (s.derived) return;
+    if constexpr (ParamStruct<F>)
+      out += dump(f, cat(prefix, s.json_name(), "."));
+    else
+      out += cat(prefix, s.json_name(), "=", param_value_text(f), "\n");
+  });
   return out;
 }
+
+/// Perturbs every field of p, checks that each line changed, writes the scene and reads it back:
+/// the fields read back are the perturbed ones.
+template <ParamStruct T>
+void expect_round_trip(Scene s, T Scene::*block, T SceneModel::*model_block) {
+  T& p = block ? s.*block : s.model.*model_block;
+  const std::string defaults = dump(p);
+  perturb(p);
+  const std::string changed = dump(p);
+  std::istringstream a(defaults), b(changed);
+  int lines = 0;
+  for (std::string la, lb; std::getline(a, la) && std::getline(b, lb); ++lines) EXPECT_NE(la, lb);
+  EXPECT_GE(lines, 4);
+  const Scene back = parse_scene(scene_to_json(s), ".", "t.json");
+  EXPECT_EQ(dump(block ? back.*block : back.model.*model_block), changed);
+}
+
+const char* kSurface =
+    R"({"model": {"kind": "surface", "source": {"phantom": "kidney"}}, "duration": 10,
+        "tools": [{"shape": "sphere", "radius": 8, "path": [{"t": 0, "position": [0, 0, 60]}]}]})";
+const char* kVessel =
+    R"({"model": {"kind": "smrm", "source": {"phantom": {"name": "vessel", "path": "straight_x"}}},
+        "duration": 10})";
 
 TEST(DeclaredParameters, EveryHybridAndStepFieldRoundTripsThroughASceneFile) {
   Scene s = parse_scene(kHybrid, ".", "t.json");
@@ -64,6 +99,61 @@ TEST(DeclaredParameters, EveryHybridAndStepFieldRoundTripsThroughASceneFile) {
   for (std::string la, lb; std::getline(a, la) && std::getline(b, lb);) EXPECT_NE(la, lb);
   const Scene back = parse_scene(scene_to_json(s), ".", "t.json");
   EXPECT_EQ(dump(back.model.hybrid) + dump(back.step), changed);
+}
+
+TEST(DeclaredParameters, EverySurfaceSmrmLocalAndContactFieldRoundTripsThroughASceneFile) {
+  const Scene surface = parse_scene(kSurface, ".", "t.json");
+  expect_round_trip<SurfaceBodyParams>(surface, nullptr, &SceneModel::surface);
+  expect_round_trip<SmrmSettings>(parse_scene(kVessel, ".", "t.json"), nullptr, &SceneModel::smrm);
+  expect_round_trip<ContactSettings>(surface, &Scene::contact, nullptr);
+  Scene local = surface;
+  local.local_k_from_body = false;  // as a file with "k_loc" says
+  expect_round_trip<LocalOptions>(local, &Scene::local, nullptr);
+}
+
+TEST(DeclaredParameters, SceneFormsKeptBesideTheDeclarations) {
+  // "k_b" without "bending" is constant bending; with "bending": "wall" it is refused
+  std::string text = kVessel;
+  text.insert(text.find("}},") + 1, R"(, "parameters": {"k_b": 0.01})");
+  Scene s = parse_scene(text, ".", "t.json");
+  EXPECT_EQ(s.model.smrm.bending, BendingMode::Constant);
+  EXPECT_EQ(s.model.smrm.chain.kb, 0.01);
+  text = kVessel;
+  text.insert(text.find("}},") + 1, R"(, "parameters": {"k_b": 0.01, "bending": "wall"})");
+  EXPECT_THROW(parse_scene(text, ".", "t.json"), InvalidInput);
+  // "local": {} is on; "local": true/false; k_loc given turns the body's stiffness off
+  text = kVessel;
+  text.insert(text.size() - 1, R"(, "local": {"k_loc": 0.2, "stiffness": "axis_projected"})");
+  s = parse_scene(text, ".", "t.json");
+  EXPECT_TRUE(s.local.enabled);
+  EXPECT_FALSE(s.local_k_from_body);
+  EXPECT_FALSE(s.local.use_body_stiffness);
+  EXPECT_EQ(s.local.settings.solver.stiffness, LocalStiffness::AxisProjected);
+  EXPECT_EQ(parse_scene(scene_to_json(s), ".", "t.json").local.settings.patch.k_loc, 0.2);
+  // the grasp angle in degrees (older scenes) and in radians (declared)
+  text = kSurface;
+  text.insert(text.size() - 1, R"(, "contact": {"grasp_angle_deg": 90, "friction": 0.2})");
+  s = parse_scene(text, ".", "t.json");
+  EXPECT_NEAR(s.contact.grasp_angle, std::acos(-1.0) / 2, 1e-15);
+  EXPECT_EQ(s.contact.friction, 0.2);
+  text = kSurface;
+  text.insert(text.size() - 1, R"(, "contact": {"dt": 0.1})");
+  try {
+    parse_scene(text, ".", "t.json");
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("t.json: contact.dt: unknown key"), std::string::npos) << e.what();
+  }
+  text = kSurface;
+  text.insert(text.size() - 1, R"(, "contact": {"kappa": 5})");
+  try {
+    parse_scene(text, ".", "t.json");
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("t.json: contact.kappa: must be in (0, 4] (got 5)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(DeclaredParameters, EveryHybridFieldRoundTripsThroughAModelPackage) {
@@ -169,6 +259,18 @@ TEST(DeclaredParameters, CommandLineSettingsUseTheDeclarations) {
             "--set model.parameters.spokes_per_atom: must be an integer (got '1.5')");
   EXPECT_NE(error("integrator.dtt=1").find("unknown parameter 'dtt'"), std::string::npos);
   EXPECT_NE(error("dt").find("expected PATH=VALUE"), std::string::npos);
+  apply_scene_settings(
+      s, "local.patch_nodes=12,local.stiffness=linearized,contact.friction=0.3,local.k_loc=0.1");
+  EXPECT_EQ(s.local.settings.patch.count, 12);
+  EXPECT_EQ(s.local.settings.solver.stiffness, LocalStiffness::Linearized);
+  EXPECT_EQ(s.contact.friction, 0.3);
+  EXPECT_FALSE(s.local_k_from_body);
+  EXPECT_EQ(error("contact.dt=1"), "--set contact.dt: is set by the program from the model");
+  EXPECT_EQ(error("local.half_width=0"), "--set local.half_width: must be >= 1 (got 0)");
+  Scene v = parse_scene(kVessel, ".", "t.json");
+  apply_scene_settings(v, "model.parameters.k_cl=0.3,model.parameters.frame_anchor=one_end");
+  EXPECT_EQ(v.model.smrm.chain.k, 0.3);
+  EXPECT_EQ(v.model.smrm.frames.anchor, FrameAnchor::OneEnd);
 }
 
 TEST(DeclaredParameters, ValidationNamesTheField) {

@@ -35,6 +35,7 @@ struct ParamSpec {
   double hi = std::numeric_limits<double>::infinity();
   bool lo_open = false, hi_open = false;  // (lo, ... instead of [lo, ...
   std::string_view key{};                 // JSON key where it differs from name (older scene files)
+  bool derived = false;                   // set by the program (not a scene key, not a CLI option)
 
   constexpr ParamSpec positive() const { return with_lo(0, true); }
   constexpr ParamSpec nonnegative() const { return with_lo(0, false); }
@@ -48,6 +49,13 @@ struct ParamSpec {
   constexpr ParamSpec json_key(std::string_view k) const {
     ParamSpec s = *this;
     s.key = k;
+    return s;
+  }
+  /// A field the program sets from the model (e.g. the contact's dt): not read from or written to scene
+  /// files, refused by set_param; still validated, listed and a Python property.
+  constexpr ParamSpec set_by_program() const {
+    ParamSpec s = *this;
+    s.derived = true;
     return s;
   }
   constexpr std::string_view json_name() const { return key.empty() ? name : key; }
@@ -81,9 +89,20 @@ concept ParamStruct = requires(T& t) {
   for_each_field(t, params_detail::NoOp{});
 };
 
+/// The name of an enum value in scene files, tables and CLI options: param_enum_name(e) where one is
+/// declared beside the enum (argument-dependent lookup; for enums whose to_string is a display name),
+/// else to_string(e). parse_enum(text, (E*)nullptr) reads it back.
+template <class E>
+std::string enum_text(E e) {
+  if constexpr (requires { param_enum_name(e); })
+    return std::string(param_enum_name(e));
+  else
+    return std::string(to_string(e));
+}
+
 template <class T>
 concept ParamEnum = std::is_enum_v<T> && requires(T e, const std::string& s) {
-  { to_string(e) } -> std::convertible_to<std::string>;
+  { enum_text(e) } -> std::convertible_to<std::string>;
   { parse_enum(s, static_cast<T*>(nullptr)) } -> std::same_as<T>;
 };
 
@@ -147,7 +166,7 @@ std::string param_value_text(const F& f) {
   if constexpr (std::is_same_v<F, bool>) {
     return f ? "true" : "false";
   } else if constexpr (std::is_enum_v<F>) {
-    return to_string(f);
+    return enum_text(f);
   } else if constexpr (std::is_arithmetic_v<F>) {
     return cat(f);
   } else if constexpr (std::is_same_v<F, std::vector<Index>>) {
@@ -190,7 +209,8 @@ void collect_param_rows(const T& p, const std::string& prefix, std::vector<Param
       collect_param_rows(f, name + ".", out);
     } else {
       out.push_back({name, param_type_text<F>(), std::string(s.unit), param_value_text(f),
-                     range_text(s, std::is_integral_v<F>), std::string(s.doc)});
+                     range_text(s, std::is_integral_v<F>),
+                     cat(s.doc, s.derived ? " (set by the program from the model; not a scene key)" : "")});
     }
   });
 }
@@ -230,6 +250,7 @@ void set_param(T& p, const std::string& name, const std::string& text) {
     } else {
       if (found || name != key) return;
       found = true;
+      if (s.derived) throw InvalidInput(cat(name, ": is set by the program from the model"));
       F value{};
       if constexpr (std::is_same_v<F, bool>) {
         if (text != "true" && text != "false")

@@ -57,7 +57,7 @@ void put_fields(ByteWriter& w, const T& p, const std::string& prefix) {
       if constexpr (std::is_same_v<F, bool>)
         w.flag(f);
       else if constexpr (std::is_enum_v<F>)
-        w.str(to_string(f), 256);
+        w.str(enum_text(f), 256);
       else if constexpr (std::is_integral_v<F>)
         w.i64(static_cast<std::int64_t>(f));
       else if constexpr (std::is_arithmetic_v<F>)

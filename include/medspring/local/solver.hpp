@@ -10,6 +10,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -33,6 +34,9 @@ enum class BoundaryMethod {
 };
 
 const char* to_string(LocalStiffness mode);
+/// The scene-file names: isotropic, linearized, axis_projected, paper_literal (core/params.hpp).
+const char* param_enum_name(LocalStiffness mode);
+LocalStiffness parse_enum(const std::string& text, LocalStiffness*);
 const char* to_string(BoundaryMethod method);
 
 /// Settings of the patch solve. Defaults: ALGORITHMS.md §6 and §9.

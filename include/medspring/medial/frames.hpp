@@ -30,6 +30,12 @@ FrameMode parse_frame_mode(const std::string& text);      // "rmf" | "paper_xoy"
 FrameAnchor parse_frame_anchor(const std::string& text);  // "one_end" | "two_end" | "best_fit"
 std::string to_string(FrameMode mode);
 std::string to_string(FrameAnchor anchor);
+inline FrameMode parse_enum(const std::string& text, FrameMode*) {
+  return parse_frame_mode(text);
+}
+inline FrameAnchor parse_enum(const std::string& text, FrameAnchor*) {
+  return parse_frame_anchor(text);
+}
 
 struct FrameSettings {
   FrameMode mode = FrameMode::RMF;

@@ -56,6 +56,9 @@ struct BalloonReport {
 
   /// Multi-line human-readable summary (counts, valence histogram, distances, time, warnings).
   std::string summary() const;
+  /// One line per finding worth reporting in a scene run: the size, valence and distances, then each
+  /// warning ("warning: ...").
+  std::vector<std::string> note_lines() const;
 };
 
 struct BalloonResult {

@@ -33,6 +33,9 @@ enum class BendingMode : std::uint8_t {
 };
 BendingMode parse_bending_mode(const std::string& text);  // "wall" | "constant"
 std::string to_string(BendingMode mode);
+inline BendingMode parse_enum(const std::string& text, BendingMode*) {
+  return parse_bending_mode(text);
+}
 
 /// The vessel wall that gives the default bending stiffness.
 struct WallSettings {
@@ -60,6 +63,39 @@ struct SmrmSettings {
   BendingMode bending = BendingMode::Wall;  // Wall (default): E I of the wall; Constant: chain.kb
   WallSettings wall{};                      // used by BendingMode::Wall
 };
+
+/// The declaration of SmrmSettings (core/params.hpp): the "parameters" of an smrm model in a scene, the
+/// Python properties and keywords, `run --set model.parameters.NAME=VALUE`, the table in
+/// docs/parameters.md. Flat names for the nested chain, wall and frame settings ("k_cl" is chain.k).
+/// `atoms` is the model's "atoms" key and chain.nonlinear its "nonlinear" key, not parameters here.
+/// In a scene file a "k_b" without "bending" means "bending": "constant" (scene.cpp).
+template <ParamOf<SmrmSettings> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"spokes", "", "spokes per atom of the structured builders (M)"}.at_least(3), s.spokes);
+  v(ParamSpec{"mass", "g", "mass of a centerline atom"}.positive(), s.chain.mass);
+  v(ParamSpec{"beta", "1/ms", "mass-proportional damping of an atom, d = beta m"}.nonnegative(),
+    s.chain.beta);
+  v(ParamSpec{"k_cl", "N/mm", "centerline springs between consecutive atoms"}.positive(), s.chain.k);
+  v(ParamSpec{"k_r", "N/mm", "return spring of an atom to its rest position"}.nonnegative(), s.chain.kr);
+  v(ParamSpec{"bending", "", "wall (k_b from E I of the wall) or constant (k_b at every interior atom)"},
+    s.bending);
+  v(ParamSpec{"k_b", "N/mm", "bending stiffness of bending = constant (0: the paper's chain)"}.nonnegative(),
+    s.chain.kb);
+  v(ParamSpec{"wall_E", "MPa", "Young's modulus of the wall (bending = wall)"}.positive(), s.wall.E);
+  v(ParamSpec{"wall_thickness_ratio", "", "wall thickness / lumen radius (bending = wall)"}.positive(),
+    s.wall.thickness_ratio);
+  v(ParamSpec{"fix_first", "", "atom 0 fixed"}, s.chain.fix_first);
+  v(ParamSpec{"fix_last", "", "the last atom fixed"}, s.chain.fix_last);
+  v(ParamSpec{"k_loc", "N/mm", "stiffness of the local deformation patch"}.positive(), s.k_loc);
+  v(ParamSpec{"duffing", "", "Duffing law of the centerline springs (D-3)"}, s.chain.duffing);
+  v(ParamSpec{"frame_mode", "", "rmf (D-12) or paper_xoy"}, s.frames.mode);
+  v(ParamSpec{"frame_anchor", "", "RMF anchor: two_end, one_end or best_fit"}, s.frames.anchor);
+  v(ParamSpec{"dedup_tolerance", "mm", "consecutive centerline points closer than this are merged"}
+        .nonnegative(),
+    s.dedup_tolerance);
+  v(ParamSpec{"max_radius_factor", "", "spoke marching and generic binding limit, in local radii"}.positive(),
+    s.max_radius_factor);
+}
 
 /// What the builders found (conditions that are reported, not thrown).
 struct SmrmBuildReport {

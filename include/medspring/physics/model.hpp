@@ -131,6 +131,18 @@ struct SurfaceBodyParams {
   DuffingSettings duffing{};  // Strain (D-3) by default
   std::vector<Index> fixed;   // pinned nodes
 };
+/// The declaration of SurfaceBodyParams (core/params.hpp): the "parameters" of a surface model in a
+/// scene, the Python properties and keywords, `run --set model.parameters.NAME=VALUE`, the table in
+/// docs/parameters.md. The node parameters are flat here ("mass", not "node.mass").
+template <ParamOf<SurfaceBodyParams> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"mass", "g", "mass of a node"}.positive(), s.node.mass);
+  v(ParamSpec{"beta", "1/ms", "mass-proportional damping of a node, d = beta m"}.nonnegative(), s.node.beta);
+  v(ParamSpec{"k_r", "N/mm", "return spring of a node to its rest position"}.nonnegative(), s.node.return_k);
+  v(ParamSpec{"k", "N/mm", "surface springs (one per mesh edge, D-1)"}.positive(), s.k);
+  v(ParamSpec{"duffing", "", "Duffing law of every spring (D-3)"}, s.duffing);
+  v(ParamSpec{"fixed", "", "pinned nodes"}, s.fixed);
+}
 /// Refused up front (InvalidInput naming the node count and the memory) when kModelBuildBytesPerNode
 /// per node exceeds the machine's memory (core/memory.hpp).
 Model make_surface_model(const SurfaceMesh& mesh, const SurfaceBodyParams& params,

@@ -26,6 +26,26 @@ struct LocalOptions {
   bool guard = false;                 // §6.5: limit |U_c| to 0.9 x the contact's spoke length
 };
 
+/// The declaration of LocalOptions (core/params.hpp): the scene's "local" block, the Python properties
+/// and keywords, `run --set local.NAME=VALUE`, the table in docs/parameters.md. In a scene file a "local"
+/// object means enabled unless it says otherwise, and a "k_loc" turns use_body_stiffness off (scene.cpp).
+template <ParamOf<LocalOptions> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"enabled", "", "eq. (6) overlay while a force acts (§6.5)"}, s.enabled);
+  v(ParamSpec{"stiffness", "",
+              "patch stiffness (§6.2): isotropic, linearized, axis_projected or paper_literal"},
+    s.settings.solver.stiffness);
+  v(ParamSpec{"k_loc", "N/mm", "patch spring stiffness (default: the body's own, k_surf or 0.05)"}.positive(),
+    s.settings.patch.k_loc);
+  v(ParamSpec{"cache", "", "keep the factor while the contact node stays the same (§6.5)"},
+    s.settings.cache_local);
+  v(ParamSpec{"guard", "", "limit |U_c| to 0.9 x the contact's spoke length (§6.5)"}, s.guard);
+  v(ParamSpec{"patch_nodes", "", "nodes of a BFS patch (unstructured surfaces)"}.at_least(2),
+    s.settings.patch.count);
+  v(ParamSpec{"half_width", "", "half-width of the structured window (2: 5 x 5)"}.at_least(1),
+    s.settings.patch.half_width);
+}
+
 struct SimulationSettings {
   StepSettings step{};  // dt 0.5 ms, symplectic Euler, sub-stepping on
   LocalOptions local{};

@@ -27,6 +27,7 @@
 #include <string_view>
 #include <vector>
 
+#include "medspring/core/params.hpp"
 #include "medspring/tools/surface_bvh.hpp"
 #include "medspring/tools/tool.hpp"
 
@@ -46,6 +47,39 @@ struct ContactSettings {
   double grasp_angle = 0.15;    // rad: a grasper with opening <= this holds what its jaws touch
   bool substep = false;  // re-evaluate the normal penalty forces at every substep of the model (substep())
 };
+
+/// The declaration of ContactSettings (core/params.hpp): the scene's "contact" block, validation, the
+/// Python properties and keywords, `run --set contact.NAME=VALUE`, the table in docs/parameters.md.
+/// A scene may give the grasp angle in degrees as "grasp_angle_deg" (scene_tools.cpp).
+template <ParamOf<ContactSettings> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"friction", "", "Coulomb coefficient mu (0: frictionless)"}.nonnegative(), s.friction);
+  v(ParamSpec{"stiffness", "N/mm^3", "penalty k_p per mm of penetration; 0 = automatic (kappa)"}
+        .nonnegative(),
+    s.stiffness);
+  v(ParamSpec{"kappa", "", "automatic k_p: k_p max(A) dt^2 / m_min = kappa (symplectic bound 4)"}
+        .positive()
+        .at_most(4),
+    s.kappa);
+  v(ParamSpec{"damping", "", "c_p = damping k_p dt"}.nonnegative(), s.damping);
+  v(ParamSpec{"multiplier", "", "augmented Lagrangian: lambda += multiplier k d per update (0: penalty)"}
+        .nonnegative()
+        .at_most(1),
+    s.multiplier);
+  v(ParamSpec{"slip_velocity", "mm/ms", "below it friction is viscous (regularised Coulomb)"}.positive(),
+    s.slip_velocity);
+  v(ParamSpec{"max_depth", "", "contacts reported up to max_depth x the tool radius (tunnelling guard)"}
+        .at_least(1),
+    s.max_depth);
+  v(ParamSpec{"grasp_angle", "rad", "a grasper with opening <= this holds what its jaws touch"}
+        .nonnegative()
+        .at_most(3.141592653589793, true),
+    s.grasp_angle);
+  v(ParamSpec{"substep", "", "re-evaluate the normal penalty forces at every substep of the model"}, s.substep);
+  v(ParamSpec{"min_mass", "g", "the smallest node mass a surface force acts on"}.positive().set_by_program(),
+    s.min_mass);
+  v(ParamSpec{"dt", "ms", "the update the forces are held over"}.positive().set_by_program(), s.dt);
+}
 
 /// Throws InvalidInput naming the field.
 void validate_contact_settings(const ContactSettings& s);
