@@ -52,6 +52,9 @@ const std::vector<Command>& commands() {
        "       medspring build vessel --centerline FILE --unit mm|cm|m [--branch N | --branches all]\n"
        "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE [--label N]\n"
        "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
+       "                              --out DIR [--json] [--force]\n"
+       "       medspring build volumetric --mesh FILE [--unit mm|cm|m] | --mask FILE [--label N]\n"
+       "                              [--nodes 2000] [--surface-nodes 458] [--E-kPa 10] [--nu 0.45]\n"
        "                              --out DIR [--json] [--force]\n\n"
        "Builds a simulation model from real anatomy (ALGORITHMS.md §3-4) and writes it as .vtp files.\n"
        "  kidney      the hybrid kidney: balloon surface of exactly --nodes nodes fitted to the organ, the\n"
@@ -73,6 +76,12 @@ const std::vector<Command>& commands() {
        "              closed path tubes, bound to the branch atoms; rings MM apart, default the atom\n"
        "              spacing).\n"
        "              Writes surface.vtp, atoms.vtp, spokes.vtp, vessel.msm and summary.json.\n"
+       "  volumetric  the volumetric spring organ (issue 23, docs/volumetric.md): the balloon surface of\n"
+       "              `build kidney` with --surface-nodes nodes, meshed inside by TetGen to about --nodes\n"
+       "              nodes in all; springs on the tetrahedra's edges and a volume term per tetrahedron "
+       "from\n"
+       "              --E-kPa and --nu. Writes volumetric.msm (the model package with its tetrahedra),\n"
+       "              surface.vtp and summary.json.\n"
        "  --mesh FILE        closed organ surface (.obj .stl .ply .vtp .vtk); --unit: its length unit\n"
        "  --close-holes N    close holes of up to N edges first (an open mesh is refused otherwise)\n"
        "  --mask FILE        label volume (.nii .nii.gz .mha .mhd .nrrd); --label: the organ's label\n"
@@ -241,8 +250,10 @@ const std::vector<Command>& commands() {
        "  --wall-ratio   vessel wall thickness / lumen radius\n"
        "  --no-vessel, --vessel-only  leave the vessel out / run only the vessel\n"
        "  --indentation-only  only the force-indentation of a rigid sphere (issue 18; part of a full run):\n"
-       "                 Hertz validation of the FEM contact, then the real kidney: FEM vs the sphere tool\n",
-       {"json", "force", "quick", "quiet", "no-validation", "no-vessel", "vessel-only", "indentation-only"},
+       "                 Hertz validation of the FEM contact, then the real kidney: FEM vs the sphere tool\n"
+       "  --no-indentation  leave the sphere indentation out of a full run\n",
+       {"json", "force", "quick", "quiet", "no-validation", "no-vessel", "vessel-only", "indentation-only",
+        "no-indentation"},
        cmd_accuracy},
       {"calibrate",
        "usage: medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"
