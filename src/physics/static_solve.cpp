@@ -3,8 +3,6 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <vector>
 
 #include "medspring/core/check.hpp"
@@ -126,8 +124,6 @@ StaticResult static_equilibrium(const Model& m, const MatX3& f_ext, const Static
       factored = true;
       stale = false;
       last_factor_iteration = it;
-      if (std::getenv("MS_DEBUG_STATIC"))
-        std::fprintf(stderr, "  factor at it %d residual %g mu %g\n", it, res.residual, mu);
     }
     // Armijo backtracking on the total potential (r = -grad Pi, so dx is a descent direction).
     const double pi0 = total_potential(m, res.x, f_ext);
@@ -162,9 +158,6 @@ StaticResult static_equilibrium(const Model& m, const MatX3& f_ext, const Static
     if (s.reuse_tangent && res.residual > s.reuse_rate * previous) stale = true;
     if (alpha == 1.0 && mu > 0) mu *= 0.1;
   }
-  if (std::getenv("MS_DEBUG_STATIC"))
-    std::fprintf(stderr, "static: %d it, residual %g, last factor %d, mu %g\n", res.iterations, res.residual,
-                 last_factor_iteration, mu);
   if (!(res.residual <= s.tolerance))
     throw SolverError(
         cat(m.name, ": static solve: no equilibrium found after ", res.iterations,
