@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "accuracy_indentation.hpp"
+#include "accuracy_tables.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
@@ -15,15 +16,7 @@ using json = nlohmann::json;
 
 json hertz_validation_json(int level) {
   json rows = json::array();
-  for (const auto& r : fem::validate_hertz(level))
-    rows.push_back({{"name", r.name},
-                    {"level", r.level},
-                    {"nodes", r.nodes},
-                    {"quantity", r.quantity},
-                    {"fem", r.fem},
-                    {"analytic", r.analytic},
-                    {"rel_error", r.rel_error},
-                    {"solve_s", r.solve_seconds}});
+  for (const auto& r : fem::validate_hertz(level)) rows.push_back(accuracy::validation_json(r));
   return rows;
 }
 

@@ -2,7 +2,10 @@
 //   build kidney      balloon surface + distance-mapping skeleton + spokes = the hybrid kidney (§4)
 //   build centerline  the distance-mapping centerline with radii (§3)
 //   build vessel      the SMRM vessel (§5) from a centerline file, a mesh or a segmentation
+//   build volumetric  the balloon surface of `build kidney` meshed inside by TetGen: the volumetric spring
+//                     organ (issue 23, docs/volumetric.md) as a model package with its tetrahedra
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -25,6 +28,12 @@
 #include "medspring/io/data_dir.hpp"
 #include "medspring/io/temp_folders.hpp"
 #include "medspring/sim/simulation.hpp"
+#ifdef MEDSPRING_HAVE_FEM
+#include "medspring/fem/volumetric.hpp"
+#include "medspring/io/mesh_io.hpp"
+#include "medspring/models/model_package.hpp"
+#include "medspring/models/volumetric_body.hpp"
+#endif
 #endif
 
 namespace medspring::cli {
@@ -322,6 +331,61 @@ int build_vessel_cmd(const Args& args) {
                 [&](const fs::path& dir) { write_vessel_files(dir, v); });
 }
 
+#ifdef MEDSPRING_HAVE_FEM
+// The volumetric organ: the balloon surface of --surface-nodes nodes (as `build kidney`), TetGen inside to
+// about --nodes nodes in all (docs/volumetric.md), springs and volume terms from --E-kPa / --nu. Writes
+// volumetric.msm (kind volumetric: the tetrahedra, the material; no supports, so the surface's return
+// springs are on), surface.vtp and summary.json.
+int build_volumetric_cmd(const Args& args) {
+  args.require_known({"json", "force", "mesh", "mask", "label", "unit", "close-holes", "nodes",
+                      "surface-nodes", "E-kPa", "nu", "out"});
+  KidneyBuildSettings st;
+  st.source = organ_source(args);
+  st.nodes = count_option(args, "surface-nodes", 458, 4);
+  const Index nodes = count_option(args, "nodes", 2000, 10);
+  require(nodes >= st.nodes, "option --nodes: ", nodes, " is below the --surface-nodes ", st.nodes);
+  VolumetricSettings vs;
+  vs.E_kPa = args.number("E-kPa", vs.E_kPa);
+  vs.nu = args.number("nu", vs.nu);
+  require(std::isfinite(vs.E_kPa) && vs.E_kPa > 0, "option --E-kPa: must be > 0 (got ", vs.E_kPa, ")");
+  require(std::isfinite(vs.nu) && vs.nu > -1 && vs.nu < 0.5, "option --nu: must be in (-1, 0.5) (got ", vs.nu,
+          ")");
+  const fs::path out = out_option(args);
+  check_output_folder(out, args.flag("force"));
+  const auto t0 = std::chrono::steady_clock::now();
+  const KidneyBuild k = build_kidney_model(st);
+  const SurfaceMesh surface{k.model->rest_surface(), k.model->faces()};
+  const VolumetricMesh mesh = fem::volumetric_mesh(surface, {.target_nodes = nodes});
+  const auto body = std::make_shared<VolumetricBody>(mesh, vs, "volumetric organ");
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const VolumetricStats& vst = body->stats();
+  nlohmann::json summary = {{"input", k.summary.input},
+                            {"input_kind", k.summary.input_kind},
+                            {"nodes", vst.nodes},
+                            {"target_nodes", nodes},
+                            {"surface_nodes", vst.surface_nodes},
+                            {"interior_nodes", vst.interior_nodes},
+                            {"tetrahedra", vst.tetrahedra},
+                            {"springs", vst.springs},
+                            {"volume_mm3", vst.volume_mm3},
+                            {"min_tet_volume_mm3", vst.min_tet_volume},
+                            {"E_kPa", vs.E_kPa},
+                            {"nu", vs.nu},
+                            {"build_seconds", seconds}};
+  const std::string text = cat("volumetric organ from ", k.summary.input, ": ", vst.nodes, " nodes (",
+                               vst.surface_nodes, " on the surface, target ", nodes, "), ", vst.tetrahedra,
+                               " tetrahedra, ", vst.springs, " springs, volume ", vst.volume_mm3,
+                               " mm^3; E = ", vs.E_kPa, " kPa, nu = ", vs.nu, "; built in ", seconds, " s\n");
+  return finish(args, out, {{"volumetric", summary}}, text, k.summary.warnings, [&](const fs::path& dir) {
+    save_model_package(dir / "volumetric.msm",
+                       package_of(*body, "Volumetric organ",
+                                  cat("volumetric spring organ, ", vst.nodes, " nodes, ", vst.tetrahedra,
+                                      " tetrahedra, from ", k.summary.input)));
+    write_vtp(dir / "surface.vtp", surface);
+  });
+}
+#endif
+
 struct BuildKind {
   const char* name;
   int (*run)(const Args&);
@@ -329,7 +393,13 @@ struct BuildKind {
 
 const std::vector<BuildKind>& build_kinds() {
   static const std::vector<BuildKind> kinds = {
-      {"kidney", build_kidney}, {"centerline", build_centerline_cmd}, {"vessel", build_vessel_cmd}};
+      {"kidney", build_kidney},
+      {"centerline", build_centerline_cmd},
+      {"vessel", build_vessel_cmd},
+#ifdef MEDSPRING_HAVE_FEM
+      {"volumetric", build_volumetric_cmd},
+#endif
+  };
   return kinds;
 }
 

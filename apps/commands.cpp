@@ -240,8 +240,9 @@ const std::vector<CommandSpec>& commands() {
                    {.name = "quiet", .help = "no request log on stderr"}},
        .run = cmd_view},
       {.name = "build",
-       .summary = "build a model from real anatomy: build kidney | centerline | vessel (--help)",
-       .usage = "medspring build kidney|centerline|vessel [options]   (medspring build KIND --help)",
+       .summary = "build a model from real anatomy: build kidney | centerline | vessel | volumetric (--help)",
+       .usage =
+           "medspring build kidney|centerline|vessel|volumetric [options]   (medspring build KIND --help)",
        .about =
            "Builds a simulation model from real anatomy (ALGORITHMS.md §3-4) and writes it as .vtp files.",
        .subcommands =
@@ -332,6 +333,39 @@ const std::vector<CommandSpec>& commands() {
                    .unit = "MPa",
                    .def = "0.5",
                    .help = "bending from the wall's Young's modulus"},
+                  kBuildOut,
+                  kBuildJson,
+                  kForce}},
+            {.name = "volumetric",
+             .summary = "the volumetric spring organ (issue 23, docs/volumetric.md): tetrahedra inside the "
+                        "balloon surface",
+             .usage = "medspring build volumetric --mesh FILE [--unit mm|cm|m] [--close-holes N]\n"
+                      "                              | --mask FILE [--label N]\n"
+                      "                              [--nodes 2000] [--surface-nodes 458] [--E-kPa 10] "
+                      "[--nu 0.45]\n"
+                      "                              --out DIR [--json] [--force]",
+             .about =
+                 "The volumetric spring organ: the balloon surface of `build kidney` with --surface-nodes\n"
+                 "nodes, meshed inside by TetGen to about --nodes nodes in all; springs on the\n"
+                 "tetrahedra's edges and a volume term per tetrahedron from --E-kPa and --nu. Writes\n"
+                 "volumetric.msm (the model package with its tetrahedra), surface.vtp and summary.json.\n"
+                 "Needs the fem layer (TetGen).",
+             .options =
+                 {kMesh,
+                  kUnit,
+                  {.name = "close-holes",
+                   .value = "N",
+                   .help = "close holes of up to N edges first (an open mesh is refused otherwise)"},
+                  kMask,
+                  kLabel,
+                  {.name = "nodes", .value = "N", .def = "2000", .help = "nodes in all (surface + interior)"},
+                  {.name = "surface-nodes", .value = "N", .def = "458", .help = "surface nodes"},
+                  {.name = "E-kPa",
+                   .value = "E",
+                   .unit = "kPa",
+                   .def = "10",
+                   .help = "the tissue's Young's modulus"},
+                  {.name = "nu", .value = "NU", .def = "0.45", .help = "the tissue's Poisson ratio (< 0.5)"},
                   kBuildOut,
                   kBuildJson,
                   kForce}}},
@@ -491,7 +525,8 @@ const std::vector<CommandSpec>& commands() {
             {.name = "vessel-only", .help = "run only the vessel"},
             {.name = "indentation-only",
              .help = "only the force-indentation of a rigid sphere (issue 18; part of a full run): Hertz "
-                     "validation of the FEM contact, then the real kidney: FEM vs the sphere tool"}},
+                     "validation of the FEM contact, then the real kidney: FEM vs the sphere tool"},
+            {.name = "no-indentation", .help = "leave the sphere indentation out of a full run"}},
        .run = cmd_accuracy},
       {.name = "calibrate",
        .summary = "fit spring stiffnesses to a tissue (E, nu) on FEM responses; held-out errors",

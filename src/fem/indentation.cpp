@@ -11,6 +11,7 @@
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
 #include "medspring/fem/matching.hpp"
+#include "medspring/fem/validation.hpp"
 
 namespace medspring::fem {
 
@@ -213,32 +214,6 @@ std::pair<double, double> principal_curvatures(const MatX3& V, const Vec3& point
   return {-k(1), -k(0)};
 }
 
-namespace {
-
-// Boussinesq point load F (N) at the origin, pressing into the half-space z < 0 (mm, MPa).
-Vec3 boussinesq_u(const Material& m, double F, const Vec3& x) {
-  const double G = m.mu(), nu = m.nu;
-  const double rho = std::hypot(x(0), x(1)), zeta = -x(2), R = x.norm();
-  const double c = F / (4 * std::numbers::pi * G);
-  const double ur = c * (rho * zeta / (R * R * R) - (1 - 2 * nu) * rho / (R * (R + zeta)));
-  const double uz = c * (zeta * zeta / (R * R * R) + 2 * (1 - nu) / R);
-  Vec3 u(0, 0, -uz);
-  if (rho > 0) {
-    u(0) = ur * x(0) / rho;
-    u(1) = ur * x(1) / rho;
-  }
-  return u;
-}
-
-std::vector<Index> on_plane(const TetMesh& m, int axis, double value) {
-  std::vector<Index> out;
-  for (Index i = 0; i < m.num_nodes(); ++i)
-    if (std::abs(m.X(i, axis) - value) < 1e-9) out.push_back(i);
-  return out;
-}
-
-}  // namespace
-
 std::vector<ValidationResult> validate_hertz(int level, const FemSettings& fs) {
   require(level >= 1 && level <= 3, "validation level must be 1, 2 or 3");
   const double R = 10.0, L = 20.0;
@@ -247,11 +222,11 @@ std::vector<ValidationResult> validate_hertz(int level, const FemSettings& fs) {
   const auto xs = graded(0, L, n, 1.6);
   const auto zs = graded(-L, 0, n, 1.0 / 1.6);
   FemProblem p{box_mesh(xs, xs, zs), mat};
-  for (Index v : on_plane(p.mesh, 0, 0.0)) p.constraints.push_back({v, 0, 0.0});
-  for (Index v : on_plane(p.mesh, 1, 0.0)) p.constraints.push_back({v, 1, 0.0});
+  for (Index v : nodes_on_plane(p.mesh, 0, 0.0)) p.constraints.push_back({v, 0, 0.0});
+  for (Index v : nodes_on_plane(p.mesh, 1, 0.0)) p.constraints.push_back({v, 1, 0.0});
   std::vector<Index> far;
   for (int axis : {0, 1, 2})
-    for (Index v : on_plane(p.mesh, axis, axis == 2 ? -L : L)) far.push_back(v);
+    for (Index v : nodes_on_plane(p.mesh, axis, axis == 2 ? -L : L)) far.push_back(v);
   std::sort(far.begin(), far.end());
   far.erase(std::unique(far.begin(), far.end()), far.end());
   // the far faces carry the point-load field of the current force (they are not contact candidates:
@@ -268,7 +243,7 @@ std::vector<ValidationResult> validate_hertz(int level, const FemSettings& fs) {
   s.update_boundary = [&](FemProblem& q, double force) {
     for (std::size_t j = far_begin; j < far_begin + 3 * far.size(); ++j) {
       auto& c = q.constraints[j];
-      c.value = boussinesq_u(mat, force, q.mesh.X.row(c.node).transpose())(c.dof);
+      c.value = boussinesq_displacement(mat, force, q.mesh.X.row(c.node).transpose())(c.dof);
     }
   };
   std::vector<ValidationResult> out;

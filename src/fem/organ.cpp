@@ -1,5 +1,7 @@
 #include "medspring/fem/organ.hpp"
 
+#include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -9,6 +11,7 @@
 #include "medspring/geometry/topology.hpp"
 #include "medspring/local/deformer.hpp"
 #include "medspring/local/overlay.hpp"
+#include "medspring/physics/forces.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/physics/static_solve.hpp"
 
@@ -75,30 +78,112 @@ MatX3 OrganReference::surface_displacement(const ContactLoad& load, double* solv
 
 namespace {
 
-MatX3 static_surface(const Body& body, const ContactLoad& load, MatX3* f_surface_out) {
+// The disk load as nodal forces on the model's degrees of freedom (through the body's force map).
+MatX3 model_load(const Body& body, const ContactLoad& load) {
   const MatX3& S = body.rest_surface();
   const MatX3 fs = disk_load_linear(S, body.faces(), load.centre, load.radius, load.force);
-  const Model& m = body.model();
-  MatX3 f_ext = MatX3::Zero(m.num_nodes(), 3);
+  MatX3 f_ext = MatX3::Zero(body.model().num_nodes(), 3);
   for (Index i = 0; i < fs.rows(); ++i)
     if (fs.row(i).squaredNorm() > 0) body.transfer_force(i, fs.row(i).transpose(), f_ext);
-  const StaticResult r = static_equilibrium(m, f_ext);
-  State st = make_state(m);
-  st.x = r.x;
+  return f_ext;
+}
+
+MatX3 surface_of(const Body& body, const MatX3& x) {
+  State st = make_state(body.model());
+  st.x = x;
   MatX3 surf;
   body.map_to_surface(st, surf);
-  if (f_surface_out) *f_surface_out = fs;
-  return surf - S;
+  return surf - body.rest_surface();
+}
+
+// The residual tolerance is relative to the load: 1e-7 of the largest nodal force (at least 1e-10 N). An
+// absolute 1e-10 N sits at the round-off floor of the volumetric kind's forces, where Newton stagnates
+// (5e-10 N after 10 iterations, then up to 200 factorisations per solve); 1e-7 of the load changes a
+// displacement by about 1e-7 of itself. A model with volume terms (thousands of nodes, a tangent whose
+// factorisation is most of the solve) also keeps its factorised tangent across Newton steps (modified
+// Newton); the others factor at every step as before.
+MatX3 static_surface(const Body& body, const ContactLoad& load) {
+  const MatX3 f = model_load(body, load);
+  StaticSettings ss;
+  ss.tolerance = std::max(ss.tolerance, 1e-7 * f.rowwise().norm().maxCoeff());
+  ss.reuse_tangent = body.model().volume.size() > 0;
+  return surface_of(body, static_equilibrium(body.model(), f, ss).x);
+}
+
+// Golden-section search for the minimum of f over [lo, hi]: two probes and `iterations` more; returns the
+// final bracket.
+template <class F>
+std::pair<double, double> golden_section(F&& f, double lo, double hi, int iterations) {
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
+  double fa = f(a), fb = f(b);
+  for (int it = 0; it < iterations; ++it) {
+    if (fa < fb) {
+      hi = b;
+      b = a;
+      fb = fa;
+      a = hi - g * (hi - lo);
+      fa = f(a);
+    } else {
+      lo = a;
+      a = b;
+      fa = fb;
+      b = lo + g * (hi - lo);
+      fb = f(b);
+    }
+  }
+  return {lo, hi};
 }
 
 }  // namespace
 
 MatX3 spring_displacement(const Body& body, const ContactLoad& load) {
-  return static_surface(body, load, nullptr);
+  return static_surface(body, load);
+}
+
+std::vector<MatX3> spring_displacement_linear(const Body& body, const std::vector<ContactLoad>& loads) {
+  const Model& m = body.model();
+  const Index n = m.num_nodes();
+  std::vector<Index> map(static_cast<std::size_t>(3 * n), -1);
+  Index nf = 0;
+  for (Index a : m.free_nodes)
+    for (int d = 0; d < 3; ++d) map[static_cast<std::size_t>(3 * a + d)] = nf++;
+  std::vector<MatX3> out;
+  if (nf == 0) {
+    for (std::size_t i = 0; i < loads.size(); ++i) out.push_back(MatX3::Zero(body.num_surface_nodes(), 3));
+    return out;
+  }
+  const Eigen::SparseMatrix<double> K =
+      tangent_stiffness(m, m.x0, {.clamp_transverse = false, .include_return = true});
+  std::vector<Eigen::Triplet<double>> T;
+  T.reserve(static_cast<std::size_t>(K.nonZeros()));
+  for (int c = 0; c < K.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator e(K, c); e; ++e) {
+      const Index r = map[static_cast<std::size_t>(e.row())], q = map[static_cast<std::size_t>(e.col())];
+      if (r >= 0 && q >= 0) T.emplace_back(r, q, e.value());
+    }
+  Eigen::SparseMatrix<double> Kff(nf, nf);
+  Kff.setFromTriplets(T.begin(), T.end());
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Kff);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0).all())
+    throw SolverError(cat(m.name, ": linear response: the stiffness at rest is not positive definite"));
+  for (const auto& load : loads) {
+    const MatX3 f = model_load(body, load);
+    VecX r(nf);
+    for (Index i = 0; i < 3 * n; ++i)
+      if (map[static_cast<std::size_t>(i)] >= 0) r[map[static_cast<std::size_t>(i)]] = f.data()[i];
+    const VecX u = ldlt.solve(r);
+    if (!u.allFinite()) throw SolverError(cat(m.name, ": linear response: the solve is not finite"));
+    MatX3 x = m.x0;
+    for (Index i = 0; i < 3 * n; ++i)
+      if (map[static_cast<std::size_t>(i)] >= 0) x.data()[i] += u[map[static_cast<std::size_t>(i)]];
+    out.push_back(surface_of(body, x));
+  }
+  return out;
 }
 
 MatX3 spring_displacement_local(const Body& body, const ContactLoad& load, double k_loc) {
-  MatX3 u = static_surface(body, load, nullptr);
+  MatX3 u = static_surface(body, load);
   const MatX3& S = body.rest_surface();
   const Index contact = nearest_node(S, load.centre);
   LocalDeformationSettings ls;
@@ -146,37 +231,71 @@ VecX calibrate_multipliers(const Response& response, Index families,
     }
     return c;
   };
-  const double lo0 = std::log(1e-3), hi0 = std::log(1e3), g = (std::sqrt(5.0) - 1) / 2;
+  const double lo0 = std::log(1e-3), hi0 = std::log(1e3);
   for (int sweep = 0; sweep < sweeps; ++sweep)
     for (Index f = 0; f < families; ++f) {
       // narrower bracket on later sweeps, around the current value
-      double lo = sweep == 0 ? lo0 : logm(f) - std::log(10.0),
-             hi = sweep == 0 ? hi0 : logm(f) + std::log(10.0);
+      const double lo = sweep == 0 ? lo0 : logm(f) - std::log(10.0),
+                   hi = sweep == 0 ? hi0 : logm(f) + std::log(10.0);
       VecX x = logm;
-      auto at = [&](double v) {
-        x(f) = v;
-        return cost(x);
-      };
-      double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
-      double fa = at(a), fb = at(b);
-      for (int it = 0; it < 24; ++it) {
-        if (fa < fb) {
-          hi = b;
-          b = a;
-          fb = fa;
-          a = hi - g * (hi - lo);
-          fa = at(a);
-        } else {
-          lo = a;
-          a = b;
-          fa = fb;
-          b = lo + g * (hi - lo);
-          fb = at(b);
-        }
-      }
-      logm(f) = 0.5 * (lo + hi);
+      const auto [l, h] = golden_section(
+          [&](double v) {
+            x(f) = v;
+            return cost(x);
+          },
+          lo, hi, 24);
+      logm(f) = 0.5 * (l + h);
     }
   return logm.array().exp().matrix();
+}
+
+VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<CalibrationCase>& training,
+                               int evaluations) {
+  require(!training.empty() && evaluations >= 3, "calibrate: need >= 1 training load and >= 3 evaluations");
+  std::vector<ContactLoad> loads;
+  for (const auto& t : training) loads.push_back(t.load);
+  double best_cost = std::numeric_limits<double>::infinity(), best_logr = 0, best_c = 1;
+  auto cost = [&](double logr) {
+    VecX m(2);
+    m << 1.0, std::exp(logr);
+    std::vector<MatX3> us;
+    try {
+      us = response(m, loads);
+    } catch (const SolverError&) {
+      return std::numeric_limits<double>::infinity();
+    }
+    require(us.size() == training.size(), "calibrate: the response returned ", us.size(), " fields for ",
+            training.size(), " loads");
+    // the cost of a / c times u is quadratic in a: minimised in closed form
+    double uu = 0, uU = 0;
+    for (std::size_t i = 0; i < training.size(); ++i) {
+      const auto& t = training[i];
+      const MatX3& u = us[i];
+      const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
+      const double wn = 1.0 / (s * s * static_cast<double>(u.rows())), wc = 1.0 / (s * s);
+      uu += wn * u.squaredNorm() + wc * u.row(t.contact).squaredNorm();
+      uU += wn * (u.array() * t.u_fem.array()).sum() + wc * u.row(t.contact).dot(t.u_fem.row(t.contact));
+    }
+    const double a = uU > 0 && uu > 0 ? uU / uu : 1.0;  // a = 1 / c
+    double cst = 0;
+    for (std::size_t i = 0; i < training.size(); ++i) {
+      const auto& t = training[i];
+      const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
+      cst += (a * us[i] - t.u_fem).squaredNorm() / (s * s * static_cast<double>(us[i].rows()));
+      cst += (a * us[i].row(t.contact) - t.u_fem.row(t.contact)).squaredNorm() / (s * s);
+    }
+    if (cst < best_cost) {
+      best_cost = cst;
+      best_logr = logr;
+      best_c = 1.0 / a;
+    }
+    return cst;
+  };
+  golden_section(cost, std::log(1e-2), std::log(1e2), evaluations - 2);
+  if (!std::isfinite(best_cost)) throw SolverError("calibrate: no ratio in [1e-2, 1e2] has a response");
+  VecX m(2);
+  m << best_c, best_c * std::exp(best_logr);
+  return m;
 }
 
 }  // namespace medspring::fem

@@ -40,15 +40,16 @@ ValidationResult finish(ValidationResult r, const FemProblem& p, const FemResult
   return r;
 }
 
-std::vector<Index> nodes_where(const TetMesh& m, int axis, double value) {
+}  // namespace
+
+std::vector<Index> nodes_on_plane(const TetMesh& m, int axis, double value) {
   std::vector<Index> out;
   for (Index i = 0; i < m.num_nodes(); ++i)
     if (std::abs(m.X(i, axis) - value) < 1e-9) out.push_back(i);
   return out;
 }
 
-// Boussinesq point load F (N) at the origin, pressing into the half-space z < 0 (mm, MPa).
-Vec3 boussinesq(const Material& m, double F, const Vec3& x) {
+Vec3 boussinesq_displacement(const Material& m, double F, const Vec3& x) {
   const double G = m.mu(), nu = m.nu;
   const double rho = std::hypot(x(0), x(1)), zeta = -x(2), R = x.norm();
   const double c = F / (4 * std::numbers::pi * G);
@@ -61,8 +62,6 @@ Vec3 boussinesq(const Material& m, double F, const Vec3& x) {
   }
   return u;
 }
-
-}  // namespace
 
 double uniaxial_stretch(const Material& m, double P) {
   validate_material(m);
@@ -80,7 +79,7 @@ ValidationResult validate_uniaxial(int level, const FemSettings& s) {
   const int n = level + 1;
   FemProblem p{box_mesh(graded(0, L, n), graded(0, L, n), graded(0, L, n)), Material::from_kpa(10, 0.45)};
   for (int axis = 0; axis < 3; ++axis)
-    for (Index v : nodes_where(p.mesh, axis, 0.0)) p.constraints.push_back({v, axis, 0.0});
+    for (Index v : nodes_on_plane(p.mesh, axis, 0.0)) p.constraints.push_back({v, axis, 0.0});
   const MatX6i B = boundary_faces(p.mesh);
   for (const auto& [node, f] :
        uniform_traction(p.mesh, faces_on_plane(p.mesh, B, 0, L), Vec3(P * L * L, 0, 0)))
@@ -88,7 +87,7 @@ ValidationResult validate_uniaxial(int level, const FemSettings& s) {
   const FemResult res = solve(p, s);
   ValidationResult r{"uniaxial", level};
   r.quantity = "stretch lambda under 2 kPa";
-  const auto tip = nodes_where(p.mesh, 0, L);
+  const auto tip = nodes_on_plane(p.mesh, 0, L);
   double mean = 0;
   for (Index v : tip) mean += res.u(v, 0);
   r.fem = 1.0 + mean / static_cast<double>(tip.size()) / L;
@@ -106,14 +105,14 @@ ValidationResult validate_cantilever(int level, const FemSettings& s) {
   const double compliance = L * L * L / (3 * mat.E * I) + L / (5.0 / 6.0 * mat.mu() * A);
   const double F = target / compliance;
   FemProblem p{box_mesh(graded(0, L, nx), graded(0, b, nyz), graded(0, h, nyz)), mat};
-  p.fixed = nodes_where(p.mesh, 0, 0.0);
+  p.fixed = nodes_on_plane(p.mesh, 0, 0.0);
   const MatX6i B = boundary_faces(p.mesh);
   for (const auto& [node, f] : uniform_traction(p.mesh, faces_on_plane(p.mesh, B, 0, L), Vec3(0, 0, -F)))
     p.loads.push_back({node, f});
   const FemResult res = solve(p, s);
   ValidationResult r{"cantilever", level};
   r.quantity = "mean tip deflection, mm";
-  const auto tip = nodes_where(p.mesh, 0, L);
+  const auto tip = nodes_on_plane(p.mesh, 0, L);
   double mean = 0;
   for (Index v : tip) mean += -res.u(v, 2);
   r.fem = mean / static_cast<double>(tip.size());
@@ -129,12 +128,12 @@ std::vector<ValidationResult> validate_boussinesq(int level, const FemSettings& 
   const auto xs = graded(0, R, n, 1.35);
   auto zs = graded(-R, 0, n, 1.0 / 1.35);
   FemProblem p{box_mesh(xs, xs, zs), mat};
-  for (Index v : nodes_where(p.mesh, 0, 0.0)) p.constraints.push_back({v, 0, 0.0});
-  for (Index v : nodes_where(p.mesh, 1, 0.0)) p.constraints.push_back({v, 1, 0.0});
+  for (Index v : nodes_on_plane(p.mesh, 0, 0.0)) p.constraints.push_back({v, 0, 0.0});
+  for (Index v : nodes_on_plane(p.mesh, 1, 0.0)) p.constraints.push_back({v, 1, 0.0});
   for (int axis : {0, 1, 2}) {
     const double value = axis == 2 ? -R : R;
-    for (Index v : nodes_where(p.mesh, axis, value)) {
-      const Vec3 u = boussinesq(mat, F, p.mesh.X.row(v));
+    for (Index v : nodes_on_plane(p.mesh, axis, value)) {
+      const Vec3 u = boussinesq_displacement(mat, F, p.mesh.X.row(v));
       for (int d = 0; d < 3; ++d) p.constraints.push_back({v, d, u(d)});
     }
   }

@@ -1,7 +1,9 @@
 #include "medspring/physics/static_solve.hpp"
 
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "medspring/core/check.hpp"
 #include "medspring/physics/forces.hpp"
@@ -13,6 +15,18 @@ namespace {
 // Total potential Pi(x) = V(x) - f_ext . (x - x0), whose stationary points are the equilibria.
 double total_potential(const Model& m, const MatX3& x, const MatX3& f_ext) {
   return potential_energy(m, x) - (f_ext.array() * (x - m.x0).array()).sum();
+}
+
+// The compressed sparsity pattern a symbolic factorisation was computed for.
+struct SparsePattern {
+  std::vector<int> outer, inner;
+};
+
+bool same_pattern(const Eigen::SparseMatrix<double>& A, const SparsePattern& p) {
+  return static_cast<Eigen::Index>(p.outer.size()) == A.outerSize() + 1 &&
+         static_cast<Eigen::Index>(p.inner.size()) == A.nonZeros() &&
+         std::equal(p.outer.begin(), p.outer.end(), A.outerIndexPtr()) &&
+         std::equal(p.inner.begin(), p.inner.end(), A.innerIndexPtr());
 }
 
 }  // namespace
@@ -50,41 +64,67 @@ StaticResult static_equilibrium(const Model& m, const MatX3& f_ext, const Static
   res.residual = residual(res.x, r);
   double mu = 0.0;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  SparsePattern pattern;
+  // modified Newton (s.reuse_tangent): the factorised tangent is kept while each step cuts the residual by
+  // the factor s.reuse_rate; a step that does not, or fails the line search, refactors at the current x
+  bool factored = false, stale = true;
+  int last_factor_iteration = -1;
+  double mu_min = 0;
   for (int it = 0; it < s.max_iterations && res.residual > s.tolerance; ++it) {
     res.iterations = it + 1;
-    const Eigen::SparseMatrix<double> K =
-        tangent_stiffness(m, res.x, {.clamp_transverse = false, .include_return = true});
-    std::vector<Eigen::Triplet<double>> T;
-    T.reserve(static_cast<std::size_t>(K.nonZeros()));
-    double kmax = 0;
-    for (int c = 0; c < K.outerSize(); ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator e(K, c); e; ++e) {
-        const Index rr = map[e.row()], cc = map[e.col()];
-        if (rr >= 0 && cc >= 0) {
-          T.emplace_back(rr, cc, e.value());
-          if (rr == cc) kmax = std::max(kmax, std::abs(e.value()));
-        }
-      }
-    Eigen::SparseMatrix<double> Kff(nf, nf);
-    Kff.setFromTriplets(T.begin(), T.end());
-    Eigen::SparseMatrix<double> I(nf, nf);
-    I.setIdentity();
-    const double mu_min = 1e-10 * std::max(kmax, 1e-12);
     VecX dx;
-    mu = mu > 0 ? mu * 0.1 : 0.0;
-    for (int tries = 0; tries < 60; ++tries) {
-      const Eigen::SparseMatrix<double> A = mu > 0 ? Eigen::SparseMatrix<double>(Kff + mu * I) : Kff;
-      ldlt.compute(A);
-      bool pd = ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0).all();
-      if (pd) {
-        dx = ldlt.solve(r);
-        if (dx.allFinite()) break;
+    if (factored && !stale && s.reuse_tangent) {
+      dx = ldlt.solve(r);
+      if (!dx.allFinite()) {
+        stale = true;
+        continue;
       }
-      mu = std::max(mu * 10.0, mu_min);
-      dx.resize(0);
+    } else {
+      const Eigen::SparseMatrix<double> K =
+          tangent_stiffness(m, res.x, {.clamp_transverse = false, .include_return = true});
+      std::vector<Eigen::Triplet<double>> T;
+      T.reserve(static_cast<std::size_t>(K.nonZeros()));
+      double kmax = 0;
+      for (int c = 0; c < K.outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator e(K, c); e; ++e) {
+          const Index rr = map[e.row()], cc = map[e.col()];
+          if (rr >= 0 && cc >= 0) {
+            T.emplace_back(rr, cc, e.value());
+            if (rr == cc) kmax = std::max(kmax, std::abs(e.value()));
+          }
+        }
+      Eigen::SparseMatrix<double> Kff(nf, nf);
+      Kff.setFromTriplets(T.begin(), T.end());
+      Eigen::SparseMatrix<double> I(nf, nf);
+      I.setIdentity();
+      mu_min = 1e-10 * std::max(kmax, 1e-12);
+      mu = mu > 0 ? mu * 0.1 : 0.0;
+      for (int tries = 0; tries < 60; ++tries) {
+        // Kff + mu I always (mu = 0 keeps an explicit diagonal), so the pattern is the same on every try and
+        // Newton iteration: the fill-reducing ordering and symbolic analysis are done once per solve and
+        // only redone if the tangent's pattern changes (a spring graph whose pattern moves with x).
+        Eigen::SparseMatrix<double> A = Kff + mu * I;
+        A.makeCompressed();
+        if (!same_pattern(A, pattern)) {
+          ldlt.analyzePattern(A);
+          pattern.outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
+          pattern.inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+        }
+        ldlt.factorize(A);
+        bool pd = ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0).all();
+        if (pd) {
+          dx = ldlt.solve(r);
+          if (dx.allFinite()) break;
+        }
+        mu = std::max(mu * 10.0, mu_min);
+        dx.resize(0);
+      }
+      if (dx.size() != nf)
+        throw SolverError(cat(m.name, ": static solve: tangent stiffness could not be factored"));
+      factored = true;
+      stale = false;
+      last_factor_iteration = it;
     }
-    if (dx.size() != nf)
-      throw SolverError(cat(m.name, ": static solve: tangent stiffness could not be factored"));
     // Armijo backtracking on the total potential (r = -grad Pi, so dx is a descent direction).
     const double pi0 = total_potential(m, res.x, f_ext);
     const double slope = -r.dot(dx);
@@ -107,12 +147,15 @@ StaticResult static_equilibrium(const Model& m, const MatX3& f_ext, const Static
       for (Index q = 0; q < nf; ++q) xt.data()[dof[q]] += dx[q];
       VecX rt(nf);
       if (residual(xt, rt) >= res.residual) {
-        mu = std::max(mu * 10.0, mu_min);
+        stale = true;  // refactor; a freshly factored tangent whose step failed is shifted as well
+        if (last_factor_iteration == it) mu = std::max(mu * 10.0, mu_min);
         continue;
       }
     }
+    const double previous = res.residual;
     res.x = xt;
     res.residual = residual(res.x, r);
+    if (s.reuse_tangent && res.residual > s.reuse_rate * previous) stale = true;
     if (alpha == 1.0 && mu > 0) mu *= 0.1;
   }
   if (!(res.residual <= s.tolerance))

@@ -309,5 +309,42 @@ TEST(CliBuildVessel, BadInputExitsWithOneLineNamingThePartAndWritesNothing) {
   expect_error("--segmentation \"" + (tmp / "two.mha").string() + "\"", "2 separate components");
 }
 
+// `build volumetric` (issue 23): the package carries the tetrahedral mesh at about --nodes nodes, its
+// surface is the balloon's --surface-nodes, and it rebuilds to a body that the engine loads.
+TEST(CliBuild, VolumetricWritesAPackageWithItsTetrahedraAtTheNodeCount) {
+  const fs::path tmp = testing::temp_dir("cli-volumetric");
+  const fs::path mesh = testing::require_data_file("kidney_left_hubmap_vhm.obj");
+  const std::string in = "build volumetric --mesh \"" + mesh.string() + "\" --unit m ";
+  const CliRun r = run_cli(
+      in + "--surface-nodes 200 --nodes 700 --nu 0.3 --out \"" + (tmp / "v").string() + "\" --json", tmp);
+  if (r.code != 0 && r.err.find("unknown kind 'volumetric'") != std::string::npos)
+    GTEST_SKIP() << "medspring built without the fem layer (TetGen)";
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* f : {"volumetric.msm", "surface.vtp", "summary.json"})
+    EXPECT_TRUE(fs::exists(tmp / "v" / f)) << f;
+  const ModelPackage p = read_model_package(tmp / "v" / "volumetric.msm");
+  EXPECT_EQ(p.kind, "volumetric");
+  EXPECT_EQ(p.volumetric_mesh.surface_nodes, 200);
+  const Index n = p.volumetric_mesh.X.rows();
+  EXPECT_GT(n, 700 * 0.8) << "TetGen lands within 5 % after up to 5 tries; 20 % is the bound here";
+  EXPECT_LT(n, 700 * 1.2);
+  EXPECT_GT(p.volumetric_mesh.T.rows(), n);  // a solid: more tetrahedra than nodes
+  EXPECT_DOUBLE_EQ(p.volumetric.nu, 0.3);
+  const BodyPtr body = make_body(p);
+  EXPECT_EQ(body->model().num_nodes(), n);
+  EXPECT_EQ(body->num_surface_nodes(), 200);
+  EXPECT_NE(r.out.find("\"tetrahedra\""), std::string::npos) << r.out;
+
+  // bad input: named, nothing written
+  const CliRun low =
+      run_cli(in + "--surface-nodes 200 --nodes 100 --out \"" + (tmp / "w").string() + "\"", tmp);
+  EXPECT_EQ(low.code, 1);
+  EXPECT_NE(low.err.find("--nodes: 100 is below the --surface-nodes 200"), std::string::npos) << low.err;
+  const CliRun nu = run_cli(in + "--nu 0.5 --out \"" + (tmp / "w").string() + "\"", tmp);
+  EXPECT_EQ(nu.code, 1);
+  EXPECT_NE(nu.err.find("--nu: must be in (-1, 0.5)"), std::string::npos) << nu.err;
+  EXPECT_FALSE(fs::exists(tmp / "w"));
+}
+
 }  // namespace
 }  // namespace medspring

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "medspring/core/error.hpp"
+#include "medspring/fem/organ.hpp"
 #include "medspring/fem/tet_mesh.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/model_package.hpp"
@@ -439,3 +440,43 @@ TEST(Volumetric, ModelPackageRebuildsTheSameModel) {
   EXPECT_TRUE(check_fingerprint(p, *again));
   EXPECT_EQ(model_fingerprint(again->model()), model_fingerprint(body.model()));
 }
+
+namespace medspring {
+namespace {
+
+// The organ tables' solvers (docs/accuracy.md): the modified Newton (kept factorisation) reaches the same
+// equilibrium as full Newton, and the small-strain response (one factorisation, fem::spring_displacement_
+// linear) is the nonlinear static response in the limit of a small load.
+TEST(VolumetricStatics, ModifiedNewtonAndSmallStrainResponseAgreeWithFullNewton) {
+  const double L = 20;
+  const VolumetricMesh mesh = cube_mesh(3, L);
+  VolumetricSettings s;
+  for (Index i = 0; i < mesh.surface_nodes; ++i)
+    if (mesh.X(i, 2) < 1e-9) s.fixed.push_back(i);  // the bottom face
+  const VolumetricBody body(mesh, s, "cube");
+  const Model& m = body.model();
+  MatX3 f = MatX3::Zero(m.num_nodes(), 3);
+  Index top = 0;
+  for (Index i = 0; i < mesh.surface_nodes; ++i)
+    if ((mesh.X.row(i) - Vec3(L / 3, L / 3, L).transpose()).norm() <
+        (mesh.X.row(top) - Vec3(L / 3, L / 3, L).transpose()).norm())
+      top = i;
+  f.row(top) = Vec3(0.01, 0, -0.05).transpose();  // a large load: several Newton steps
+  StaticSettings full, kept;
+  full.tolerance = kept.tolerance = 1e-9;
+  kept.reuse_tangent = true;
+  const StaticResult a = static_equilibrium(m, f, full), b = static_equilibrium(m, f, kept);
+  const double u = (a.x - m.x0).rowwise().norm().maxCoeff();
+  EXPECT_GT(u, 0.5) << "the load should deform the cube visibly (mm)";
+  EXPECT_LT((a.x - b.x).cwiseAbs().maxCoeff(), 1e-6 * u);
+
+  const fem::ContactLoad small{Vec3(L / 2, L / 2, L), Vec3(0, 0, -1e-5), 5.0};
+  const MatX3 lin = fem::spring_displacement_linear(body, {small}).at(0);
+  const MatX3 nl = fem::spring_displacement(body, small);
+  const double peak = nl.rowwise().norm().maxCoeff();
+  EXPECT_GT(peak, 0.0);
+  EXPECT_LT((lin - nl).rowwise().norm().maxCoeff(), 1e-3 * peak);
+}
+
+}  // namespace
+}  // namespace medspring

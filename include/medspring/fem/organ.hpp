@@ -72,6 +72,12 @@ std::vector<Index> support_nodes(const MatX3& surface, const SupportRule& rule);
 /// (disk_load_linear) that travel the body's force map. Throws SolverError when there is no equilibrium.
 MatX3 spring_displacement(const Body& body, const ContactLoad& load);
 
+/// The small-strain response: the surface displacement (#S x 3, mm) under each load of the model linearised
+/// at rest, K(x0) u = f over the free nodes, with one factorisation of K(x0) for all loads (the static
+/// solve factors the tangent at every Newton iteration of every load). Throws SolverError when K(x0) is
+/// not positive definite (a mechanism the supports leave free).
+std::vector<MatX3> spring_displacement_linear(const Body& body, const std::vector<ContactLoad>& loads);
+
 /// The same plus the local-deformation overlay (§6, eq. 6) of the whole contact force on the surface
 /// node nearest the disk centre (BFS patch of 25 nodes; k_loc = body.local_stiffness() when k_loc <= 0).
 MatX3 spring_displacement_local(const Body& body, const ContactLoad& load, double k_loc = 0.0);
@@ -99,5 +105,16 @@ struct CalibrationCase {
 using Response = std::function<MatX3(const VecX& multipliers, const ContactLoad& load)>;
 VecX calibrate_multipliers(const Response& response, Index families,
                            const std::vector<CalibrationCase>& training, int sweeps = 2);
+
+/// Calibration of a model with two stiffness families whose common scale c divides its small-strain
+/// displacement (the volumetric kind: springs, volume terms; docs/volumetric.md): a golden-section search
+/// over the log ratio r = m1 / m0 in [1e-2, 1e2] (`evaluations` responses) with c in closed form, the
+/// least-squares fit of u / c in the cost of calibrate_multipliers. response(m, loads) returns the
+/// displacement under every training load at once (e.g. spring_displacement_linear: one factorisation per
+/// ratio). Returns (c, c r).
+using BatchResponse =
+    std::function<std::vector<MatX3>(const VecX& multipliers, const std::vector<ContactLoad>& loads)>;
+VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<CalibrationCase>& training,
+                               int evaluations = 18);
 
 }  // namespace medspring::fem

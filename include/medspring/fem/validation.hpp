@@ -43,4 +43,12 @@ std::vector<ValidationResult> validate_boussinesq(int level, const FemSettings& 
 /// P (MPa), lateral faces free.
 double uniaxial_stretch(const Material& m, double P);
 
+/// Displacement (mm) at x of a point load F (N) at the origin pressing into the half-space z < 0
+/// (Boussinesq), for the linear material m (MPa). The far-field condition of validate_boussinesq and of
+/// the sphere indentation (indentation.hpp).
+Vec3 boussinesq_displacement(const Material& m, double F, const Vec3& x);
+
+/// The nodes of m whose coordinate `axis` equals `value` (within 1e-9 mm).
+std::vector<Index> nodes_on_plane(const TetMesh& m, int axis, double value);
+
 }  // namespace medspring::fem

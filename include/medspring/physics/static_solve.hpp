@@ -9,6 +9,11 @@ struct StaticSettings {
   double tolerance = 1e-10;  // max per-node residual norm (N)
   int max_iterations = 200;
   int max_backtracks = 40;
+  // Modified Newton: keep the factorised tangent while each step cuts the max residual by at least
+  // reuse_rate, refactor otherwise (a large model, e.g. the volumetric kind, spends its time factoring).
+  // Same equilibrium to the tolerance, fewer factorisations, more (cheap) iterations.
+  bool reuse_tangent = false;
+  double reuse_rate = 0.25;
 };
 
 struct StaticResult {

@@ -1,0 +1,97 @@
+// Internals of `medspring accuracy` / `medspring calibrate` (docs/accuracy.md), split by concern:
+//   cmd_accuracy_organ.cpp   the organ tables: FEM cases, model kinds, calibration, errors
+//   cmd_accuracy_vessel.cpp  the vessel: SMRM centerline against the FEM wall
+//   cmd_accuracy_report.cpp  accuracy.md
+//   cmd_accuracy.cpp         the two commands (options, output folder, figures)
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli.hpp"
+#include "medspring/fem/validation.hpp"
+#include "medspring/fem/vessel.hpp"
+#include "medspring/models/volumetric_body.hpp"
+#include "medspring/scene/scene.hpp"
+#include "scene_support.hpp"
+
+namespace medspring::cli::accuracy {
+
+using json = nlohmann::json;
+
+struct Organ {
+  std::string name;
+  SurfaceMesh surface;
+  MatX3 atoms;
+  // volumetric kind (issue 23): the TetGen mesh of the surface (made once) and the material it gets
+  mutable std::shared_ptr<const VolumetricMesh> vmesh;
+  mutable double E_kPa = 10, nu = 0.45;
+  mutable Index target_nodes = 2000;
+};
+
+// A model kind of the tables: "surface", "hybrid" or "volumetric", linear or Duffing, with or without the
+// local overlay.
+struct Kind {
+  std::string base;  // surface | hybrid | volumetric
+  bool nonlinear = false;
+  bool local = false;
+  std::string label() const {
+    return base + (local ? " + local" : "") + (nonlinear ? " (Duffing)" : " (linear)");
+  }
+  Index stiffness_families() const { return base == "surface" || base == "volumetric" ? 2 : 4; }
+  // + eta of the Duffing springs (D-3: k' = eta k / L0^2; the volumetric kind keeps eta = 1: its
+  // calibration fits springs and volume terms only) + k_loc
+  bool fits_eta() const { return nonlinear && base != "volumetric"; }
+  Index families() const { return stiffness_families() + (fits_eta() ? 1 : 0) + (local ? 1 : 0); }
+  Index eta_index() const { return fits_eta() ? stiffness_families() : -1; }
+  Index local_index() const { return local ? families() - 1 : -1; }
+};
+
+struct Frame {
+  Vec3 c, e1, e3;  // centroid, long axis, thin axis (the load presses along -e3, the support is at -e3)
+  double half_length = 0, thickness = 0;
+};
+
+struct Settings {
+  fem::Material material;
+  double radius = 8.0;
+  bool quick = false;
+  std::vector<std::string> kinds;  // --kinds: the bases to run (empty: all)
+  Index volumetric_nodes = 2000;   // --nodes
+  std::vector<double> forces;      // --forces (N; default 0.2, 0.5, 1.0)
+  int level = 1;
+  bool quiet = false;
+};
+
+/// --kinds, --forces and --nodes of `accuracy` and `calibrate` (cmd names the command in errors).
+void read_kind_options(const Args& args, Settings& st, const std::string& cmd);
+/// A progress line on stderr unless --quiet / --json.
+void note(const Settings& s, const std::string& line);
+
+/// Centroid, long and thin axes of a point set.
+Frame principal_frame(const MatX3& V);
+/// Sites on the +e3 side at fractions t of the half length along e1: the most +e3 node near each.
+std::vector<Index> pick_sites(const MatX3& V, const Frame& f, const std::vector<double>& ts);
+
+/// Everything measured on one organ: FEM cases, then every kind (default: all) default and calibrated.
+json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind> kinds = {},
+               bool convergence = true);
+/// The SMRM vessel of the scene against its FEM wall (docs/accuracy.md, "The vessel").
+json run_vessel(Scene scene0, const std::string& name, const Settings& st, const fem::Material& mat,
+                const fem::VesselMeshSettings& vms, FileLoader& loader);
+
+Organ phantom_organ();
+/// The real kidney of the bundled scene kidney_1.0N_nonlinear.json; nullopt (and why) when it cannot be
+/// built.
+std::optional<Organ> real_kidney(const std::filesystem::path& scenes, FileLoader& loader, std::string& why);
+
+/// One row of the closed-form validation (fem/validation.hpp) as JSON.
+json validation_json(const fem::ValidationResult& r);
+/// accuracy.md from the run's JSON.
+std::string markdown(const json& j);
+
+}  // namespace medspring::cli::accuracy

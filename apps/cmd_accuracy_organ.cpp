@@ -1,0 +1,399 @@
+// `medspring accuracy` / `calibrate`: the organ tables (docs/accuracy.md) — FEM cases under matched supports
+// and contact loads, every model kind with default and calibrated stiffnesses, errors on held-out cases.
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "accuracy_indentation.hpp"
+#include "accuracy_summary.hpp"
+#include "accuracy_tables.hpp"
+#include "commands.hpp"
+#include "medspring/builders/output_folder.hpp"
+#include "medspring/core/check.hpp"
+#include "medspring/fem/organ.hpp"
+#include "medspring/fem/validation.hpp"
+#include "medspring/fem/vessel.hpp"
+#include "medspring/fem/volumetric.hpp"
+#include "medspring/medial/chain.hpp"
+#include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/smrm_vessel.hpp"
+#include "medspring/models/surface_body.hpp"
+#include "medspring/models/tissue.hpp"
+#include "medspring/models/volumetric_body.hpp"
+#include "medspring/physics/loads.hpp"
+#include "medspring/scene/build.hpp"
+#include "medspring/scene/scene.hpp"
+#include "medspring/sim/simulation.hpp"
+#include "scene_support.hpp"
+
+namespace medspring::cli::accuracy {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const VolumetricMesh& volumetric_mesh_of(const Organ& o) {
+  if (!o.vmesh)
+    o.vmesh = std::make_shared<const VolumetricMesh>(
+        fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes}));
+  return *o.vmesh;
+}
+
+// Stiffness families: surface (k, k_r); hybrid (k_surf, k_spoke, k_cl, k_r); multipliers m scale them.
+// Volumetric: (springs, volume terms) from E and nu (docs/volumetric.md); no return springs (supports).
+BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& support, const VecX& m) {
+  if (k.base == "volumetric") {
+    VolumetricSettings s;
+    s.E_kPa = o.E_kPa;
+    s.nu = o.nu;
+    s.spring_scale = m(0);
+    s.volume_scale = m(1);
+    if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
+    s.fixed = support;
+    return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
+  }
+  if (k.base == "surface") {
+    SurfaceBodyParams p;
+    p.k *= m(0);
+    p.node.return_k *= m(1);
+    if (!k.nonlinear) p.duffing.mode = DuffingMode::Linear;
+    if (k.nonlinear) p.duffing.eta *= m(k.eta_index());
+    p.fixed = support;
+    return std::make_shared<SurfaceBody>(o.surface, p, o.name);
+  }
+  HybridSettings s;
+  s.k_surf *= m(0);
+  s.k_spoke *= m(1);
+  s.k_cl *= m(2);
+  s.surface_node.return_k *= m(3);
+  s.atom_node.return_k *= m(3);
+  s.nonlinear = k.nonlinear;
+  if (k.nonlinear) s.duffing.eta *= m(k.eta_index());
+  s.fixed = support;
+  return std::make_shared<HybridKidney>(o.surface, o.atoms, s, o.name);
+}
+
+double median_update_us(const BodyPtr& body, const Kind& k, Index contact, const Vec3& F, int samples) {
+  SimulationSettings ss;
+  ss.local.enabled = k.local;
+  ss.normals = false;
+  Simulation sim(body, ss);
+  sim.set_loads({{.node = contact, .force = F, .t_ramp = 0}});
+  sim.advance(50);
+  std::vector<double> us;
+  us.reserve(static_cast<std::size_t>(samples));
+  for (int i = 0; i < samples; ++i) {
+    const auto a = std::chrono::steady_clock::now();
+    sim.update();
+    us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count());
+  }
+  std::nth_element(us.begin(), us.begin() + static_cast<long>(us.size() / 2), us.end());
+  return us[us.size() / 2];
+}
+
+}  // namespace
+
+Frame principal_frame(const MatX3& V) {
+  Frame f;
+  f.c = V.colwise().mean().transpose();
+  const MatX3 D = V.rowwise() - f.c.transpose();
+  Eigen::SelfAdjointEigenSolver<Mat3> es(D.transpose() * D);
+  f.e3 = es.eigenvectors().col(0);
+  f.e1 = es.eigenvectors().col(2);
+  const VecX p1 = D * f.e1, p3 = D * f.e3;
+  f.half_length = 0.5 * (p1.maxCoeff() - p1.minCoeff());
+  f.thickness = p3.maxCoeff() - p3.minCoeff();
+  return f;
+}
+
+// Sites on the +e3 side at fractions t of the half length along e1: the most +e3 node near each.
+std::vector<Index> pick_sites(const MatX3& V, const Frame& f, const std::vector<double>& ts) {
+  std::vector<Index> out;
+  for (double t : ts) {
+    Index best = -1;
+    double top = -1e300;
+    for (Index i = 0; i < V.rows(); ++i) {
+      const Vec3 d = V.row(i).transpose() - f.c;
+      if (std::abs(d.dot(f.e1) - t * f.half_length) > 0.1 * f.half_length) continue;
+      if (d.dot(f.e3) > top) {
+        top = d.dot(f.e3);
+        best = i;
+      }
+    }
+    require(best >= 0, "accuracy: no surface node near site t = ", t);
+    out.push_back(best);
+  }
+  return out;
+}
+
+// --kinds surface,hybrid,volumetric (default all) and --nodes N (volumetric node count, default 2000).
+void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
+  if (auto k = args.get("kinds")) {
+    std::stringstream ss(*k);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing",
+              cmd, ": --kinds: unknown kind '", item,
+              "' (expected surface, hybrid, volumetric, volumetric-duffing)");
+      st.kinds.push_back(item);
+    }
+    require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
+  }
+  if (auto f = args.get("forces")) {
+    std::stringstream ss(*f);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(item.c_str(), &end);
+      require(end && *end == '\0' && std::isfinite(v) && v > 0 && v <= 100, cmd, ": --forces: '", item,
+              "' is not a force in (0, 100] N");
+      st.forces.push_back(v);
+    }
+    require(!st.forces.empty(), cmd, ": --forces must list at least one force");
+  }
+  const long long nodes = args.integer("nodes", 2000);
+  require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
+  st.volumetric_nodes = static_cast<Index>(nodes);
+}
+
+void note(const Settings& s, const std::string& line) {
+  if (!s.quiet) std::cerr << line << std::endl;
+}
+
+// Everything measured on one organ.
+json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind> kinds, bool convergence) {
+  const Frame f = principal_frame(o.surface.V);
+  const fem::SupportRule rule{-f.e3, 0.2 * f.thickness};
+  const std::vector<Index> support = fem::support_nodes(o.surface.V, rule);
+  const std::vector<double> ts =
+      st.quick ? std::vector<double>{-0.3, 0.3} : std::vector<double>{-0.45, -0.15, 0.15, 0.45};
+  const std::vector<Index> sites = pick_sites(o.surface.V, f, ts);
+  const std::vector<double> forces = !st.forces.empty() ? st.forces
+                                     : st.quick         ? std::vector<double>{0.5}
+                                                        : std::vector<double>{0.2, 0.5, 1.0};
+  // training force: 0.5 N, or the smallest of --forces without it (large-strain runs train on small loads)
+  const double train_force = std::find(forces.begin(), forces.end(), 0.5) != forces.end()
+                                 ? 0.5
+                                 : *std::min_element(forces.begin(), forces.end());
+  // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
+  const std::size_t train_sites = st.quick ? 1 : 2;
+  json out = {
+      {"organ", o.name},
+      {"surface_nodes", o.surface.num_vertices()},
+      {"support_nodes", support.size()},
+      {"support_rule",
+       {{"direction", {rule.direction(0), rule.direction(1), rule.direction(2)}}, {"depth_mm", rule.depth}}},
+      {"contact_radius_mm", st.radius},
+      {"sites", sites}};
+
+  fem::OrganMeshSettings ms;
+  ms.subdivisions = st.level - 1;
+  note(st, cat(o.name, ": meshing (level ", st.level, ")"));
+  const fem::OrganReference ref(o.surface, st.material, rule, ms);
+  out["fem"] = {{"nodes", ref.mesh().num_nodes()},
+                {"elements", ref.mesh().num_elements()},
+                {"fixed_nodes", ref.fixed_fem_nodes().size()},
+                {"level", st.level}};
+
+  struct Case {
+    Index site_index;
+    double force;
+    fem::ContactLoad load;
+    MatX3 u_fem;
+    double seconds;
+    bool train;
+  };
+  std::vector<Case> cases;
+  json fem_failed = json::array();
+  for (std::size_t si = 0; si < sites.size(); ++si)
+    for (double F : forces) {
+      Case c{static_cast<Index>(si),
+             F,
+             {o.surface.V.row(sites[si]).transpose(), -F * f.e3, st.radius},
+             {},
+             0,
+             false};
+      c.train = si < train_sites && F == train_force;
+      bool cached = false;
+      note(st, cat(o.name, ": FEM site ", si, ", ", F, " N"));
+      try {
+        c.u_fem = ref.surface_displacement(c.load, &c.seconds, &cached);
+      } catch (const SolverError& e) {  // e.g. no equilibrium at a large strain: reported, not hidden
+        note(st, cat(o.name, ": FEM site ", si, ", ", F, " N: no equilibrium"));
+        fem_failed.push_back({{"site", si}, {"force_N", F}, {"train", c.train}, {"error", e.what()}});
+        continue;
+      }
+      cases.push_back(std::move(c));
+    }
+  out["fem_failed"] = fem_failed;
+  require(!cases.empty(), "accuracy: ", o.name, ": CalculiX found no equilibrium for any load");
+  double fem_seconds = 0;
+  for (const auto& c : cases) fem_seconds += c.seconds;
+  out["fem"]["median_solve_s"] = [&] {
+    std::vector<double> v;
+    for (const auto& c : cases) v.push_back(c.seconds);
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  }();
+
+  // mesh convergence of the reference: the contact displacement of the first case at the next level
+  if (!st.quick && convergence) {
+    fem::OrganMeshSettings fine = ms;
+    fine.subdivisions = st.level;
+    note(st, cat(o.name, ": FEM convergence (level ", st.level + 1, ")"));
+    const fem::OrganReference ref2(o.surface, st.material, rule, fine);
+    double secs = 0;
+    const MatX3 u2 = ref2.surface_displacement(cases[0].load, &secs);
+    const Index c = sites[0];
+    out["fem"]["convergence"] = {
+        {"level", st.level + 1},
+        {"nodes", ref2.mesh().num_nodes()},
+        {"contact_mm", u2.row(c).norm()},
+        {"contact_mm_level", cases[0].u_fem.row(c).norm()},
+        {"rel_change", (u2.row(c) - cases[0].u_fem.row(c)).norm() / u2.row(c).norm()},
+        {"solve_s", secs}};
+  }
+
+  std::vector<fem::CalibrationCase> training;
+  for (const auto& c : cases)
+    if (c.train) training.push_back({c.load, c.u_fem, sites[static_cast<std::size_t>(c.site_index)]});
+
+  json rows = json::array();
+  if (kinds.empty()) {
+    for (bool nl : {false, true})
+      for (const char* b : {"surface", "hybrid", "volumetric"}) kinds.push_back({b, nl, false});
+    kinds.push_back({"hybrid", true, true});
+    kinds.push_back({"hybrid", false, true});
+  }
+  if (!st.kinds.empty())
+    std::erase_if(
+        kinds, [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
+          const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing" : "");
+          return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
+        });
+  o.E_kPa = st.material.E * 1e3;
+  o.nu = st.material.nu;
+  o.target_nodes = st.volumetric_nodes;
+  if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
+    const VolumetricMesh& vm = volumetric_mesh_of(o);
+    out["volumetric"] = {{"nodes", vm.X.rows()},
+                         {"surface_nodes", vm.surface_nodes},
+                         {"tetrahedra", vm.T.rows()},
+                         {"target_nodes", st.volumetric_nodes}};
+  }
+  // The displacement of kind k with its families scaled by m (+ local: the last multiplier scales k_loc).
+  auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {
+    const BodyPtr body = make_body(o, k, support, m);
+    return k.local ? fem::spring_displacement_local(*body, load, body->local_stiffness() * m(k.local_index()))
+                   : fem::spring_displacement(*body, load);
+  };
+  for (const Kind& k : kinds) {
+    for (bool calibrated : {false, true}) {
+      VecX m = VecX::Ones(k.families());
+      if (calibrated) {
+        note(st, cat(o.name, ": calibrating ", k.label()));
+        if (k.base == "volumetric")  // on the small-strain response: one factorisation per ratio
+          m = fem::calibrate_scale_and_ratio(
+              [&](const VecX& mm, const std::vector<fem::ContactLoad>& ls) {
+                return fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
+              },
+              training);
+        else
+          m = fem::calibrate_multipliers(
+              [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, k.families(),
+              training, st.quick ? 1 : 2);
+      }
+      const BodyPtr body = make_body(o, k, support, m);
+      json errs = json::array();
+      double sum_rms_rel_held = 0, n_held = 0;
+      for (const auto& c : cases) {
+        MatX3 u;
+        try {
+          u = response(k, m, c.load);
+        } catch (const SolverError& e) {
+          errs.push_back({{"site", c.site_index}, {"force_N", c.force}, {"error", e.what()}});
+          continue;
+        }
+        const Index contact = sites[static_cast<std::size_t>(c.site_index)];
+        const fem::SurfaceError e = fem::compare(u, c.u_fem, contact);
+        // the contact error split along the load and across it (a sliding of the contact node)
+        const Vec3 fd = c.load.force.normalized(), du = (u.row(contact) - c.u_fem.row(contact)).transpose();
+        const double along = std::abs(du.dot(fd)), across = (du - du.dot(fd) * fd).norm();
+        errs.push_back({{"site", c.site_index},
+                        {"contact_error_along_pct", 100 * e.rel(along)},
+                        {"contact_error_across_pct", 100 * e.rel(across)},
+                        {"force_N", c.force},
+                        {"train", c.train},
+                        {"contact_fem_mm", e.contact_fem},
+                        {"contact_model_mm", e.contact_model},
+                        {"contact_error_mm", e.contact_error},
+                        {"contact_error_pct", 100 * e.rel(e.contact_error)},
+                        {"rms_mm", e.rms},
+                        {"rms_pct", 100 * e.rel(e.rms)},
+                        {"max_mm", e.max},
+                        {"max_pct", 100 * e.rel(e.max)}});
+        if (!c.train) {
+          sum_rms_rel_held += e.rel(e.rms);
+          n_held += 1;
+        }
+        if (c.site_index == 0 && c.force == forces.back() && k.base == "hybrid" && !k.local && k.nonlinear) {
+          const VecX d = (u - c.u_fem).rowwise().norm();
+          maps[o.name + (calibrated ? " calibrated" : " default")] = {
+              {"V", std::vector<double>(o.surface.V.data(), o.surface.V.data() + o.surface.V.size())},
+              {"F", std::vector<Index>(o.surface.F.data(), o.surface.F.data() + o.surface.F.size())},
+              {"error_mm", std::vector<double>(d.data(), d.data() + d.size())},
+              {"title", cat(o.name, ": ", k.label(), calibrated ? ", calibrated" : ", default", " vs FEM, ",
+                            c.force, " N at site 0")}};
+        }
+      }
+      const double us = median_update_us(body, k, sites[0], -0.5 * f.e3, st.quick ? 100 : 500);
+      rows.push_back({{"kind", k.label()},
+                      {"base", k.base},
+                      {"nonlinear", k.nonlinear},
+                      {"local", k.local},
+                      {"calibrated", calibrated},
+                      {"multipliers", std::vector<double>(m.data(), m.data() + m.size())},
+                      {"update_us", us},
+                      {"held_out_mean_rms_pct", n_held > 0 ? 100 * sum_rms_rel_held / n_held : 0.0},
+                      {"cases", errs}});
+    }
+  }
+  out["models"] = rows;
+  out["fem"]["total_solve_s"] = fem_seconds;
+  return out;
+}
+
+Organ phantom_organ() {
+  const HybridKidney hk = hybrid_kidney_phantom();
+  Organ o;
+  o.name = "kidney phantom";
+  o.surface = {hk.rest_surface(), hk.faces()};
+  o.atoms = kidney_phantom_atoms();
+  return o;
+}
+
+std::optional<Organ> real_kidney(const fs::path& scenes, FileLoader& loader, std::string& why) {
+  const fs::path file = scenes / "kidney_1.0N_nonlinear.json";
+  try {
+    const Scene scene = load_scene(file);
+    const BuiltScene built = build_scene(scene, &loader);
+    Organ o;
+    o.name = "real kidney";
+    o.surface = {built.body->rest_surface(), built.body->faces()};
+    o.atoms = built.atoms_rest;
+    return o;
+  } catch (const Error& e) {
+    why = e.what();
+    return std::nullopt;
+  }
+}
+
+}  // namespace medspring::cli::accuracy
