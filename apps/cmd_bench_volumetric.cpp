@@ -22,33 +22,37 @@ namespace medspring::cli {
 std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) {
   std::vector<bench::BenchCase> cases;
 #ifdef MEDSPRING_HAVE_FEM
-  for (const Index target : {1000, 2000}) {
-    const std::string name = cat("kidney_volumetric_", target, "_explicit_linear");
-    if (!filter.empty() && name.find(filter) == std::string::npos) continue;
-    const SurfaceMesh s = kidney_phantom();
-    const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
-    VolumetricSettings st;  // 10 kPa, nu = 0.45
-    st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
-    auto body = std::make_shared<const VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = target}), st,
-                                                       "volumetric kidney");
-    bench::BenchCase b;
-    b.name = name;
-    b.group = "kidney";
-    b.nodes = body->model().num_nodes();
-    b.springs = body->model().num_springs();
-    b.setup = [body] {
-      SimulationSettings ss;
-      ss.normals = false;
-      ss.local.enabled = false;
-      auto sim = std::make_shared<Simulation>(body, ss);
-      Index top = 0;
-      for (Index i = 0; i < body->num_surface_nodes(); ++i)
-        if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
-      sim->set_loads({{.node = top, .force = Vec3(0, 0, -0.5), .t_ramp = 0}});
-      return std::function<void()>([sim] { sim->update(); });
-    };
-    cases.push_back(std::move(b));
-  }
+  for (const Index target : {1000, 2000})
+    for (const double mass_scaling_dt :
+         {0.0, 0.25}) {  // the default (off), and opt-in selective mass scaling
+      const std::string name =
+          cat("kidney_volumetric_", target, "_explicit_linear", mass_scaling_dt > 0 ? "_mass_scaled" : "");
+      if (!filter.empty() && name.find(filter) == std::string::npos) continue;
+      const SurfaceMesh s = kidney_phantom();
+      const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+      VolumetricSettings st;  // 10 kPa, nu = 0.45
+      st.mass_scaling_dt = mass_scaling_dt;
+      st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+      auto body = std::make_shared<const VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = target}),
+                                                         st, "volumetric kidney");
+      bench::BenchCase b;
+      b.name = name;
+      b.group = "kidney";
+      b.nodes = body->model().num_nodes();
+      b.springs = body->model().num_springs();
+      b.setup = [body] {
+        SimulationSettings ss;
+        ss.normals = false;
+        ss.local.enabled = false;
+        auto sim = std::make_shared<Simulation>(body, ss);
+        Index top = 0;
+        for (Index i = 0; i < body->num_surface_nodes(); ++i)
+          if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
+        sim->set_loads({{.node = top, .force = Vec3(0, 0, -0.5), .t_ramp = 0}});
+        return std::function<void()>([sim] { sim->update(); });
+      };
+      cases.push_back(std::move(b));
+    }
 #else
   (void)filter;
 #endif

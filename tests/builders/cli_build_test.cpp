@@ -325,7 +325,7 @@ TEST(CliBuild, VolumetricWritesAPackageWithItsTetrahedraAtTheNodeCount) {
   const ModelPackage p = read_model_package(tmp / "v" / "volumetric.msm");
   EXPECT_EQ(p.kind, "volumetric");
   EXPECT_EQ(p.volumetric_mesh.surface_nodes, 200);
-  const Index n = p.volumetric_mesh.X.rows();
+  const auto n = p.volumetric_mesh.X.rows();
   EXPECT_GT(n, 700 * 0.8) << "TetGen lands within 5 % after up to 5 tries; 20 % is the bound here";
   EXPECT_LT(n, 700 * 1.2);
   EXPECT_GT(p.volumetric_mesh.T.rows(), n);  // a solid: more tetrahedra than nodes

@@ -47,8 +47,9 @@ void expect_identical_runs(const Model& m, std::vector<PointLoad> loads, StepSet
   const double scale = 1.0 + m.x0.cwiseAbs().maxCoeff();
   EXPECT_LE((a.x - b.x).cwiseAbs().maxCoeff(), 1e-12 * scale);
   EXPECT_LE((a.v - b.v).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + b.v.cwiseAbs().maxCoeff()));
-  if (a.warnings.rollbacks == 0)  // after a failed substep f is scratch (the gather pass stops at the node)
+  if (a.warnings.rollbacks == 0) {  // after a failed substep f is scratch (the gather pass stops at the node)
     EXPECT_LE((a.f - b.f).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + b.f.cwiseAbs().maxCoeff()));
+  }
   EXPECT_NEAR(a.stiffening, b.stiffening, 1e-12 * b.stiffening);
   EXPECT_EQ(a.substeps, b.substeps);
   EXPECT_EQ(a.warnings.rollbacks, b.warnings.rollbacks);
@@ -115,8 +116,9 @@ TEST(GatherPass, RollbacksAndFailedFramesMatchTheScatterPass) {
     step(ms, b, nog, &loads);
   }
   EXPECT_EQ(a.x.allFinite(), b.x.allFinite());
-  if (a.x.allFinite())
+  if (a.x.allFinite()) {
     EXPECT_LE((a.x - b.x).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + b.x.cwiseAbs().maxCoeff()));
+  }
 }
 
 TEST(GatherPass, NotBuiltWhereItDoesNotApply) {
