@@ -87,7 +87,7 @@ TEST(CliBuild, ErrorsExitNonZeroWithOneLineAndWriteNothing) {
 
   const CliRun unknown = run_cli("build organ --out x", tmp);
   EXPECT_EQ(unknown.code, 1);
-  EXPECT_NE(unknown.err.find("unknown kind 'organ' (known: kidney, centerline, vessel)"), std::string::npos)
+  EXPECT_NE(unknown.err.find("unknown kind 'organ' (known: kidney, centerline, vessel"), std::string::npos)
       << unknown.err;
 }
 
