@@ -65,8 +65,8 @@ SceneFileAccess file_access() {
                       std::vector<std::string>& notes) {
     TreeSurface r = blended_tree_surface(tree, plain, spacing);
     notes.push_back(cat("union of ", r.path_tubes, " closed path tubes: ", r.mesh.num_vertices(), " nodes, ",
-                        r.closed ? "closed and manifold" : "NOT closed", ", ", r.components, " component(s), ",
-                        r.self_intersections, " self-intersecting triangle pairs"));
+                        r.closed ? "closed and manifold" : "NOT closed", ", ", r.components,
+                        " component(s), ", r.self_intersections, " self-intersecting triangle pairs"));
     for (const auto& n : r.notes) notes.push_back(n);
     for (const auto& w : r.warnings) notes.push_back("warning: " + w);
     return std::move(r.mesh);

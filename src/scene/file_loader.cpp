@@ -57,8 +57,8 @@ VolumetricMesh CachingSceneLoader::tetrahedralize(const SurfaceMesh& organ, Inde
   return access_.tetrahedralize(organ, nodes);
 }
 
-SurfaceMesh CachingSceneLoader::tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
-                                             std::vector<std::string>& notes) {
+SurfaceMesh CachingSceneLoader::tree_surface(const CenterlineTree& tree, const SmrmTree& plain,
+                                             double spacing, std::vector<std::string>& notes) {
   if (!access_.tree_surface) return SceneLoader::tree_surface(tree, plain, spacing, notes);  // refuses
   return access_.tree_surface(tree, plain, spacing, notes);
 }

@@ -357,8 +357,7 @@ TEST(CliUsage, UnknownOptionsMissingValuesAndBadNumbersExitTwoWithOneLineNamingT
       {"nosuch", "medspring: error: unknown command 'nosuch'"},
       {"--bogus", "medspring: error: unknown option --bogus"},
       // the hand-written parser took options before build's kind: the error says what to write
-      {"build --mesh x.obj kidney",
-       "the kind comes first: write medspring build kidney|centerline|vessel"},
+      {"build --mesh x.obj kidney", "the kind comes first: write medspring build kidney|centerline|vessel"},
   };
   for (const auto& c : cases) {
     const Result r = medspring(c.args);

@@ -44,9 +44,9 @@ struct VolumetricSettings {
   double min_mass_fraction = 0.5;  // mass scaling: every node weighs at least this fraction of the mean node
                                    // mass (small elements would otherwise set a tiny stable step; statics
                                    // unaffected)
-  double mass_scaling_dt = 0.0;    // ms: selective mass scaling for this sub-step (0 = off, the default). A node whose
-                                   // block-Gershgorin row at rest would need a smaller step gets the mass
-                                   // for it (slivers; statics unaffected, the added mass is in stats)
+  double mass_scaling_dt = 0.0;    // ms: selective mass scaling for this sub-step (0 = off, the default). A
+                                 // node whose block-Gershgorin row at rest would need a smaller step gets the
+                                 // mass for it (slivers; statics unaffected, the added mass is in stats)
   std::optional<double> return_k;  // N/mm per surface node; default: 0 with supports, else 0.02
   double spring_scale = 1.0;       // calibration multipliers of the spring and volume families
   double volume_scale = 1.0;

@@ -75,7 +75,8 @@ void for_each_field(S& s, V&& v) {
         .nonnegative()
         .at_most(3.141592653589793, true),
     s.grasp_angle);
-  v(ParamSpec{"substep", "", "re-evaluate the normal penalty forces at every substep of the model"}, s.substep);
+  v(ParamSpec{"substep", "", "re-evaluate the normal penalty forces at every substep of the model"},
+    s.substep);
   v(ParamSpec{"min_mass", "g", "the smallest node mass a surface force acts on"}.positive().set_by_program(),
     s.min_mass);
   v(ParamSpec{"dt", "ms", "the update the forces are held over"}.positive().set_by_program(), s.dt);
