@@ -21,15 +21,7 @@ double spring_forces(const Model& m, const double* x, double* f) {
   const Index ns = m.springs.size();
   double stiff = 1.0;
   for (Index s = 0; s < ns; ++s) {
-    double fx, fy, fz;
-    if (!detail::spring_force<Soft, Stiff>(S, s, x, stiff, fx, fy, fz)) continue;
-    const Index a = 3 * S.I[s], b = 3 * S.J[s];
-    f[a] += fx;
-    f[a + 1] += fy;
-    f[a + 2] += fz;
-    f[b] -= fx;
-    f[b + 1] -= fy;
-    f[b + 2] -= fz;
+    detail::add_spring_force<Soft, Stiff>(S, s, x, stiff, f);
   }
   return stiff;
 }
@@ -50,15 +42,7 @@ double fused_forces(const Model& m, const double* x, double* f) {
   for (; t < T.owned_end[2]; ++t) detail::tet_record<2, Soft, Stiff>(R[t], P, x, f, ss, sv);
   const detail::SpringArrays S(m);
   for (const Index s : T.loose_springs) {
-    double fx, fy, fz;
-    if (!detail::spring_force<Soft, Stiff>(S, s, x, ss, fx, fy, fz)) continue;
-    const Index a = 3 * S.I[s], b = 3 * S.J[s];
-    f[a] += fx;
-    f[a + 1] += fy;
-    f[a + 2] += fz;
-    f[b] -= fx;
-    f[b + 1] -= fy;
-    f[b + 2] -= fz;
+    detail::add_spring_force<Soft, Stiff>(S, s, x, ss, f);
   }
   return std::max(ss, sv);
 }

@@ -157,15 +157,7 @@ void threaded_forces(const Model& m, State& st, ThreadedStep& P, int t) {
   const detail::SpringArrays S(m);
   double stiff = 1.0;
   for (const Index s : P.inner[ut]) {
-    double fx, fy, fz;
-    if (!detail::spring_force<Soft, Stiff>(S, s, X, stiff, fx, fy, fz)) continue;
-    const Index a = 3 * S.I[s], b = 3 * S.J[s];
-    f[a] += fx;
-    f[a + 1] += fy;
-    f[a + 2] += fz;
-    f[b] -= fx;
-    f[b + 1] -= fy;
-    f[b + 2] -= fz;
+    detail::add_spring_force<Soft, Stiff>(S, s, X, stiff, f);
   }
   for (const Index c : P.cross[ut]) {
     const Index s = c >= 0 ? c : -c - 1;

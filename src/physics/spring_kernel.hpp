@@ -39,6 +39,21 @@ inline bool spring_force(const SpringArrays& S, Index s, const double* x, double
                                        S.KP[s], S.IK[s], stiff, fx, fy, fz);
 }
 
+/// Adds spring s's force to both of its nodes in f (+ on I[s], - on J[s]); the serial scatter of every
+/// spring pass (forces.cpp, the threaded step's inner springs).
+template <bool Soft, bool Stiff>
+inline void add_spring_force(const SpringArrays& S, Index s, const double* x, double& stiff, double* f) {
+  double fx, fy, fz;
+  if (!spring_force<Soft, Stiff>(S, s, x, stiff, fx, fy, fz)) return;
+  const Index a = 3 * S.I[s], b = 3 * S.J[s];
+  f[a] += fx;
+  f[a + 1] += fy;
+  f[a + 2] += fz;
+  f[b] -= fx;
+  f[b + 1] -= fy;
+  f[b + 2] -= fz;
+}
+
 /// f = f_ext - k_r (x - x0) on nodes [a0, a1).
 inline void return_forces(const Model& m, const double* X, const double* FE, double* Fo, Index a0, Index a1) {
   const double* X0 = m.x0.data();
