@@ -1,6 +1,8 @@
 // ContactModel's contact history (checkpoints, docs/tools.md): what the contact model carries from one
 // update to the next -- previous surface, tool poses, grasps, persistent-contact flags, multipliers -- as a
 // versioned binary record. Split from contact.cpp (collision and response).
+#include <cmath>
+#include <numbers>
 #include <string>
 #include <string_view>
 
