@@ -1,6 +1,7 @@
-// `medspring view`: serves the browser page (web/index.html, app.js, the wasm engine dist/medspring.mjs,
-// three.js from web/node_modules/three) and a folder of model packages on 127.0.0.1 with a tiny
-// single-threaded HTTP/1.1 server (POSIX sockets, poll; one response per connection). docs/web.md.
+// `medspring view`: serves the browser page (web/index.html, app.js and its modules in app/, the wasm
+// engine dist/medspring.mjs, three.js from web/node_modules/three) and a folder of model packages on
+// 127.0.0.1 with a tiny single-threaded HTTP/1.1 server (POSIX sockets, poll; one response per
+// connection). docs/web.md.
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
