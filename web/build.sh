@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Compiles the Eigen-only engine layers (core geometry physics local medial models tools sim) and the embind
-# bindings (web/src/bindings.cpp) to WebAssembly with Debian's emscripten: web/dist/medspring.mjs
-# (ES module, wasm embedded: -sSINGLE_FILE, so node and the browser load it without fetch).
+# API (web/src/*.cpp: the Engine in engine.cpp / engine_tools.cpp, bound in bindings.cpp) to WebAssembly
+# with Debian's emscripten: web/dist/medspring.mjs (ES module, wasm embedded: -sSINGLE_FILE, so node and
+# the browser load it without fetch).
 # Usage: bash web/build.sh [BUILD_DIR]   (objects in BUILD_DIR, default build-wasm; incremental)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -25,16 +26,25 @@ for layer in core geometry physics local medial models tools sim; do
   done
 done
 while (( jobs > 0 )); do wait -n; jobs=$((jobs - 1)); done  # fails the script if a compile failed
-bobj="$build/obj/bindings.o"
-if [[ ! -f "$bobj" || "$here/src/bindings.cpp" -nt "$bobj" || -n "$(find "$root/include" -newer "$bobj" -name '*.hpp' -print -quit)" ]]; then
-  em++ "${flags[@]}" -c "$here/src/bindings.cpp" -o "$bobj"
-fi
+# The JavaScript API: web/src/*.cpp (bindings.cpp binds the Engine of engine.hpp / engine*.cpp).
+wobjs=()
+for src in "$here"/src/*.cpp; do
+  obj="$build/obj/web-$(basename "${src%.cpp}").o"
+  wobjs+=("$obj")
+  if [[ ! -f "$obj" || "$src" -nt "$obj" ||
+        -n "$(find "$root/include" "$here/src" -newer "$obj" -name '*.hpp' -print -quit)" ]]; then
+    em++ "${flags[@]}" -c "$src" -o "$obj" &
+    jobs=$((jobs + 1))
+    if (( jobs >= ${WASM_JOBS:-2} )); then wait -n; jobs=$((jobs - 1)); fi
+  fi
+done
+while (( jobs > 0 )); do wait -n; jobs=$((jobs - 1)); done
 out="$here/dist/medspring.mjs"
 relink=0
 [[ -f "$out" ]] || relink=1
-for o in "${objs[@]}" "$bobj"; do [[ "$o" -nt "$out" ]] && relink=1; done
+for o in "${objs[@]}" "${wobjs[@]}"; do [[ "$o" -nt "$out" ]] && relink=1; done
 if (( relink )); then
-  em++ -O3 "${objs[@]}" "$bobj" -lembind -o "$out" \
+  em++ -O3 "${objs[@]}" "${wobjs[@]}" -lembind -o "$out" \
     -sMODULARIZE=1 -sEXPORT_ES6=1 -sEXPORT_NAME=createMedSpring -sALLOW_MEMORY_GROWTH=1 -sSINGLE_FILE=1 \
     -sENVIRONMENT=web,node -fexceptions
   echo "web/build.sh: wrote $out"

@@ -1,5 +1,5 @@
 // Native reference for the WebAssembly tests (web/test/wasm_matches_native.mjs): runs the haptic loop of
-// a bundled model or a model package exactly as the browser engine (web/src/bindings.cpp) configures it,
+// a bundled model or a model package exactly as the browser engine (web/src/engine.cpp) configures it,
 // and writes the force trace in the format of `medspring haptics` (force_trace.csv).
 //
 //   medspring_web_reference MODEL|PACKAGE.msm --node N (--trajectory FILE | --press MM --out-trajectory FILE)
@@ -64,7 +64,7 @@ int run(int argc, char** argv) {
   }
   if (node < 0 || out_trace.empty()) throw InvalidInput("--node and --out-trace are required");
 
-  // The body, as the browser Engine builds it (bindings.cpp: constructor, then setParams).
+  // The body, as the browser Engine builds it (web/src/engine.cpp: constructor, then setParams).
   ModelPackage package;
   BodyPtr body;
   if (cli::is_builtin_model(model)) {
