@@ -46,6 +46,9 @@ TEST(GpuSceneBatch, KidneyPressesOnTheGpuGiveTheCpuSceneRunsMetrics) {
   const std::vector<double> times{100.0, 300.0};
   const std::vector<BatchRunResult> gpu = run_scene_batch(runs, gpu::scene_batch_stepper(), times);
   const std::vector<BatchRunResult> cpu = run_scene_batch(runs, make_cpu_batch_stepper, times);
+  ::testing::Test::RecordProperty("gpu_batch_seconds", std::to_string(gpu[0].run_seconds));
+  ::testing::Test::RecordProperty("cpu_batch_seconds", std::to_string(cpu[0].run_seconds));
+  ::testing::Test::RecordProperty("gpu_median_frame_us", std::to_string(gpu[0].summary.median_update_us));
   for (std::size_t i = 0; i < runs.size(); ++i) {
     SCOPED_TRACE(i);
     const RunSummary& g = gpu[i].summary;
