@@ -243,9 +243,13 @@ SplitTableArrays<R> make_split_table(const Model& m, int threads, int chunk) {
 template <class R>
 GridSplitArrays<R> make_grid_split_table(const Model& m, int chunk) {
   require_network(m);
-  if (chunk <= 0) chunk = kHeavyDegree;
   const Index n = m.num_nodes();
   const NodeSprings A = node_springs(m);
+  if (chunk <= 0 && n > 0) {  // as HeavyLast: heavier than kHeavyDegree and twice the median degree
+    std::vector<int> sorted = A.degree;
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    chunk = std::max(kHeavyDegree, 2 * sorted[static_cast<std::size_t>(n / 2)]);
+  }
   std::vector<Row> rows;
   std::vector<int> heavy;
   for (Index a = 0; a < n; ++a) {  // light nodes in node order (locality kept)

@@ -70,7 +70,7 @@ TEST(GpuSceneBatch, KidneyPressesOnTheGpuGiveTheCpuSceneRunsMetrics) {
 
 TEST(GpuSceneBatch, RefusesAModelTheGpuPathLacksBeforeAnyDeviceWork) {
   const BuiltScene v = build_scene(parse_scene(R"({"model": {"kind": "smrm", "source": {"phantom": "vessel"}},
-    "loads": [{"ring": 20, "spoke": 7, "magnitude": 0.1}], "duration": 5})",
+    "loads": [{"ring": 20, "spoke": 7, "direction": "towards_atom", "magnitude": 0.1}], "duration": 5})",
                                                ".", "v.json"),
                                    nullptr);
   try {

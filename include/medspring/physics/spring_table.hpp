@@ -75,7 +75,8 @@ template <class R>
 SplitTableArrays<R> make_split_table(const Model& model, int threads, int chunk = 0);
 
 /// The grid kernel's table with heavy nodes split (hd::GridSplit, kernels_split.hpp): nodes of at most
-/// `chunk` springs (default kHeavyDegree) are whole rows in node order; then, from a warp boundary, each
+/// `chunk` springs (default as HeavyLast: max(kHeavyDegree, twice the median degree)) are whole rows in
+/// node order; then, from a warp boundary, each
 /// heavier node by decreasing degree as consecutive rows of at most max(chunk, ceil(degree / 32)) springs
 /// in spring order, all in one warp (padding rows, part -2, where a node's chunks would straddle two), its
 /// first row the lead that sums them.
