@@ -1,9 +1,9 @@
 // The substep kernels. Grid kernel: one thread per table row gathers its node's return spring, load and
 // springs (hd::node_substep, the same code the CPU-side test runs) and advances the node, one launch per
 // substep; heavy nodes split into chunks gathered by the lanes of one warp and summed by its lead
-// (hd::grid_split_gather / grid_split_finish). Block kernel: one block per model runs a frame's substeps with the model's state in shared
-// memory (hd::split_phase1 / split_phase2: hd::node_substep per node, heavy nodes split). No atomics on
-// forces; the stiffening max and the guard are reduced per block.
+// (hd::grid_split_gather / grid_split_finish). Block kernel: one block per model runs a frame's substeps
+// with the model's state in shared memory (hd::split_phase1 / split_phase2: hd::node_substep per node,
+// heavy nodes split). No atomics on forces; the stiffening max and the guard are reduced per block.
 #include <climits>
 
 #include "launch.hpp"
