@@ -55,7 +55,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
   if (A.scalars->fail_first < A.substep) return;  // an earlier substep failed: buffers left as they were
   const int b = blockIdx.y;
   const int r = blockIdx.x * blockDim.x + threadIdx.x;  // table row
-  const bool split = A.split.rows > 0;                   // the same for every thread of the launch
+  const bool split = A.split.rows > 0;                  // the same for every thread of the launch
   const int rows = split ? A.split.rows : A.nodes.nodes;
   R stiff = R(1);
   int code = hd::kNodeOk;
@@ -73,8 +73,8 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
                                                 A.xo + off, A.vo + off, parts, stiff);
     __syncwarp();
     if (r < rows) {
-      const int c = hd::grid_split_finish(N, A.split, r, A.h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
-                                          A.vo + off, parts);
+      const int c = hd::grid_split_finish(N, A.split, r, A.h, A.vmax2, loads, A.x + off, A.v + off,
+                                          A.xo + off, A.vo + off, parts);
       code = c > code ? c : code;
     }
   } else if (r < rows) {
