@@ -156,3 +156,17 @@ def test_study_on_the_gpu_matches_the_cpu_study(tmp_path):
     for k in ["contact_peak_mm", "contact_hold_mm", "max_disp_peak_mm", "atom_hold_mm", "final_max_disp_mm"]:
         np.testing.assert_allclose(rb[k], ra[k], rtol=1e-9, atol=1e-12, err_msg=k)
     np.testing.assert_allclose(rb["displacement"], ra["displacement"], rtol=0, atol=1e-9)
+
+
+@needs_scene
+def test_run_batch_on_cuda_without_a_gpu_raises_the_cause():
+    """SceneRunner.run_batch(device="cuda") where no GPU answers: the engine's error (gpu.GpuError, a
+    medspring.Error) or, in a build without the backend, an Error naming it; never a CPU run."""
+    if not gpu_reason():
+        pytest.skip("a GPU is present")
+    text = json.dumps({"model": {"kind": "hybrid", "source": {"phantom": "kidney"}},
+                       "loads": [{"node": 3, "magnitude": 0.5, "direction": "inward_normal"}], "duration": 5})
+    with pytest.raises(ms.Error) as e:
+        ms._medspring.SceneRunner().run_batch([text], "/", [], False, "cuda")
+    msg = str(e.value)
+    assert "no CUDA backend" in msg or "CPU engine" in msg, msg
