@@ -46,14 +46,21 @@ TEST(GpuSceneBatch, KidneyPressesOnTheGpuGiveTheCpuSceneRunsMetrics) {
   const std::vector<double> times{100.0, 300.0};
   const std::vector<BatchRunResult> gpu = run_scene_batch(runs, gpu::scene_batch_stepper(), times);
   const std::vector<BatchRunResult> cpu = run_scene_batch(runs, make_cpu_batch_stepper, times);
+  // The per-model synchronous copies give the same records as the whole-batch asynchronous readback.
+  const std::vector<BatchRunResult> sync =
+      run_scene_batch(runs, gpu::scene_batch_stepper({}, gpu::Readback::Sync), times);
   ::testing::Test::RecordProperty("gpu_batch_seconds", std::to_string(gpu[0].run_seconds));
   ::testing::Test::RecordProperty("cpu_batch_seconds", std::to_string(cpu[0].run_seconds));
+  ::testing::Test::RecordProperty("gpu_sync_readback_batch_seconds", std::to_string(sync[0].run_seconds));
   ::testing::Test::RecordProperty("gpu_median_frame_us", std::to_string(gpu[0].summary.median_update_us));
   for (std::size_t i = 0; i < runs.size(); ++i) {
     SCOPED_TRACE(i);
     const RunSummary& g = gpu[i].summary;
     const RunSummary ref = run_scene(built[i]).summary;  // the CPU scene run (= cpu[i], bit for bit)
     EXPECT_EQ(cpu[i].summary.contact_hold_mm, ref.contact_hold_mm);
+    EXPECT_EQ(sync[i].summary.contact_peak_mm, g.contact_peak_mm);
+    EXPECT_EQ(sync[i].summary.max_disp_peak_mm, g.max_disp_peak_mm);
+    EXPECT_EQ(sync[i].fields.back(), gpu[i].fields.back());
     EXPECT_EQ(g.substeps, ref.substeps);
     EXPECT_EQ(g.warnings, ref.warnings);
     const std::vector<std::pair<double, double>> metrics{{g.contact_peak_mm, ref.contact_peak_mm},
