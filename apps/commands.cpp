@@ -403,11 +403,12 @@ const std::vector<CommandSpec>& commands() {
                     .value = "RUNS",
                     .help = "also time RUNS runs on 1..N local workers for the report"},
                    {.name = "device",
-                    .value = "cpu|cuda|cpu-batch",
+                    .value = "cpu|cuda|cpu-batch|auto",
                     .def = "cpu",
                     .help =
                         "where the runs step: cuda = each task's runs one batch on the GPU engine "
-                        "(docs/gpu.md; an error without a GPU), cpu-batch = the same batch path on the CPU"}},
+                        "(docs/gpu.md; an error without a GPU), cpu-batch = the same batch path on the CPU, "
+                        "auto = cuda where a GPU is usable, else cpu (said on stderr)"}},
        .run = cmd_study},
       {.name = "run",
        .summary = "run a scene file (docs/scenes.md): ParaView series, traces, summary",

@@ -170,3 +170,19 @@ def test_run_batch_on_cuda_without_a_gpu_raises_the_cause():
         ms._medspring.SceneRunner().run_batch([text], "/", [], False, "cuda")
     msg = str(e.value)
     assert "no CUDA backend" in msg or "CPU engine" in msg, msg
+
+
+@needs_scene
+def test_device_auto_says_which_engine_and_why(tmp_path, capsys):
+    pytest.importorskip("zarr")
+    spec = tmp_path / "s.json"
+    spec.write_text(json.dumps(small_study(duration=40.0)))
+    rc = study_main.main([str(spec), "--out", str(tmp_path / "o"), "--workers", "0", "--quiet", "--no-report",
+                          "--device", "auto"])
+    assert rc == 0
+    err = capsys.readouterr().err
+    why = gpu_reason()
+    if why:
+        assert "--device auto: the CPU engine (" in err and why.splitlines()[0] in err
+    else:
+        assert "--device auto: the GPU engine" in err

@@ -1,5 +1,5 @@
 """`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]
-[--device cpu|cuda|cpu-batch]`:
+[--device cpu|cuda|cpu-batch|auto]`:
 runs a parameter study (docs/studies.md). Errors are one line on stderr with exit code 2."""
 
 from __future__ import annotations
@@ -44,11 +44,17 @@ def main(argv=None) -> int:
     p.add_argument("--scaling", type=int, metavar="RUNS", default=0,
                    help="also time RUNS runs on 1..N local workers (N = --workers or every core) for the report")
     p.add_argument("--max-batches", type=int, default=None, help=argparse.SUPPRESS)
-    p.add_argument("--device", choices=["cpu", "cuda", "cpu-batch"], default="cpu",
+    p.add_argument("--device", choices=["cpu", "cuda", "cpu-batch", "auto"], default="cpu",
                    help="where the runs step: cpu (default: each run a scene run), cuda (each task's runs one "
-                   "batch on the GPU engine; in this process unless --workers/--scheduler) or cpu-batch (the "
-                   "same batch path on the CPU engine, the reference of cuda); docs/gpu.md")
+                   "batch on the GPU engine; in this process unless --workers/--scheduler), cpu-batch (the "
+                   "same batch path on the CPU engine, the reference of cuda) or auto (cuda where a GPU is "
+                   "usable, else cpu, saying which and why); docs/gpu.md")
     a = p.parse_args(argv)
+    if a.device == "auto":  # the only fallback, asked for: said in one line
+        why = _cuda_refusal()
+        a.device = "cpu" if why else "cuda"
+        print(f"medspring study: --device auto: {'the CPU engine (' + why + ')' if why else 'the GPU engine'}",
+              file=sys.stderr)
     if a.device == "cuda":
         # No silent fallback (docs/gpu.md): a build without the CUDA backend or a machine without a usable
         # device is refused in one line naming the reason and --device cpu.
