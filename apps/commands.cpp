@@ -142,7 +142,7 @@ const std::vector<CommandSpec>& commands() {
        .usage =
            "medspring haptics SCENE|MODEL --trajectory FILE [--node N] [--k-vc 0.1] [--b-vc 0.01]\n"
            "                        [--f-max 3] [--local] [--linear] [--duration MS] [--out DIR [--force]] "
-           "[--json]",
+           "[--json] [--device cpu|cuda]",
        .about =
            "Runs the 1 kHz haptic loop (ALGORITHMS.md §2.5, docs/haptics.md) along a recorded tool path: "
            "every 1 ms\n"
@@ -185,6 +185,11 @@ const std::vector<CommandSpec>& commands() {
              .def = "1",
              .help = "threads of the step (1..256; small models use one, docs/performance.md)"},
             {.name = "out", .value = "DIR", .help = "write force_trace.csv to DIR"},
+            {.name = "device",
+             .value = "D",
+             .def = "cpu",
+             .help = "cpu, or cuda: the loop on the GPU engine (gpu::HapticLoop, docs/gpu.md; surface and "
+                     "hybrid models, no --local/--tool; an error without a GPU)"},
             kForce,
             kJson},
        .run = cmd_haptics},
@@ -398,9 +403,12 @@ const std::vector<CommandSpec>& commands() {
                     .value = "RUNS",
                     .help = "also time RUNS runs on 1..N local workers for the report"},
                    {.name = "device",
-                    .value = "cpu|cuda",
+                    .value = "cpu|cuda|cpu-batch|auto",
                     .def = "cpu",
-                    .help = "where the runs step (cuda: refused, not yet)"}},
+                    .help =
+                        "where the runs step: cuda = each task's runs one batch on the GPU engine "
+                        "(docs/gpu.md; an error without a GPU), cpu-batch = the same batch path on the CPU, "
+                        "auto = cuda where a GPU is usable, else cpu (said on stderr)"}},
        .run = cmd_study},
       {.name = "run",
        .summary = "run a scene file (docs/scenes.md): ParaView series, traces, summary",

@@ -5,17 +5,27 @@
 #                                     (registers, stack, spills) into ${OUT:-build-gpu-check}/ptxas.txt and
 #                                     SASS into kernels.sass. Fails on a compile error, a stack frame or a
 #                                     spill. Run before each stop where no CI job compiles the kernels.
-#   scripts/gpu-check.sh stage DIR    (on a machine with Eigen and GoogleTest) copies the Eigen headers and
-#                                     the GoogleTest sources into DIR (e.g. shared/gpu-deps) for a GPU
-#                                     machine that has neither.
-#   scripts/gpu-check.sh full [DEPS]  (on the GPU machine) the engine-only build (no VTK/CGAL, no scene
-#                                     layer: nlohmann_json absent) with MEDSPRING_CUDA=ON, Eigen and
-#                                     GoogleTest from DEPS (default shared/gpu-deps) when the system has
-#                                     none; runs the physics tests, the `gpu`-labelled tests, and
-#                                     medspring_gpu_bench (= medspring bench --gpu) into $OUT/gpu-bench.
+#   scripts/gpu-check.sh stage DIR    (on a machine with Eigen, GoogleTest and nlohmann_json) copies their
+#                                     headers / sources into DIR (e.g. shared/gpu-deps) for a GPU machine
+#                                     that has none of them.
+#   scripts/gpu-check.sh full [DEPS]  (on the GPU machine) ONE prepared run of every GPU figure of issue 21
+#                                     in about 8 minutes on an H100 (GPU_CHECK_BUDGET_S, default 480, caps
+#                                     the stages): the engine-only build (no VTK/CGAL; the scene layer with
+#                                     nlohmann_json from DEPS when the system has none), MEDSPRING_CUDA=ON;
+#                                     then, each stage under its own timeout so that a slow one cannot eat
+#                                     the others: (1) medspring_gpu_bench (= medspring bench --gpu: the tube
+#                                     at 1.2k/120k/1M/16M nodes fp64 + fp32, the copy bandwidth, PyTorch and
+#                                     the CPU engine in the same run, 8,448 kidneys with both kernels) into
+#                                     $OUT/gpu-bench; (2) the GPU tests (GPU = CPU trajectories, the study's
+#                                     batch path, the haptic loop against the CPU loop with tick times) as
+#                                     GoogleTest XML in $OUT/xml; (3) the CPU-side kernel tests. Finally
+#                                     scripts/gpu_summary.py writes $OUT/summary.json and $OUT/summary.md
+#                                     (the issue's table, its targets met or not, every test and the figures
+#                                     it recorded) -- also when a stage failed or ran out of time.
 #   scripts/gpu-check.sh              compile, then full when nvidia-smi sees a GPU.
-# GPU_CHECK_USE_DEPS=1 takes Eigen/GoogleTest from DEPS even where the system has them;
-# GPU_CHECK_CONFIGURE_ONLY=1 stops `full` after configuring (both: to try the GPU machine's path here).
+# GPU_CHECK_USE_DEPS=1 takes Eigen/GoogleTest/nlohmann_json from DEPS even where the system has them;
+# GPU_CHECK_CONFIGURE_ONLY=1 stops `full` after configuring (both: to try the GPU machine's path here);
+# GPU_BENCH_ARGS replaces the bench's arguments (default --batch 8448).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${OUT:-$root/build-gpu-check}
@@ -48,15 +58,39 @@ stage() {
   mkdir -p "$dir"
   cp -r /usr/include/eigen3 "$dir/eigen3"
   cp -r /usr/src/googletest "$dir/googletest"
-  echo "gpu-check: staged Eigen and GoogleTest in $dir ($(du -sh "$dir" | cut -f1))"
+  mkdir -p "$dir/json-include" && cp -r /usr/include/nlohmann "$dir/json-include/nlohmann"
+  echo "gpu-check: staged Eigen, GoogleTest and nlohmann_json in $dir ($(du -sh "$dir" | cut -f1))"
+}
+
+# run_stage NAME LIMIT_S CMD...: runs CMD into $out/logs/NAME.log under min(LIMIT_S, what is left of the
+# budget) and appends "NAME<TAB>exit<TAB>seconds" to $out/stages.tsv; never stops the script.
+run_stage() {
+  local name=$1 limit=$2
+  shift 2
+  local left=$((budget - (SECONDS - start)))
+  ((left < limit)) && limit=$left
+  if ((limit < 10)); then
+    printf '%s\t%s\t0\n' "$name" "skipped: budget spent" >> "$out/stages.tsv"
+    echo "gpu-check: $name skipped (budget of ${budget} s spent)"
+    return 0
+  fi
+  local t0=$SECONDS rc=0
+  echo "gpu-check: $name (at most ${limit} s) ..."
+  timeout --kill-after=10 "$limit" "$@" > "$out/logs/$name.log" 2>&1 || rc=$?
+  printf '%s\t%s\t%s\n' "$name" "$rc" "$((SECONDS - t0))" >> "$out/stages.tsv"
+  echo "gpu-check: $name exit $rc in $((SECONDS - t0)) s ($out/logs/$name.log)"
+  tail -5 "$out/logs/$name.log" || true
 }
 
 full() {
   local deps=${1:-$root/shared/gpu-deps}
-  local build=$out/build prefix=$out/deps
+  local build=$out/build prefix=$out/deps skip="fem;paper"
+  budget=${GPU_CHECK_BUDGET_S:-480}
+  start=$SECONDS
+  mkdir -p "$out/logs" "$out/xml"
+  : > "$out/stages.tsv"
   local args=(-DMEDSPRING_WITH_VTK=OFF -DMEDSPRING_WITH_CGAL=OFF -DMEDSPRING_BUILD_PYTHON=OFF
-    -DMEDSPRING_BUILD_BENCH=OFF -DMEDSPRING_SKIP_LAYERS="scene;fem" -DMEDSPRING_CUDA=ON
-    -DCMAKE_CUDA_COMPILER="$nvcc")
+    -DMEDSPRING_BUILD_BENCH=OFF -DMEDSPRING_CUDA=ON -DCMAKE_CUDA_COMPILER="$nvcc")
   # GPU_CHECK_USE_DEPS=1 uses DEPS even where the system has Eigen/GoogleTest (to try this path anywhere).
   if [ -n "${GPU_CHECK_USE_DEPS:-}" ] || { [ ! -d /usr/include/eigen3 ] && [ ! -d /usr/local/include/eigen3 ]; }; then
     [ -d "$deps/eigen3" ] || { echo "gpu-check: no Eigen here and none in $deps (run 'stage' where Eigen is)" >&2; exit 2; }
@@ -73,6 +107,27 @@ EOF
     printf 'set(PACKAGE_VERSION 3.4.0)\nset(PACKAGE_VERSION_COMPATIBLE TRUE)\n' > "$prefix/eigen-cmake/Eigen3ConfigVersion.cmake"
     args+=(-DEigen3_DIR="$prefix/eigen-cmake")
   fi
+  # nlohmann_json (header-only) for the scene layer: the study's batch path on the GPU (gpu_scene_tests).
+  if [ -n "${GPU_CHECK_USE_DEPS:-}" ] || ! ls /usr/share/cmake/nlohmann_json/nlohmann_jsonConfig.cmake \
+      /usr/lib/cmake/nlohmann_json/nlohmann_jsonConfig.cmake \
+      /usr/local/share/cmake/nlohmann_json/nlohmann_jsonConfig.cmake >/dev/null 2>&1; then
+    if [ -d "$deps/json-include/nlohmann" ]; then
+      mkdir -p "$prefix/json-cmake"
+      cat > "$prefix/json-cmake/nlohmann_jsonConfig.cmake" <<EOF
+set(nlohmann_json_VERSION 3.11.2)
+if(NOT TARGET nlohmann_json::nlohmann_json)
+  add_library(nlohmann_json::nlohmann_json INTERFACE IMPORTED)
+  set_target_properties(nlohmann_json::nlohmann_json PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "$deps/json-include")
+endif()
+EOF
+      printf 'set(PACKAGE_VERSION 3.11.2)\nset(PACKAGE_VERSION_COMPATIBLE TRUE)\n' > "$prefix/json-cmake/nlohmann_jsonConfigVersion.cmake"
+      args+=(-Dnlohmann_json_DIR="$prefix/json-cmake")
+    else
+      echo "gpu-check: no nlohmann_json here or in $deps: the scene layer (the study's batch path) is left out"
+      skip="scene;fem;paper"
+    fi
+  fi
+  args+=(-DMEDSPRING_SKIP_LAYERS="$skip")
   if [ -n "${GPU_CHECK_USE_DEPS:-}" ] || ! ls /usr/lib/*/cmake/GTest/GTestConfig.cmake /usr/local/lib/cmake/GTest/GTestConfig.cmake >/dev/null 2>&1; then
     [ -d "$deps/googletest" ] || { echo "gpu-check: no GoogleTest here and none in $deps" >&2; exit 2; }
     cmake -S "$deps/googletest" -B "$out/gtest-build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
@@ -83,10 +138,27 @@ EOF
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${args[@]}" > "$out/configure.log"
   grep -E "MedSpring: CUDA|Eigen|GTest" "$out/configure.log" || true
   [ -z "${GPU_CHECK_CONFIGURE_ONLY:-}" ] || return 0
-  cmake --build "$build" --target gpu_tests physics_tests hybrid_gather_tests medspring_gpu_bench
-  ctest --test-dir "$build" -R 'HdKernels|SpringTable|HybridGather' --output-on-failure
-  ctest --test-dir "$build" -L gpu --output-on-failure --timeout 1800
-  "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" ${GPU_BENCH_ARGS:-}
+  nvidia-smi --query-gpu=name,memory.total,driver_version,clocks.max.sm --format=csv > "$out/nvidia-smi.csv" 2>&1 || true
+  local targets=(gpu_tests physics_tests hybrid_gather_tests medspring_gpu_bench)
+  grep -q "gpu_scene_tests" "$build/build.ninja" 2>/dev/null && targets+=(gpu_scene_tests)
+  run_stage build 300 cmake --build "$build" --target "${targets[@]}"
+  # (1) the issue's table: tube sizes, precisions, bandwidth, PyTorch and CPU, the kidney batch.
+  # shellcheck disable=SC2086
+  run_stage bench 200 "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" ${GPU_BENCH_ARGS:---batch 8448}
+  # (2) GPU against CPU, the study's batch path, the haptic loops (figures recorded in the XML).
+  run_stage gpu_tests 180 "$build/tests/gpu/gpu_tests" --gtest_output="xml:$out/xml/gpu_tests.xml"
+  if [ -x "$build/tests/gpu/gpu_scene_tests" ]; then
+    run_stage gpu_scene_tests 90 "$build/tests/gpu/gpu_scene_tests" --gtest_output="xml:$out/xml/gpu_scene_tests.xml"
+  fi
+  # (3) the CPU-side twins of the kernels (block kernel, its split rows, the grid kernel's split rows).
+  run_stage cpu_kernel_tests 60 "$build/tests/physics/physics_tests" --gtest_filter='HdKernels*:SpringTable*' \
+    --gtest_output="xml:$out/xml/physics_tests.xml"
+  run_stage hybrid_gather_tests 60 "$build/tests/models/hybrid_gather_tests" \
+    --gtest_output="xml:$out/xml/hybrid_gather_tests.xml"
+  python3 "$root/scripts/gpu_summary.py" "$out" > "$out/logs/summary.log" 2>&1 ||
+    echo "gpu-check: summary failed (see $out/logs/summary.log)"
+  head -40 "$out/summary.md" 2>/dev/null || true
+  echo "gpu-check: full done in $((SECONDS - start)) s; $out/summary.md, $out/summary.json"
 }
 
 case "${1:-auto}" in

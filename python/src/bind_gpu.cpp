@@ -7,6 +7,9 @@
 #include "bind_common.hpp"
 #include "medspring/gpu/engine.hpp"
 #include "medspring/physics/integrators.hpp"
+#ifdef MEDSPRING_PYTHON_WITH_SCENE
+#include "medspring/gpu/scene_batch.hpp"
+#endif
 
 namespace medspring::python {
 namespace {
@@ -125,7 +128,14 @@ py::array_t<double> batch_arg(py::handle obj, const char* name, int B, Index n) 
 
 }  // namespace
 
+#ifdef MEDSPRING_PYTHON_WITH_SCENE
+BatchStepperFactory& gpu_batch_factory();  // bind_scene.cpp
+#endif
+
 void bind_gpu(py::module_& parent) {
+#ifdef MEDSPRING_PYTHON_WITH_SCENE
+  gpu_batch_factory() = gpu::scene_batch_stepper();  // SceneRunner.run_batch(device="cuda")
+#endif
   py::module_ m = parent.def_submodule("_gpu", "The CUDA backend (docs/gpu.md); use medspring.gpu.");
   py::object error = parent.attr("Error");
   py::object runtime_error = py::module_::import("builtins").attr("RuntimeError");

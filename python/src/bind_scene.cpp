@@ -18,6 +18,7 @@
 
 #include "bind_common.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/scene/batch.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/file_loader.hpp"
 #include "medspring/scene/runner.hpp"
@@ -181,6 +182,49 @@ class SceneRunner {
     return out;
   }
 
+  // Runs in batches (scene/batch.hpp): every run built here (a run whose build fails gets its error in
+  // `errors` and no output), then stepped in groups by `make`. Outputs in the runs' order.
+  std::vector<RunOutput> run_batch(const std::vector<Scene>& parsed, const std::vector<double>& times,
+                                   const BatchStepperFactory& make, std::vector<std::string>& errors) {
+    const std::size_t R = parsed.size();
+    std::vector<RunOutput> out(R);
+    errors.assign(R, "");
+    std::vector<BuiltScene> built;
+    built.reserve(R);
+    std::vector<std::size_t> which;  // run of built[k]
+    for (std::size_t i = 0; i < R; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      try {
+        built.push_back(build(parsed[i], &out[i].model_built));
+        which.push_back(i);
+      } catch (const InvalidInput& e) {  // as the study worker names a failed run: "Type: message"
+        errors[i] = cat("InvalidInput: ", e.what());
+      } catch (const IoError& e) {
+        errors[i] = cat("IoError: ", e.what());
+      } catch (const Error& e) {
+        errors[i] = cat("Error: ", e.what());
+      }
+      out[i].build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    std::vector<const BuiltScene*> ptrs;
+    for (const BuiltScene& b : built) ptrs.push_back(&b);
+    std::vector<BatchRunResult> r = run_scene_batch(ptrs, make, times);
+    for (std::size_t k = 0; k < built.size(); ++k) {
+      RunOutput& o = out[which[k]];
+      const BuiltScene& b = built[k];
+      o.num_surface_nodes = b.body->num_surface_nodes();
+      if (!b.loads.empty()) {
+        o.load_node = b.loads.front().node;
+        o.load_force = b.loads.front().force;
+      }
+      o.summary = r[k].summary;
+      o.field_times = std::move(r[k].field_times);
+      o.fields = std::move(r[k].fields);
+      o.run_seconds = r[k].run_seconds / std::max(1, r[k].group_size);  // the run's share of its batch
+    }
+    return out;
+  }
+
   std::size_t cached_models() const { return models_.size(); }
 
  private:
@@ -241,6 +285,11 @@ py::dict output_dict(RunOutput& o, bool fields) {
 }
 
 }  // namespace
+
+BatchStepperFactory& gpu_batch_factory() {  // set by bind_gpu (bind_gpu.cpp) in a build with the backend
+  static BatchStepperFactory f;
+  return f;
+}
 
 void bind_scene(py::module_& m) {
   m.def(
@@ -316,6 +365,57 @@ void bind_scene(py::module_& m) {
           py::arg("text"), py::arg("base_dir") = ".", py::arg("origin") = "scene",
           "Builds (or finds in the cache) the model of a scene: dict of rest_surface (S, 3), faces, rest "
           "vertex normals, atoms_rest, num_surface_nodes, notes, build_seconds.")
+      .def(
+          "run_batch",
+          [](SceneRunner& self, const std::vector<std::string>& texts, const std::string& base_dir,
+             const std::vector<double>& field_times, bool fields, const std::string& device,
+             const std::vector<std::string>& origins) {
+            if (!origins.empty() && origins.size() != texts.size())
+              throw InvalidInput(
+                  cat("run_batch: origins: ", origins.size(), " names for ", texts.size(), " runs"));
+            BatchStepperFactory make;
+            if (device == "cpu")
+              make = make_cpu_batch_stepper;
+            else if (device == "cuda")
+              make = gpu_batch_factory();
+            else
+              throw InvalidInput(cat("run_batch: device: expected 'cpu' or 'cuda'; got '", device, "'"));
+            if (!make)
+              throw Error(
+                  "run_batch: device 'cuda': this build has no CUDA backend (MEDSPRING_CUDA, "
+                  "docs/gpu.md); use the CPU engine");
+            std::vector<RunOutput> o;
+            std::vector<std::string> errors;
+            {
+              py::gil_scoped_release release;
+              std::vector<Scene> parsed;
+              for (std::size_t i = 0; i < texts.size(); ++i) {
+                try {
+                  parsed.push_back(
+                      self.parse(texts[i], base_dir, origins.empty() ? cat("run ", i) : origins[i]));
+                } catch (const Error& e) {
+                  throw InvalidInput(e.what());
+                }
+              }
+              o = self.run_batch(parsed, field_times, make, errors);
+            }
+            py::list out;
+            for (std::size_t i = 0; i < o.size(); ++i)
+              out.append(errors[i].empty() ? py::object(output_dict(o[i], fields))
+                                           : py::object(py::str(errors[i])));
+            return out;
+          },
+          py::arg("texts"), py::arg("base_dir") = ".", py::arg("field_times") = std::vector<double>{},
+          py::arg("fields") = true, py::arg("device") = "cpu",
+          py::arg("origins") = std::vector<std::string>{},
+          "Runs scenes (JSON texts) in batches (docs/gpu.md, 'Study runs on the GPU'): runs whose models "
+          "share "
+          "a topology, step settings and duration are stepped together by a batch engine — device='cuda': "
+          "the CUDA backend's gpu.Engine; device='cpu': the CPU reference (step() per model). Returns a list "
+          "in the runs' order: for each run the dict of run(), or the error text of a run whose build failed "
+          "('InvalidInput: ...'); origins: a name per run for its messages. "
+          "median_update_us is the batch's frame time; run_seconds the run's share of its batch. Raises "
+          "InvalidInput for a scene with local deformation or tools, gpu.GpuError for a GPU failure.")
       .def_property_readonly("cached_models", &SceneRunner::cached_models,
                              "How many models this runner holds.");
 }

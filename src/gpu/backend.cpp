@@ -43,7 +43,8 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   const auto uB = static_cast<std::size_t>(B);
   // The kernel, and the table for it (load balance, docs/gpu.md): heavy rows split into chunks and all
   // rows dealt by size over the block's threads for one block per model (make_split_table); heavy rows
-  // in warps of their own for the grid kernel (RowOrder::HeavyLast).
+  // split over the lanes of one warp for the grid kernel (make_grid_split_table; without heavy rows
+  // RowOrder::HeavyLast).
   kernel = kernel_for(o, B, n, dev);
   per_block = kernel == Options::Kernel::PerBlock;
   block_threads = std::min(kBlockThreads, std::max(32, (n + 31) / 32 * 32));
@@ -73,12 +74,33 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     part_begin.allocate(S0.part_begin.size(), "allocating the spring table");
     part_begin.upload(S0.part_begin.data(), S0.part_begin.size(), 0, "uploading the spring table");
   }
+  // The grid kernel: heavy rows split over the lanes of one warp where the model has nodes of more than
+  // kHeavyDegree springs (make_grid_split_table); otherwise one row per node, HeavyLast.
+  GridSplitArrays<R> G0;
+  if (!per_block) {
+    G0 = make_grid_split_table<R>(m0);
+    if (!G0.heavy_node.empty()) {
+      grid_rows = G0.rows();
+      parts = G0.parts();
+      part.allocate(G0.part.size(), "allocating the spring table");
+      part.upload(G0.part.data(), G0.part.size(), 0, "uploading the spring table");
+      lead.allocate(G0.lead.size(), "allocating the spring table");
+      lead.upload(G0.lead.data(), G0.lead.size(), 0, "uploading the spring table");
+      heavy_node.allocate(G0.heavy_node.size(), "allocating the spring table");
+      heavy_node.upload(G0.heavy_node.data(), G0.heavy_node.size(), 0, "uploading the spring table");
+      part_begin.allocate(G0.part_begin.size(), "allocating the spring table");
+      part_begin.upload(G0.part_begin.data(), G0.part_begin.size(), 0, "uploading the spring table");
+      grid_parts.allocate(3 * static_cast<std::size_t>(parts) * uB, "allocating the split rows' sums");
+    }
+  }
+  const bool grid_split = grid_rows > 0;
   auto table_of = [&](const Model& m) {
-    return per_block ? make_split_table<R>(m, block_threads).table
-                     : make_spring_table<R>(m, RowOrder::HeavyLast);
+    if (per_block) return make_split_table<R>(m, block_threads).table;
+    return grid_split ? make_grid_split_table<R>(m).table : make_spring_table<R>(m, RowOrder::HeavyLast);
   };
   // Topology from model 0, parameters from every model.
-  const SpringTableArrays<R> T0 = per_block ? std::move(S0.table) : table_of(m0);
+  const SpringTableArrays<R> T0 =
+      per_block ? std::move(S0.table) : (grid_split ? std::move(G0.table) : table_of(m0));
   entries = T0.entries();
   if (!T0.row_node.empty()) {
     row_node.allocate(T0.row_node.size(), "allocating the spring table");
@@ -335,10 +357,10 @@ template <class R>
 std::size_t Backend<R>::device_bytes() const {
   std::size_t total = 0;
   for (const DeviceArray<R>* a :
-       {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &xb[0], &xb[1], &vb[0], &vb[1]})
+       {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &xb[0], &xb[1], &vb[0], &vb[1], &grid_parts})
     total += a->n * sizeof(R);
   total += fixed.n + (load_slot.n + row_node.n + slice_begin.n + slice_width.n + other.n + part.n +
-                      heavy_node.n + part_begin.n) *
+                      heavy_node.n + part_begin.n + lead.n) *
                          sizeof(int);
   return total;
 }

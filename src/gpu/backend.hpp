@@ -63,6 +63,11 @@ struct Backend final : Engine::Impl {
   // The block kernel's split rows (hd::SplitRows): chunk slot per row, split nodes, their slots.
   DeviceArray<int> part, heavy_node, part_begin;
   int split_rows = 0, split_heavy = 0, parts = 0;
+  // The grid kernel's split rows (hd::GridSplit; part, heavy_node, part_begin shared with the above):
+  // lead row flags and the chunks' force sums (parts per model).
+  DeviceArray<int> lead;
+  DeviceArray<R> grid_parts;
+  int grid_rows = 0;
   // State: ping-pong buffers, `cur` holds the current positions and velocities.
   DeviceArray<R> xb[2], vb[2];
   int cur = 0;

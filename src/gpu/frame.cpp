@@ -35,6 +35,11 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   A.guard = settings.guard;
   A.stiff_bits = stiff ? stiff_dev.p + kk : stiff_dev.p;
   A.scalars = scalars_dev.p;
+  if (grid_rows > 0) {
+    A.split = {grid_rows, part.p, lead.p, part_begin.p, heavy_node.p};
+    A.parts = grid_parts.p;
+    A.parts_stride = 3ll * parts;
+  }
   return A;
 }
 

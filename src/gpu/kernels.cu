@@ -1,8 +1,9 @@
 // The substep kernels. Grid kernel: one thread per table row gathers its node's return spring, load and
 // springs (hd::node_substep, the same code the CPU-side test runs) and advances the node, one launch per
-// substep. Block kernel: one block per model runs a frame's substeps with the model's state in shared
-// memory (hd::split_phase1 / split_phase2: hd::node_substep per node, heavy nodes split). No atomics on
-// forces; the stiffening max and the guard are reduced per block.
+// substep; heavy nodes split into chunks gathered by the lanes of one warp and summed by its lead
+// (hd::grid_split_gather / grid_split_finish). Block kernel: one block per model runs a frame's substeps
+// with the model's state in shared memory (hd::split_phase1 / split_phase2: hd::node_substep per node,
+// heavy nodes split). No atomics on forces; the stiffening max and the guard are reduced per block.
 #include <climits>
 
 #include "launch.hpp"
@@ -54,18 +55,35 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
   if (A.scalars->fail_first < A.substep) return;  // an earlier substep failed: buffers left as they were
   const int b = blockIdx.y;
   const int r = blockIdx.x * blockDim.x + threadIdx.x;  // table row
+  const bool split = A.split.rows > 0;                  // the same for every thread of the launch
+  const int rows = split ? A.split.rows : A.nodes.nodes;
   R stiff = R(1);
-  if (r < A.nodes.nodes) {
-    hd::NodeArrays<R> N;
-    hd::SpringTable<R> T;
-    model_arrays(A, b, N, T);
-    const long long off = 3ll * A.nodes.nodes * b;
-    const int code = hd::node_substep<Soft, Stiff>(N, T, r, A.h, A.vmax2, A.loads + 3ll * A.load_rows * b,
-                                                   A.x + off, A.v + off, A.xo + off, A.vo + off, stiff);
-    if (code != hd::kNodeOk && A.guard) {
-      atomicMin(&A.scalars->fail_first, A.substep);
-      atomicMax(&A.scalars->fail_code, code);
+  int code = hd::kNodeOk;
+  hd::NodeArrays<R> N;
+  hd::SpringTable<R> T;
+  model_arrays(A, b, N, T);
+  const long long off = 3ll * A.nodes.nodes * b;
+  const R* loads = A.loads + 3ll * A.load_rows * b;
+  if (split) {
+    // Phase 1: whole rows advance their node, chunk rows write their sums; a split node's chunks are in
+    // the lead's warp (blockDim is a multiple of 32), so the warp's barrier orders them before phase 2.
+    R* parts = A.parts + A.parts_stride * b;
+    if (r < rows)
+      code = hd::grid_split_gather<Soft, Stiff>(N, T, A.split, r, A.h, A.vmax2, loads, A.x + off, A.v + off,
+                                                A.xo + off, A.vo + off, parts, stiff);
+    __syncwarp();
+    if (r < rows) {
+      const int c = hd::grid_split_finish(N, A.split, r, A.h, A.vmax2, loads, A.x + off, A.v + off,
+                                          A.xo + off, A.vo + off, parts);
+      code = c > code ? c : code;
     }
+  } else if (r < rows) {
+    code = hd::node_substep<Soft, Stiff>(N, T, r, A.h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
+                                         A.vo + off, stiff);
+  }
+  if (code != hd::kNodeOk && A.guard) {
+    atomicMin(&A.scalars->fail_first, A.substep);
+    atomicMax(&A.scalars->fail_code, code);
   }
   if constexpr (Stiff) {
     __shared__ double warp_max[32];
@@ -128,7 +146,8 @@ __global__ void __launch_bounds__(kBlockThreads, 2) block_frame_kernel(BlockArgs
 
 template <class R, bool Soft, bool Stiff>
 cudaError_t launch(const SubstepArgs<R>& A, int block, cudaStream_t stream) {
-  const dim3 grid(static_cast<unsigned>((A.nodes.nodes + block - 1) / block), static_cast<unsigned>(A.batch));
+  const int rows = A.split.rows > 0 ? A.split.rows : A.nodes.nodes;
+  const dim3 grid(static_cast<unsigned>((rows + block - 1) / block), static_cast<unsigned>(A.batch));
   substep_kernel<R, Soft, Stiff><<<grid, block, 0, stream>>>(A);
   return cudaGetLastError();
 }

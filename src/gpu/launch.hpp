@@ -38,6 +38,11 @@ struct SubstepArgs {
   bool guard = true;                         // flag |v| > v_max / non-finite into scalars
   unsigned long long* stiff_bits = nullptr;  // double bit pattern, atomicMax (values >= 0)
   FrameScalars* scalars = nullptr;
+  // The grid kernel's heavy rows split (hd::GridSplit, make_grid_split_table); split.rows == 0: one row
+  // per node (RowOrder::HeavyLast). parts: the chunks' force sums, model b at + b * parts_stride.
+  hd::GridSplit split;
+  R* parts = nullptr;
+  long long parts_stride = 0;
 };
 
 template <class R>

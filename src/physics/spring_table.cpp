@@ -108,66 +108,52 @@ SpringTableArrays<R> make_spring_table(const Model& m, RowOrder order, int threa
   return T;
 }
 
-template <class R>
-SplitTableArrays<R> make_split_table(const Model& m, int threads, int chunk) {
-  require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
-  require(m.bending.size() == 0, m.name, ": the spring table has no bending terms (", m.bending.size(),
-          " in the model); step it with the CPU engine");
-  require(threads >= 1, "make_split_table: threads must be >= 1 (got ", threads, ")");
+namespace {
+
+// Each node's springs in spring order: entries start[a] .. start[a+1] of (other end, spring).
+struct NodeSprings {
+  std::vector<int> degree, start, other, spring;
+};
+
+NodeSprings node_springs(const Model& m) {
   const Index n = m.num_nodes(), ns = m.num_springs();
-  if (chunk <= 0)
-    chunk = std::max(8, static_cast<int>((2 * static_cast<long long>(ns) + threads - 1) / threads));
-  // Each node's springs in spring order: (other end, spring).
-  std::vector<int> degree(static_cast<std::size_t>(n), 0), start(static_cast<std::size_t>(n) + 1, 0);
+  NodeSprings A;
+  A.degree.assign(static_cast<std::size_t>(n), 0);
+  A.start.assign(static_cast<std::size_t>(n) + 1, 0);
   for (Index s = 0; s < ns; ++s) {
-    ++degree[static_cast<std::size_t>(m.springs.i[static_cast<std::size_t>(s)])];
-    ++degree[static_cast<std::size_t>(m.springs.j[static_cast<std::size_t>(s)])];
+    ++A.degree[static_cast<std::size_t>(m.springs.i[static_cast<std::size_t>(s)])];
+    ++A.degree[static_cast<std::size_t>(m.springs.j[static_cast<std::size_t>(s)])];
   }
   for (Index a = 0; a < n; ++a)
-    start[static_cast<std::size_t>(a) + 1] =
-        start[static_cast<std::size_t>(a)] + degree[static_cast<std::size_t>(a)];
-  std::vector<int> other(static_cast<std::size_t>(2 * ns)), spring(static_cast<std::size_t>(2 * ns));
-  std::vector<int> fill(start.begin(), start.end() - 1);
+    A.start[static_cast<std::size_t>(a) + 1] =
+        A.start[static_cast<std::size_t>(a)] + A.degree[static_cast<std::size_t>(a)];
+  A.other.resize(static_cast<std::size_t>(2 * ns));
+  A.spring.resize(static_cast<std::size_t>(2 * ns));
+  std::vector<int> fill(A.start.begin(), A.start.end() - 1);
   for (Index s = 0; s < ns; ++s) {
     const int a = m.springs.i[static_cast<std::size_t>(s)], b = m.springs.j[static_cast<std::size_t>(s)];
-    other[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)])] = b;
-    spring[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = s;
-    other[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)])] = a;
-    spring[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)]++)] = s;
+    A.other[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)])] = b;
+    A.spring[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = static_cast<int>(s);
+    A.other[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)])] = a;
+    A.spring[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)]++)] = static_cast<int>(s);
   }
-  // Rows: (node, first entry, end entry, slot); a heavy node's chunks get consecutive slots.
-  struct Row {
-    int node, begin, end, part;
-  };
-  std::vector<Row> rows;
-  SplitTableArrays<R> out;
-  out.chunk = chunk;
-  out.part_begin.push_back(0);
-  for (Index a = 0; a < n; ++a) {
-    const int b0 = start[static_cast<std::size_t>(a)], d = degree[static_cast<std::size_t>(a)];
-    if (d <= chunk) {
-      rows.push_back({static_cast<int>(a), b0, b0 + d, -1});
-      continue;
-    }
-    out.heavy_node.push_back(static_cast<int>(a));
-    for (int c = 0; c < d; c += chunk)
-      rows.push_back(
-          {static_cast<int>(a), b0 + c, b0 + std::min(d, c + chunk), out.part_begin.back() + c / chunk});
-    out.part_begin.push_back(out.part_begin.back() + (d + chunk - 1) / chunk);
-  }
-  std::vector<int> sizes(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) sizes[r] = rows[r].end - rows[r].begin;
-  const std::vector<int> order = table_row_order(sizes, RowOrder::Balanced, threads);
+  return A;
+}
+
+// A table row: node, its entries begin .. end of NodeSprings, the chunk's slot (-1 whole, -2 padding).
+struct Row {
+  int node, begin, end, part;
+};
+
+// The sliced ELL table of rows given in table order (row_node and the entries; padding entries point
+// at the row's own node).
+template <class R>
+void fill_rows(const Model& m, const NodeSprings& A, const std::vector<Row>& rows, SpringTableArrays<R>& T) {
   const auto R_ = static_cast<Index>(rows.size());
-  SpringTableArrays<R>& T = out.table;
-  T.nodes = n;
+  T.nodes = m.num_nodes();
   T.row_node.resize(rows.size());
-  out.part.resize(rows.size());
-  for (Index r = 0; r < R_; ++r) {
-    const Row& row = rows[static_cast<std::size_t>(order[static_cast<std::size_t>(r)])];
-    T.row_node[static_cast<std::size_t>(r)] = row.node;
-    out.part[static_cast<std::size_t>(r)] = row.part;
-  }
+  for (Index r = 0; r < R_; ++r)
+    T.row_node[static_cast<std::size_t>(r)] = rows[static_cast<std::size_t>(r)].node;
   const Index slices = (R_ + hd::kSlice - 1) / hd::kSlice;
   T.slice_begin.resize(static_cast<std::size_t>(slices));
   T.slice_width.resize(static_cast<std::size_t>(slices));
@@ -175,7 +161,7 @@ SplitTableArrays<R> make_split_table(const Model& m, int threads, int chunk) {
   for (Index sl = 0; sl < slices; ++sl) {
     int w = 0;
     for (Index r = sl * hd::kSlice; r < std::min<Index>(R_, (sl + 1) * hd::kSlice); ++r)
-      w = std::max(w, sizes[static_cast<std::size_t>(order[static_cast<std::size_t>(r)])]);
+      w = std::max(w, rows[static_cast<std::size_t>(r)].end - rows[static_cast<std::size_t>(r)].begin);
     T.slice_begin[static_cast<std::size_t>(sl)] = static_cast<int>(total);
     T.slice_width[static_cast<std::size_t>(sl)] = w;
     total += static_cast<long long>(w) * hd::kSlice;
@@ -190,8 +176,7 @@ SplitTableArrays<R> make_split_table(const Model& m, int threads, int chunk) {
   for (Index sl = 0; sl < slices; ++sl)
     for (int lane = 0; lane < hd::kSlice; ++lane) {
       const Index r = sl * hd::kSlice + lane;
-      const Row& row =
-          rows[static_cast<std::size_t>(order[static_cast<std::size_t>(std::min<Index>(r, R_ - 1))])];
+      const Row& row = rows[static_cast<std::size_t>(std::min<Index>(r, R_ - 1))];
       const int w = T.slice_width[static_cast<std::size_t>(sl)];
       for (int j = 0; j < w; ++j) {
         const auto e =
@@ -199,19 +184,119 @@ SplitTableArrays<R> make_split_table(const Model& m, int threads, int chunk) {
         T.other[e] = row.node;  // padding: the row's own node (zero length: skipped)
         if (r >= R_ || row.begin + j >= row.end) continue;
         const auto q = static_cast<std::size_t>(row.begin + j);
-        const auto us = static_cast<std::size_t>(spring[q]);
-        T.other[e] = other[q];
+        const auto us = static_cast<std::size_t>(A.spring[q]);
+        T.other[e] = A.other[q];
         T.L0[e] = static_cast<R>(m.springs.L0[us]);
         T.k[e] = static_cast<R>(m.springs.k[us]);
         T.kp[e] = static_cast<R>(m.springs.kp[us]);
-        T.ik[e] = static_cast<R>(m.inv_k[spring[q]]);
+        T.ik[e] = static_cast<R>(m.inv_k[A.spring[q]]);
       }
     }
+}
+
+void require_network(const Model& m) {
+  require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
+  require(m.bending.size() == 0, m.name, ": the spring table has no bending terms (", m.bending.size(),
+          " in the model); step it with the CPU engine");
+}
+
+}  // namespace
+
+template <class R>
+SplitTableArrays<R> make_split_table(const Model& m, int threads, int chunk) {
+  require_network(m);
+  require(threads >= 1, "make_split_table: threads must be >= 1 (got ", threads, ")");
+  const Index n = m.num_nodes(), ns = m.num_springs();
+  if (chunk <= 0)
+    chunk = std::max(8, static_cast<int>((2 * static_cast<long long>(ns) + threads - 1) / threads));
+  const NodeSprings A = node_springs(m);
+  // Rows: (node, first entry, end entry, slot); a heavy node's chunks get consecutive slots.
+  std::vector<Row> rows;
+  SplitTableArrays<R> out;
+  out.chunk = chunk;
+  out.part_begin.push_back(0);
+  for (Index a = 0; a < n; ++a) {
+    const int b0 = A.start[static_cast<std::size_t>(a)], d = A.degree[static_cast<std::size_t>(a)];
+    if (d <= chunk) {
+      rows.push_back({static_cast<int>(a), b0, b0 + d, -1});
+      continue;
+    }
+    out.heavy_node.push_back(static_cast<int>(a));
+    for (int c = 0; c < d; c += chunk)
+      rows.push_back(
+          {static_cast<int>(a), b0 + c, b0 + std::min(d, c + chunk), out.part_begin.back() + c / chunk});
+    out.part_begin.push_back(out.part_begin.back() + (d + chunk - 1) / chunk);
+  }
+  std::vector<int> sizes(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) sizes[r] = rows[r].end - rows[r].begin;
+  const std::vector<int> order = table_row_order(sizes, RowOrder::Balanced, threads);
+  std::vector<Row> ordered(rows.size());
+  out.part.resize(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    ordered[r] = rows[static_cast<std::size_t>(order[r])];
+    out.part[r] = ordered[r].part;
+  }
+  fill_rows(m, A, ordered, out.table);
+  return out;
+}
+
+template <class R>
+GridSplitArrays<R> make_grid_split_table(const Model& m, int chunk) {
+  require_network(m);
+  const Index n = m.num_nodes();
+  const NodeSprings A = node_springs(m);
+  if (chunk <= 0 && n > 0) {  // as HeavyLast: heavier than kHeavyDegree and twice the median degree
+    std::vector<int> sorted = A.degree;
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    chunk = std::max(kHeavyDegree, 2 * sorted[static_cast<std::size_t>(n / 2)]);
+  }
+  std::vector<Row> rows;
+  std::vector<int> heavy;
+  for (Index a = 0; a < n; ++a) {  // light nodes in node order (locality kept)
+    const int b0 = A.start[static_cast<std::size_t>(a)], d = A.degree[static_cast<std::size_t>(a)];
+    if (d <= chunk)
+      rows.push_back({static_cast<int>(a), b0, b0 + d, -1});
+    else
+      heavy.push_back(static_cast<int>(a));
+  }
+  std::stable_sort(heavy.begin(), heavy.end(), [&](int a, int b) {
+    return A.degree[static_cast<std::size_t>(a)] > A.degree[static_cast<std::size_t>(b)];
+  });
+  GridSplitArrays<R> out;
+  out.chunk = chunk;
+  out.part_begin.push_back(0);
+  std::vector<int> lead_of_row;  // heavy index of a lead row
+  auto pad_to = [&](std::size_t size) {
+    while (rows.size() < size) rows.push_back({rows.empty() ? 0 : rows.back().node, 0, 0, -2});
+  };
+  if (!heavy.empty()) pad_to((rows.size() + hd::kSlice - 1) / hd::kSlice * hd::kSlice);
+  for (std::size_t k = 0; k < heavy.size(); ++k) {
+    const int a = heavy[k];
+    const int b0 = A.start[static_cast<std::size_t>(a)], d = A.degree[static_cast<std::size_t>(a)];
+    const int c = std::max(chunk, (d + hd::kSlice - 1) / hd::kSlice);  // at most a warp of chunks
+    const int count = (d + c - 1) / c;
+    const std::size_t lane = rows.size() % hd::kSlice;
+    if (lane + static_cast<std::size_t>(count) > static_cast<std::size_t>(hd::kSlice))
+      pad_to(rows.size() - lane + hd::kSlice);  // a node's chunks never straddle two warps
+    out.heavy_node.push_back(a);
+    out.lead_row.push_back(static_cast<int>(rows.size()));
+    for (int j = 0; j < d; j += c)
+      rows.push_back({a, b0 + j, b0 + std::min(d, j + c), out.part_begin.back() + j / c});
+    out.part_begin.push_back(out.part_begin.back() + count);
+  }
+  out.part.resize(rows.size());
+  out.lead.assign(rows.size(), -1);
+  for (std::size_t r = 0; r < rows.size(); ++r) out.part[r] = rows[r].part;
+  for (std::size_t k = 0; k < out.lead_row.size(); ++k)
+    out.lead[static_cast<std::size_t>(out.lead_row[k])] = static_cast<int>(k);
+  fill_rows(m, A, rows, out.table);
   return out;
 }
 
 template SplitTableArrays<double> make_split_table<double>(const Model&, int, int);
 template SplitTableArrays<float> make_split_table<float>(const Model&, int, int);
+template GridSplitArrays<double> make_grid_split_table<double>(const Model&, int);
+template GridSplitArrays<float> make_grid_split_table<float>(const Model&, int);
 
 template <class R>
 NodeArrayData<R> make_node_arrays(const Model& m) {

@@ -66,6 +66,55 @@ std::string encode_progress(const std::string& scene, long k, Index frames, Scen
 
 }  // namespace
 
+void scene_trace_sample(const BuiltScene& b, double time, const Vec3& applied, const MatX3& surface,
+                        const MatX3& x, double local_contact, SceneTrace& tr) {
+  const MatX3& S0 = b.body->rest_surface();
+  const Model& model = b.body->model();
+  if (tr.node_disp.size() != b.trace_nodes.size()) tr.node_disp.resize(b.trace_nodes.size());
+  if (tr.atom_disp.size() != b.trace_atom_dofs.size()) tr.atom_disp.resize(b.trace_atom_dofs.size());
+  tr.time.push_back(time);
+  tr.force.push_back(applied.norm());
+  tr.max_disp.push_back((surface - S0).rowwise().norm().maxCoeff());
+  tr.local_contact.push_back(local_contact);
+  for (std::size_t k = 0; k < b.trace_nodes.size(); ++k) {
+    const Index i = b.trace_nodes[k];
+    tr.node_disp[k].push_back((surface.row(i) - S0.row(i)).norm());
+  }
+  for (std::size_t k = 0; k < b.trace_atom_dofs.size(); ++k) {
+    const Index i = b.trace_atom_dofs[k];
+    tr.atom_disp[k].push_back((x.row(i) - model.x0.row(i)).norm());
+  }
+}
+
+Index summarize_trace(const BuiltScene& b, const SceneTrace& tr, RunSummary& s) {
+  // Releases: the last one, if every load is released.
+  if (!b.loads.empty()) {
+    s.release_time = 0;
+    for (const PointLoad& L : b.loads) s.release_time = std::max(s.release_time, L.t_release);
+  }
+  const double first_release = b.loads.empty() ? INFINITY : b.loads.front().t_release;
+  const Index T = tr.size();
+  Index hold = T - 1;            // the last frame with the first load on (or the end)
+  for (Index q = 0; q < T; ++q)  // the frame at t_release already shows the force released
+    if (tr.time[q] < first_release - 1e-9) hold = q;
+  if (!tr.node_disp.empty()) {
+    s.contact_peak_mm = *std::max_element(tr.node_disp[0].begin(), tr.node_disp[0].end());
+    s.contact_hold_mm = tr.node_disp[0][hold];
+  }
+  if (!tr.atom_disp.empty()) s.atom_hold_mm = tr.atom_disp[0][hold];
+  s.local_hold_mm = tr.local_contact[hold];
+  s.max_disp_peak_mm = *std::max_element(tr.max_disp.begin(), tr.max_disp.end());
+  s.final_max_disp_mm = tr.max_disp.back();
+  if (std::isfinite(s.release_time)) {
+    Index last_out = -1;
+    for (Index q = 0; q < T; ++q)
+      if (tr.time[q] >= s.release_time - 1e-9 && tr.max_disp[q] > s.return_tolerance) last_out = q;
+    if (last_out + 1 < T)
+      s.return_ms = last_out < 0 ? 0.0 : std::max(0.0, tr.time[last_out + 1] - s.release_time);
+  }
+  return hold;
+}
+
 SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   const Scene& scene = b.scene;
   Simulation sim(b.body, b.settings);
@@ -131,7 +180,6 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
     std::copy(done.begin(), done.end(), us.begin());
     res.first_update = k0 + 1;
   }
-  const MatX3& S0 = b.body->rest_surface();
   const Model& model = b.body->model();
   const Index contact = b.loads.empty() ? -1 : b.loads.front().node;
 
@@ -157,23 +205,12 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
       }
       turning.push_back(t);
     }
-    tr.time.push_back(sim.time());
-    tr.force.push_back(sim.applied_force().norm());
-    tr.max_disp.push_back((sim.surface() - S0).rowwise().norm().maxCoeff());
     double uc = 0.0;
     const auto& patch = sim.local_nodes();
     for (std::size_t r = 0; r < patch.size(); ++r)
       if (patch[r] == contact) uc = sim.local_displacement().row(static_cast<Index>(r)).norm();
-    tr.local_contact.push_back(uc);
+    scene_trace_sample(b, sim.time(), sim.applied_force(), sim.surface(), sim.state().x, uc, tr);
     tr.energy.push_back(total_energy(model, sim.state().x, sim.state().v));
-    for (std::size_t k = 0; k < b.trace_nodes.size(); ++k) {
-      const Index i = b.trace_nodes[k];
-      tr.node_disp[k].push_back((sim.surface().row(i) - S0.row(i)).norm());
-    }
-    for (std::size_t k = 0; k < b.trace_atom_dofs.size(); ++k) {
-      const Index i = b.trace_atom_dofs[k];
-      tr.atom_disp[k].push_back((sim.state().x.row(i) - model.x0.row(i)).norm());
-    }
     for (std::size_t k = 0; k < tr.tools.size(); ++k) {
       const ToolState& ts = tools->contact().state(static_cast<Index>(k));
       SceneTrace::ToolTrace& tt = tr.tools[k];
@@ -237,34 +274,11 @@ SceneResult run_scene(const BuiltScene& b, const RunHooks& hooks) {
   s.substeps = sim.state().substeps;
   s.warnings = sim.state().warnings.total();
 
-  // Releases: the last one, if every load is released.
-  if (!b.loads.empty()) {
-    s.release_time = 0;
-    for (const PointLoad& L : b.loads) s.release_time = std::max(s.release_time, L.t_release);
-  }
-  const double first_release = b.loads.empty() ? INFINITY : b.loads.front().t_release;
-  const Index T = tr.size();
-  Index hold = T - 1;            // the last frame with the first load on (or the end)
-  for (Index q = 0; q < T; ++q)  // the frame at t_release already shows the force released
-    if (tr.time[q] < first_release - 1e-9) hold = q;
-  if (!tr.node_disp.empty()) {
-    s.contact_peak_mm = *std::max_element(tr.node_disp[0].begin(), tr.node_disp[0].end());
-    s.contact_hold_mm = tr.node_disp[0][hold];
-  }
-  if (!tr.atom_disp.empty()) s.atom_hold_mm = tr.atom_disp[0][hold];
-  s.local_hold_mm = tr.local_contact[hold];
+  const Index hold = summarize_trace(b, tr, s);
   if ((vessel || tree) && !turning.empty()) {
-    const Index offset = T - static_cast<Index>(turning.size());  // a resumed run samples from its resume
+    const Index offset =
+        tr.size() - static_cast<Index>(turning.size());  // a resumed run samples from its resume
     if (hold >= offset) s.hold_turning_change_deg = turning[static_cast<std::size_t>(hold - offset)];
-  }
-  s.max_disp_peak_mm = *std::max_element(tr.max_disp.begin(), tr.max_disp.end());
-  s.final_max_disp_mm = tr.max_disp.back();
-  if (std::isfinite(s.release_time)) {
-    Index last_out = -1;
-    for (Index q = 0; q < T; ++q)
-      if (tr.time[q] >= s.release_time - 1e-9 && tr.max_disp[q] > s.return_tolerance) last_out = q;
-    if (last_out + 1 < T)
-      s.return_ms = last_out < 0 ? 0.0 : std::max(0.0, tr.time[last_out + 1] - s.release_time);
   }
   if (hooks.on_progress) hooks.on_progress(1.0);
   return res;

@@ -538,5 +538,40 @@ TEST(CliPaper, QuickRunMakesTheReportFiguresAndTablesOnThePhantoms) {
   EXPECT_EQ(slurp(out / "report.md"), report);
 }
 
+// Issue 21: `medspring haptics --device cuda` runs the loop on gpu::HapticLoop. Without a GPU (or a CUDA
+// build) it fails in one line naming the cause and the CPU alternative, writing nothing (no fallback);
+// with one, its force trace is the CPU loop's (the contact read is the same position when not stale).
+TEST(CliHaptics, DeviceCudaRunsTheGpuLoopOrFailsInOneLine) {
+  const fs::path dir = testing::temp_dir("cli-haptics-cuda");
+  write(dir / "press.csv", "time_ms,x,y,z\n0,0,0,31\n20,0,0,26\n40,0,0,26\n");
+  const std::string base =
+      "haptics kidney_phantom --trajectory " + quote((dir / "press.csv").string()) + " --duration 40 --json";
+  const Result bad = medspring(base + " --device tpu");
+  EXPECT_EQ(bad.rc, 2);
+  EXPECT_NE(bad.err.find("--device"), std::string::npos) << bad.err;
+  EXPECT_EQ(medspring(base + " --device cuda --tool sphere:5").rc, 2);
+
+  const Result cpu = medspring(base + " --device cpu");
+  ASSERT_EQ(cpu.rc, 0) << cpu.err;
+  const Result gpu = medspring(base + " --device cuda --out " + quote((dir / "gpu").string()));
+  if (gpu.rc != 0) {  // no GPU here: one line, the cause, the CPU alternative, nothing written
+    EXPECT_EQ(count_lines(gpu.err), 1) << gpu.err;
+    const bool names_cause =
+        gpu.err.find("no CUDA backend") != std::string::npos || gpu.err.find("GPU") != std::string::npos;
+    EXPECT_TRUE(names_cause) << gpu.err;
+    EXPECT_NE(gpu.err.find("CPU engine"), std::string::npos) << gpu.err;
+    EXPECT_FALSE(fs::exists(dir / "gpu"));
+    GTEST_SKIP() << "no GPU: " << gpu.err;
+  }
+  const auto a = nlohmann::json::parse(cpu.out), b = nlohmann::json::parse(gpu.out);
+  EXPECT_EQ(b["device"], "cuda");
+  EXPECT_EQ(a["ticks"], b["ticks"]);
+  ASSERT_EQ(b["stale_ticks"].get<long>(), 0) << "reads arrived late: the loops saw different contacts";
+  EXPECT_NEAR(b["peak_force_n"].get<double>(), a["peak_force_n"].get<double>(), 1e-9);
+  for (int d = 0; d < 3; ++d)
+    EXPECT_NEAR(b["final_reaction_n"][d].get<double>(), a["final_reaction_n"][d].get<double>(), 1e-9);
+  EXPECT_GT(a["peak_force_n"].get<double>(), 0.1);
+}
+
 }  // namespace
 }  // namespace medspring

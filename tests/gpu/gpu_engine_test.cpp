@@ -2,8 +2,10 @@
 // error tests run everywhere the backend is built. Not yet run on a GPU in the session that wrote them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <thread>
 
@@ -12,6 +14,7 @@
 #include "medspring/gpu/haptics.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/physics/integrators.hpp"
+#include "medspring/sim/haptics.hpp"
 
 namespace medspring {
 namespace {
@@ -334,6 +337,42 @@ TEST(GpuEngine, HapticLoopPressesTheContactNodeThroughTheNodeRead) {
   }
   EXPECT_LT(before(c, 2) - x0.z(), -0.5);  // pulled towards the tool
   EXPECT_THROW(gpu::HapticLoop(e, 1, c), InvalidInput);
+}
+
+// `medspring haptics --device cuda`: the GPU loop's force trace is the CPU loop's (sim/haptics.hpp) while
+// every read arrives in time; the median tick of both is recorded (test XML, scripts/gpu-check.sh full).
+TEST(GpuEngine, HapticLoopTracksTheCpuLoop) {
+  REQUIRE_GPU();
+  auto kidney = std::make_shared<HybridKidney>(hybrid_kidney_phantom());
+  const Model& m = kidney->model();
+  const Index c = 223;
+  const Vec3 x0 = m.x0.row(c).transpose();
+  Simulation sim(kidney, SimulationSettings{.normals = false});
+  HapticLoop cpu(sim, c);
+  gpu::Engine e({&m}, StepSettings{});
+  gpu::HapticLoop loop(e, 0, c);
+  std::vector<double> cpu_us, gpu_us;
+  double worst = 0;
+  long compared = 0;
+  for (int k = 0; k < 400; ++k) {
+    const Vec3 tool = x0 + Vec3(0, 0, -4.0 * std::min(1.0, k / 200.0));  // press 4 mm over 200 ms, hold
+    const Vec3 a = cpu.tick(tool);
+    const long stale = loop.stale_ticks();
+    const Vec3 b = loop.tick(tool);
+    cpu_us.push_back(cpu.last().compute_us);
+    gpu_us.push_back(loop.last().compute_us);
+    if (loop.stale_ticks() != stale) break;  // from here the loops saw different contacts
+    worst = std::max(worst, (a - b).norm());
+    ++compared;
+  }
+  EXPECT_GT(compared, 10) << "most reads were late";
+  EXPECT_LE(worst, 1e-9);
+  std::sort(cpu_us.begin(), cpu_us.end());
+  std::sort(gpu_us.begin(), gpu_us.end());
+  ::testing::Test::RecordProperty("cpu_tick_median_us", std::to_string(cpu_us[cpu_us.size() / 2]));
+  ::testing::Test::RecordProperty("gpu_tick_median_us", std::to_string(gpu_us[gpu_us.size() / 2]));
+  ::testing::Test::RecordProperty("ticks_compared", std::to_string(compared));
+  ::testing::Test::RecordProperty("max_force_difference_N", std::to_string(worst));
 }
 
 TEST(GpuEngine, AsyncReadbackDeliversTheRequestedPositions) {

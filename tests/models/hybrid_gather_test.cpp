@@ -214,5 +214,62 @@ TEST(HybridGather, RowOrdersBalanceTheAtomsSpokes) {
   ::testing::Test::RecordProperty("max_degree", std::to_string(max_degree));
 }
 
+// Issue 21: heavy rows split in the grid kernel too (make_grid_split_table): an atom's spokes gathered by
+// up to a warp of threads, summed by the lead lane after the warp's barrier.
+TEST(HybridGather, GridSplitRowsEqualTheEngineStepAndKeepEveryNodeInOneWarp) {
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  PointLoad L;
+  L.node = 223;
+  L.force = Vec3(0, 0, -1.0);
+  L.t_ramp = 10.0;
+  L.t_release = 150.0;
+  const std::vector<PointLoad> loads{L};
+  StepSettings s;
+  State st = make_state(m, s);
+  testing::GridSplitStepper<double> gp(m, loads);
+  double worst = 0, peak = 0;
+  for (int f = 0; f < 600; ++f) {
+    ASSERT_TRUE(step(m, st, s, &loads).ok());
+    gp.frame(s);
+    worst =
+        std::max({worst, testing::relative_difference(gp.x, st.x), testing::relative_difference(gp.v, st.v)});
+    peak = std::max(peak, (st.x - m.x0).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(peak, 1.0);
+  EXPECT_LE(worst, 1e-12);
+  EXPECT_EQ(gp.substeps, static_cast<long>(st.substeps));
+  EXPECT_EQ(gp.failures, 0);
+  EXPECT_NEAR(gp.stiffening, st.stiffening, 1e-9 * st.stiffening);
+  const GridSplitArrays<double>& G = gp.G;
+  long real = 0;  // every spring end exactly once
+  for (std::size_t e = 0; e < G.table.entries(); ++e) real += G.table.k[e] != 0.0;
+  EXPECT_EQ(real, 2L * m.num_springs());
+  ASSERT_FALSE(G.heavy_node.empty());
+  for (std::size_t k = 0; k < G.heavy_node.size();
+       ++k) {  // a node's chunks: consecutive, one warp, lead first
+    const int first = G.lead_row[k], count = G.part_begin[k + 1] - G.part_begin[k];
+    EXPECT_EQ(first / hd::kSlice, (first + count - 1) / hd::kSlice) << "node " << G.heavy_node[k];
+    for (int j = 0; j < count; ++j) {
+      EXPECT_EQ(G.table.row_node[static_cast<std::size_t>(first + j)], G.heavy_node[k]);
+      EXPECT_EQ(G.part[static_cast<std::size_t>(first + j)], G.part_begin[k] + j);
+    }
+  }
+  // The widest row (springs one thread gathers) against the table without splitting (HeavyLast).
+  int widest = 0, widest_before = 0;
+  for (int w : G.table.slice_width) widest = std::max(widest, w);
+  for (int w : make_spring_table<double>(m, RowOrder::HeavyLast).slice_width)
+    widest_before = std::max(widest_before, w);
+  EXPECT_EQ(G.chunk, kHeavyDegree);  // the median degree of the phantom is below 8
+  EXPECT_LE(widest, G.chunk);
+  EXPECT_GT(widest_before, 2 * kHeavyDegree);
+  ::testing::Test::RecordProperty("max_relative_difference", (std::ostringstream() << worst).str());
+  ::testing::Test::RecordProperty("split_nodes", std::to_string(G.heavy_node.size()));
+  ::testing::Test::RecordProperty("rows", std::to_string(G.rows()));
+  ::testing::Test::RecordProperty("entries", std::to_string(G.table.entries()));
+  ::testing::Test::RecordProperty("widest_row",
+                                  std::to_string(widest) + " (before " + std::to_string(widest_before) + ")");
+}
+
 }  // namespace
 }  // namespace medspring

@@ -230,6 +230,82 @@ struct SplitStepper {
   }
 };
 
+/// The grid kernel with heavy rows split (make_grid_split_table, hd::grid_split_gather / _finish): every
+/// row's phase 1 (whole nodes advance, chunks write their sums), then — the warp barrier — every lead
+/// row's phase 2, ping-pong buffers for x and v as the grid kernel.
+template <class R>
+struct GridSplitStepper {
+  const Model& m;
+  GridSplitArrays<R> G;
+  NodeArrayData<R> N;
+  std::vector<PointLoad> loads;
+  LoadSlots slots;
+  std::vector<R> x, xb, v, vb, rows, parts;
+  std::vector<double> rows_d;
+  double t = 0, stiffening = 1;
+  long substeps = 0;
+  int failures = 0;
+
+  GridSplitStepper(const Model& model, std::vector<PointLoad> L, int chunk = 0)
+      : m(model),
+        G(make_grid_split_table<R>(model, chunk)),
+        N(make_node_arrays<R>(model)),
+        loads(std::move(L)) {
+    slots = make_load_slots(loads, m.num_nodes());
+    N.load_slot = slots.slot;
+    x = N.x0;
+    xb = x;
+    v.assign(x.size(), R(0));
+    vb = v;
+    parts.assign(3 * static_cast<std::size_t>(std::max(1, G.parts())), R(0));
+    rows.assign(3 * std::max<std::size_t>(1, slots.nodes.size()), R(0));
+    rows_d.assign(rows.size(), 0.0);
+  }
+
+  template <bool Soft, bool Stiff>
+  int gather(int r, R h, R vmax2, R& stiff) {
+    return hd::grid_split_gather<Soft, Stiff>(N.view(), G.table.view(), G.view(), r, h, vmax2, rows.data(),
+                                              x.data(), v.data(), xb.data(), vb.data(), parts.data(), stiff);
+  }
+
+  void frame(const StepSettings& s) {
+    const double hs = dt_safe(m, stiffening, s.safety);
+    long subs = 1;
+    if (s.dt > hs * (1.0 + 1e-12))
+      subs = static_cast<long>(std::min<double>(std::ceil(s.dt / hs), s.max_substeps));
+    const double hstep = s.dt / static_cast<double>(subs);
+    const R h = static_cast<R>(hstep);
+    const R vmax2 = static_cast<R>(s.v_max * s.v_max);
+    const double t0 = t;
+    for (long kk = 0; kk < subs; ++kk) {
+      load_rows(loads, slots, t, rows_d.data());
+      for (std::size_t q = 0; q < rows.size(); ++q) rows[q] = static_cast<R>(rows_d[q]);
+      const bool stiff_now = kk == subs - 1;
+      R grid_stiff = R(1);
+      int code = hd::kNodeOk;
+      for (int r = 0; r < G.rows(); ++r) {  // phase 1: every thread of the grid
+        R stiff = R(1);
+        const int c = m.has_soft_springs ? (stiff_now ? gather<true, true>(r, h, vmax2, stiff)
+                                                      : gather<true, false>(r, h, vmax2, stiff))
+                                         : (stiff_now ? gather<false, true>(r, h, vmax2, stiff)
+                                                      : gather<false, false>(r, h, vmax2, stiff));
+        grid_stiff = std::max(grid_stiff, stiff);
+        code = std::max(code, c);
+      }
+      for (int r = 0; r < G.rows(); ++r)  // phase 2, after each warp's barrier
+        code = std::max(code, hd::grid_split_finish(N.view(), G.view(), r, h, vmax2, rows.data(), x.data(),
+                                                    v.data(), xb.data(), vb.data(), parts.data()));
+      if (stiff_now) stiffening = static_cast<double>(grid_stiff);
+      failures += code != hd::kNodeOk;
+      std::swap(x, xb);
+      std::swap(v, vb);
+      t += hstep;
+      ++substeps;
+    }
+    t = t0 + s.dt;
+  }
+};
+
 /// max |a - b| / max(1, max |b|) over the entries.
 template <class R>
 double relative_difference(const std::vector<R>& a, const MatX3& b) {

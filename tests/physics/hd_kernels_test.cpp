@@ -226,6 +226,28 @@ TEST(HdKernels, SplitRowsEqualEngineStepSoftTube) {
                                   (std::ostringstream() << std::scientific << worst).str());
 }
 
+TEST(HdKernels, GridSplitRowsEqualEngineStepSoftTube) {
+  const Model m = small_tube(true);
+  const auto loads = press(65, Vec3(0.3, 0, -0.6));
+  StepSettings s;
+  State st = make_state(m, s);
+  testing::GridSplitStepper<double> gp(m, loads, 3);  // every node split into chunks of at most 3
+  ASSERT_EQ(gp.G.heavy_node.size(), static_cast<std::size_t>(m.num_nodes()));
+  double worst = 0, peak = 0;
+  for (int f = 0; f < 300; ++f) {
+    ASSERT_EQ(step(m, st, s, &loads).code, StepCode::Ok) << "frame " << f;
+    gp.frame(s);
+    worst = std::max({worst, relative_difference(gp.x, st.x), relative_difference(gp.v, st.v)});
+    peak = std::max(peak, (st.x - m.x0).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(peak, 0.05);
+  EXPECT_LE(worst, 1e-12);
+  EXPECT_EQ(gp.substeps, static_cast<long>(st.substeps));
+  EXPECT_NEAR(gp.stiffening, st.stiffening, 1e-9 * st.stiffening);
+  ::testing::Test::RecordProperty("grid_split_max_relative_difference_fp64",
+                                  (std::ostringstream() << std::scientific << worst).str());
+}
+
 TEST(SpringTable, BalancedDealGivesEveryThreadAHeavyAndALightRowInTurn) {
   // Degrees 9, 8, ..., 1 dealt to 4 threads: rounds forward, backward, forward.
   const std::vector<int> degree{1, 2, 3, 4, 5, 6, 7, 8, 9};

@@ -42,6 +42,50 @@ MEDSPRING_HD inline int split_phase1(const NodeArrays<R>& N, const SpringTable<R
   return code;
 }
 
+/// A split node's update from its chunks' force sums parts[3 p0 ..], p0 .. p0 + count - 1 in spring order:
+/// load and return spring first, then the chunks, then node_substep's symplectic update (v read from v,
+/// written to vo; vo == v: in place, as the block kernel). A pinned node keeps x (and v). Returns kNode*.
+template <class R>
+MEDSPRING_HD inline int split_node_advance(const NodeArrays<R>& N, int a, R h, R vmax2, const R* loads,
+                                           const R* x, const R* v, R* xo, R* vo, const R* parts, int count) {
+  const int q = 3 * a;
+  if (N.fixed[a]) {
+    xo[q] = x[q];
+    xo[q + 1] = x[q + 1];
+    xo[q + 2] = x[q + 2];
+    if (vo != v) {
+      vo[q] = v[q];
+      vo[q + 1] = v[q + 1];
+      vo[q + 2] = v[q + 2];
+    }
+    return kNodeOk;
+  }
+  R fe[3] = {R(0), R(0), R(0)};
+  const int slot = N.load_slot[a];
+  if (slot >= 0) {
+    fe[0] = loads[3 * slot];
+    fe[1] = loads[3 * slot + 1];
+    fe[2] = loads[3 * slot + 2];
+  }
+  R g[3];
+  return_force(fe, x + q, N.x0 + q, N.kr[a], g);
+  for (int p = 0; p < count; ++p) {
+    g[0] += parts[3 * p];
+    g[1] += parts[3 * p + 1];
+    g[2] += parts[3 * p + 2];
+  }
+  const R mass = N.mass[a];
+  const R c = step_coefficient(mass, N.damping[a], h);
+  R vn[3];
+  const R v2 = symplectic_velocity(mass, c, h, v + q, g, vn);
+  vo[q] = vn[0];
+  vo[q + 1] = vn[1];
+  vo[q + 2] = vn[2];
+  symplectic_position(h, x + q, vn, xo + q);
+  if (!velocity_ok(v2, vmax2)) return isfinite(v2) ? kNodeTooFast : kNodeNonFinite;
+  return kNodeOk;
+}
+
 /// Phase 2 (after a barrier) for thread t: each split node h = t, t + threads, ...: load and return
 /// spring, plus its chunks' sums in spring order, then node_substep's update (a pinned node keeps x, v).
 template <class R>
@@ -49,42 +93,52 @@ MEDSPRING_HD inline int split_phase2(const NodeArrays<R>& N, const SplitRows& S,
                                      R vmax2, const R* loads, const R* x, R* v, R* xo, const R* parts) {
   int code = kNodeOk;
   for (int k = t; k < S.heavy; k += threads) {
-    const int a = S.heavy_node[k];
-    const int q = 3 * a;
-    if (N.fixed[a]) {
-      xo[q] = x[q];
-      xo[q + 1] = x[q + 1];
-      xo[q + 2] = x[q + 2];
-      continue;
-    }
-    R fe[3] = {R(0), R(0), R(0)};
-    const int slot = N.load_slot[a];
-    if (slot >= 0) {
-      fe[0] = loads[3 * slot];
-      fe[1] = loads[3 * slot + 1];
-      fe[2] = loads[3 * slot + 2];
-    }
-    R g[3];
-    return_force(fe, x + q, N.x0 + q, N.kr[a], g);
-    for (int p = S.part_begin[k]; p < S.part_begin[k + 1]; ++p) {
-      g[0] += parts[3 * p];
-      g[1] += parts[3 * p + 1];
-      g[2] += parts[3 * p + 2];
-    }
-    const R mass = N.mass[a];
-    const R c = step_coefficient(mass, N.damping[a], h);
-    R vn[3];
-    const R v2 = symplectic_velocity(mass, c, h, v + q, g, vn);
-    v[q] = vn[0];
-    v[q + 1] = vn[1];
-    v[q + 2] = vn[2];
-    symplectic_position(h, x + q, vn, xo + q);
-    if (!velocity_ok(v2, vmax2)) {
-      const int e = isfinite(v2) ? kNodeTooFast : kNodeNonFinite;
-      code = e > code ? e : code;
-    }
+    const int p0 = S.part_begin[k];
+    const int e = split_node_advance(N, S.heavy_node[k], h, vmax2, loads, x, v, xo, v, parts + 3 * p0,
+                                     S.part_begin[k + 1] - p0);
+    code = e > code ? e : code;
   }
   return code;
+}
+
+/// The grid kernel's rows with heavy nodes split (make_grid_split_table, physics/spring_table.hpp): one
+/// thread per row as the grid kernel; a heavy node's chunks lie in consecutive rows of one warp, the first
+/// of them its lead. Phase 1 (grid_split_gather): whole rows run node_substep, chunk rows write their
+/// springs' force sum to parts[3 slot ..]; after the warp's barrier (__syncwarp: the chunks of a node are
+/// in the lead's warp) phase 2 (grid_split_finish): each lead advances its node (split_node_advance).
+struct GridSplit {
+  int rows = 0;                     // table rows (whole nodes, chunks, padding)
+  const int* part = nullptr;        // (rows) -1: whole node; -2: padding (no work); else the chunk's slot
+  const int* lead = nullptr;        // (rows) k: the first chunk of split node k; else -1
+  const int* part_begin = nullptr;  // (heavy + 1) slots of split node k: part_begin[k] .. part_begin[k+1]
+  const int* heavy_node = nullptr;  // (heavy) node
+};
+
+template <bool Soft, bool Stiff, class R>
+MEDSPRING_HD inline int grid_split_gather(const NodeArrays<R>& N, const SpringTable<R>& T, const GridSplit& G,
+                                          int r, R h, R vmax2, const R* loads, const R* x, const R* v, R* xo,
+                                          R* vo, R* parts, R& stiff) {
+  const int p = G.part[r];
+  if (p == -1) return node_substep<Soft, Stiff>(N, T, r, h, vmax2, loads, x, v, xo, vo, stiff);
+  if (p >= 0) {
+    R f[3] = {R(0), R(0), R(0)};
+    gather_spring_forces<Soft, Stiff>(T, r, row_node(T, r), x, stiff, f);
+    parts[3 * p] = f[0];
+    parts[3 * p + 1] = f[1];
+    parts[3 * p + 2] = f[2];
+  }
+  return kNodeOk;
+}
+
+template <class R>
+MEDSPRING_HD inline int grid_split_finish(const NodeArrays<R>& N, const GridSplit& G, int r, R h, R vmax2,
+                                          const R* loads, const R* x, const R* v, R* xo, R* vo,
+                                          const R* parts) {
+  const int k = G.lead[r];
+  if (k < 0) return kNodeOk;
+  const int p0 = G.part_begin[k];
+  return split_node_advance(N, G.heavy_node[k], h, vmax2, loads, x, v, xo, vo, parts + 3 * p0,
+                            G.part_begin[k + 1] - p0);
 }
 
 }  // namespace medspring::hd

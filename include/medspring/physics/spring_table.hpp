@@ -74,6 +74,26 @@ struct SplitTableArrays {
 template <class R>
 SplitTableArrays<R> make_split_table(const Model& model, int threads, int chunk = 0);
 
+/// The grid kernel's table with heavy nodes split (hd::GridSplit, kernels_split.hpp): nodes of at most
+/// `chunk` springs (default as HeavyLast: max(kHeavyDegree, twice the median degree)) are whole rows in
+/// node order; then, from a warp boundary, each
+/// heavier node by decreasing degree as consecutive rows of at most max(chunk, ceil(degree / 32)) springs
+/// in spring order, all in one warp (padding rows, part -2, where a node's chunks would straddle two), its
+/// first row the lead that sums them.
+template <class R>
+struct GridSplitArrays {
+  SpringTableArrays<R> table;  // table.row_node: the node of each row (rows = part.size())
+  std::vector<int> part, lead, part_begin, heavy_node, lead_row;
+  int chunk = 0;
+  int parts() const { return part_begin.empty() ? 0 : part_begin.back(); }
+  int rows() const { return static_cast<int>(part.size()); }
+  hd::GridSplit view() const {
+    return {static_cast<int>(part.size()), part.data(), lead.data(), part_begin.data(), heavy_node.data()};
+  }
+};
+template <class R>
+GridSplitArrays<R> make_grid_split_table(const Model& model, int chunk = 0);
+
 /// The row order alone (node of each row; empty for RowOrder::Nodes) from the node degrees.
 std::vector<int> table_row_order(const std::vector<int>& degree, RowOrder order, int threads);
 

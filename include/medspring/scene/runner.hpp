@@ -93,6 +93,18 @@ struct RunHooks {
   double stop_at = std::numeric_limits<double>::infinity();
 };
 
+/// One frame of a run's traces (what run_scene samples after every update, without the energy, the tool
+/// traces and the vessel checks): time, |applied force|, max |u| of `surface` (the displayed surface),
+/// the local overlay's |U| at the contact, |u| of the traced nodes and of the traced atoms (from the DOF
+/// positions x). Shared by run_scene and the batch runner (scene/batch.hpp).
+void scene_trace_sample(const BuiltScene& built, double time, const Vec3& applied, const MatX3& surface,
+                        const MatX3& x, double local_contact, SceneTrace& trace);
+
+/// The summary's metrics from a run's traces: release time, contact peak and hold, atom and local hold,
+/// peak and final max displacement, return time. Returns the hold frame (the last frame with the first
+/// load on). Shared by run_scene and the batch runner.
+Index summarize_trace(const BuiltScene& built, const SceneTrace& trace, RunSummary& summary);
+
 /// Runs the scene for its duration (ceil(duration / dt) updates). Never throws after the first update
 /// (numerical trouble is counted in summary.warnings); throws what Simulation throws while setting up
 /// (InvalidInput for bad loads) and whatever on_frame throws.

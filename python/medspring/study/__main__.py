@@ -1,4 +1,5 @@
-"""`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes] [--device cpu]`:
+"""`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]
+[--device cpu|cuda|cpu-batch|auto]`:
 runs a parameter study (docs/studies.md). Errors are one line on stderr with exit code 2."""
 
 from __future__ import annotations
@@ -9,8 +10,8 @@ import sys
 
 
 def _cuda_refusal() -> str:
-    """Why --device cuda cannot run here ("" when it can): no CUDA backend in the build, no usable device,
-    or (with both) the study runner's GPU path, which is not written yet (docs/gpu.md, "Python")."""
+    """Why --device cuda cannot run here ("" when it can): no CUDA backend in the build or no usable
+    device (docs/gpu.md, "Study runs on the GPU")."""
     try:
         from .. import gpu
     except ImportError as e:  # the compiled module itself is missing
@@ -20,8 +21,7 @@ def _cuda_refusal() -> str:
     ok, why = gpu.available()
     if not ok:
         return why.splitlines()[0] if why else "no usable CUDA device"
-    return ("the study runner's GPU path is not written yet: its metrics are computed by the CPU scene run "
-            "(medspring.gpu.Engine steps batches from Python, docs/gpu.md)")
+    return ""
 
 
 def main(argv=None) -> int:
@@ -44,9 +44,17 @@ def main(argv=None) -> int:
     p.add_argument("--scaling", type=int, metavar="RUNS", default=0,
                    help="also time RUNS runs on 1..N local workers (N = --workers or every core) for the report")
     p.add_argument("--max-batches", type=int, default=None, help=argparse.SUPPRESS)
-    p.add_argument("--device", choices=["cpu", "cuda"], default="cpu",
-                   help="where the runs step: cpu (default) or cuda (docs/gpu.md)")
+    p.add_argument("--device", choices=["cpu", "cuda", "cpu-batch", "auto"], default="cpu",
+                   help="where the runs step: cpu (default: each run a scene run), cuda (each task's runs one "
+                   "batch on the GPU engine; in this process unless --workers/--scheduler), cpu-batch (the "
+                   "same batch path on the CPU engine, the reference of cuda) or auto (cuda where a GPU is "
+                   "usable, else cpu, saying which and why); docs/gpu.md")
     a = p.parse_args(argv)
+    if a.device == "auto":  # the only fallback, asked for: said in one line
+        why = _cuda_refusal()
+        a.device = "cpu" if why else "cuda"
+        print(f"medspring study: --device auto: {'the CPU engine (' + why + ')' if why else 'the GPU engine'}",
+              file=sys.stderr)
     if a.device == "cuda":
         # No silent fallback (docs/gpu.md): a build without the CUDA backend or a machine without a usable
         # device is refused in one line naming the reason and --device cpu.
@@ -58,6 +66,9 @@ def main(argv=None) -> int:
     if a.workers is not None and a.workers < 0:
         print("medspring study: --workers: must be >= 0", file=sys.stderr)
         return 2
+    workers = a.workers
+    if a.device == "cuda" and workers is None and a.scheduler is None:
+        workers = 0  # one process drives the card: each task's runs are one batch on it
 
     from .. import Error
     from . import measure_scaling, run
@@ -67,8 +78,8 @@ def main(argv=None) -> int:
 
     try:
         st = load_study(a.study)
-        df = run(st, out=a.out, scheduler=a.scheduler, workers=a.workers, resume=a.resume, yes=a.yes,
-                 progress=not a.quiet, report=not a.no_report, max_batches=a.max_batches)
+        df = run(st, out=a.out, scheduler=a.scheduler, workers=workers, resume=a.resume, yes=a.yes,
+                 progress=not a.quiet, report=not a.no_report, max_batches=a.max_batches, device=a.device)
         if a.scaling > 0:
             n = a.workers or os.cpu_count() or 1
             store = Store(__import__("pathlib").Path(a.out), st, create=False)

@@ -55,7 +55,7 @@ def local_client(workers: int | None):
     return distributed.Client(cluster, set_as_default=False), cluster
 
 
-def _task(st: Study, b: int, scene_json: str) -> tuple:
+def _task(st: Study, b: int, scene_json: str, device: str = "cpu") -> tuple:
     sl = range(b * st.batch, min(st.num_runs, (b + 1) * st.batch))
     runs = [(i, st.params(i)) for i in sl]
     return runs, {
@@ -66,6 +66,7 @@ def _task(st: Study, b: int, scene_json: str) -> tuple:
         "field_times": st.field_times,
         "field_dtype": st.field_dtype,
         "num_surface_nodes": st.num_surface_nodes,
+        "device": device,
     }
 
 
@@ -117,6 +118,7 @@ def run(
     report: bool = True,
     csv_every_s: float = 2.0,
     max_batches: int | None = None,
+    device: str = "cpu",
 ):
     """Runs a study (file, JSON text, dict or Study) into the folder `out` and returns the summary table
     (pandas DataFrame of the finished runs).
@@ -126,8 +128,12 @@ def run(
     (default every core). workers=0 runs every batch in this process without Dask (the 1-process
     reference). resume: complete the study already in `out` (only missing batches are run). yes: allow
     more runs than the study's max_runs (default 100000). max_batches: stop after that many batches
-    (tests; the folder stays resumable). Everything is validated, and the scheduler reached, before
-    anything is written."""
+    (tests; the folder stays resumable). device: "cpu" (each run a scene run), "cuda" (each batch of runs
+    stepped together on the GPU engine, docs/gpu.md "Study runs on the GPU") or "cpu-batch" (the same
+    batch path on the CPU engine). Everything is validated, and the scheduler reached, before anything
+    is written."""
+    if device not in ("cpu", "cuda", "cpu-batch"):
+        raise InvalidInput(f"device: expected 'cpu', 'cuda' or 'cpu-batch'; got {device!r}")
     st = study if isinstance(study, Study) else load_study(study)
     if st.num_runs > st.max_runs and not yes:
         raise InvalidInput(
@@ -150,7 +156,7 @@ def run(
         pool = own_client
     try:
         store = Store(out, st, create=not existing)
-        return _drive(st, store, pool, progress, report, csv_every_s, max_batches)
+        return _drive(st, store, pool, progress, report, csv_every_s, max_batches, device)
     finally:
         if own_client is not None:
             own_client.close()
@@ -158,7 +164,8 @@ def run(
             own_cluster.close()
 
 
-def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_every_s: float, max_batches):
+def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_every_s: float, max_batches,
+           device: str = "cpu"):
     scene_json = json.dumps(st.scene)
     missing = store.missing_batches()
     if max_batches is not None:
@@ -191,7 +198,7 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
 
     if pool is None:
         for b in missing:
-            runs, task = _task(st, b, scene_json)
+            runs, task = _task(st, b, scene_json, device)
             finish(b, runs, run_batch(task))
     else:
         from distributed import KilledWorker, as_completed
@@ -206,7 +213,7 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
             b = next(pending, None)
             if b is None:
                 return None
-            runs, task = _task(st, b, scene_json)
+            runs, task = _task(st, b, scene_json, device)
             fut = pool.submit(run_batch, task, key=f"medspring-study-{fp}-{b}", pure=False, retries=1)
             tasks[fut.key] = (b, runs)
             return fut
@@ -238,6 +245,7 @@ def _drive(st: Study, store: Store, pool, progress: bool, report: bool, csv_ever
         "engine_seconds": engine_total,
         "duplicates_ignored": duplicates,
         "host": socket.gethostname(),
+        "device": device,
     }
     sessions = list(store.g.attrs.get("sessions", []))
     sessions.append(meta)

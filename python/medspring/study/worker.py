@@ -44,10 +44,36 @@ def run_batch(task: dict) -> dict:
     load_force = np.full((n, 3), np.nan)
     engine = np.zeros(n)
     fields = np.full((n, len(times), S, 3), np.nan, dtype=dtype) if want_fields else None
+    device = task.get("device", "cpu")
+    batched: list = []
+    if device in ("cuda", "cpu-batch"):
+        # The batch engine (docs/gpu.md, "Study runs on the GPU"): every run of the task built here and
+        # stepped together; a run whose build fails comes back as its error text. A GPU failure (no device,
+        # an unsupported model) raises: the study stops with it rather than recording every run failed.
+        docs = []
+        for index, overrides in runs:
+            try:
+                docs.append(json.dumps(apply_overrides(base, overrides)))
+            except Exception as e:  # a bad override: the run fails, the batch goes on without it
+                docs.append(e)
+        good = [d for d in docs if isinstance(d, str)]
+        origins = [f"run {index}" for (index, _), d in zip(runs, docs) if isinstance(d, str)]
+        results = runner.run_batch(good, "/", times, want_fields, "cuda" if device == "cuda" else "cpu", origins)
+        it = iter(results)
+        batched = [next(it) if isinstance(d, str) else d for d in docs]
     for k, (index, overrides) in enumerate(runs):
         try:
-            doc = apply_overrides(base, overrides)
-            r = runner.run(json.dumps(doc), "/", f"run {index}", times, want_fields)
+            if batched:
+                r = batched[k]
+                if isinstance(r, Exception):
+                    raise r
+                if isinstance(r, str):  # the build's error, "InvalidInput: run 17: ..." as below
+                    failed[k] = 1
+                    errors[k] = r.splitlines()[0][:500]
+                    continue
+            else:
+                doc = apply_overrides(base, overrides)
+                r = runner.run(json.dumps(doc), "/", f"run {index}", times, want_fields)
             s = r["summary"]
             out_metrics[k] = [float(s[m]) for m in metrics]
             load_node[k] = r["load_node"]
