@@ -12,6 +12,7 @@
 #include <string>
 
 #include "medspring/core/check.hpp"
+#include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/models/smrm_vessel.hpp"
@@ -165,6 +166,29 @@ TEST(DeclaredParameters, EveryHybridFieldRoundTripsThroughAModelPackage) {
   const ModelPackage back = decode_model_package(encode_model_package(package_of(kidney, "k")), "k.msm");
   EXPECT_EQ(dump(back.hybrid), dump(h));
   EXPECT_EQ(back.hybrid.nonlinear, h.nonlinear);
+}
+
+TEST(DeclaredParameters, EverySurfaceAndSmrmFieldRoundTripsThroughAModelPackage) {
+  // version 5 (model_package.hpp): the surface and SMRM settings are stored by their declarations too
+  SurfaceBodyParams sp;
+  const std::string surface_defaults = dump(sp);
+  perturb(sp);
+  ASSERT_NE(dump(sp), surface_defaults);
+  const SurfaceBody surface(tube(6, 8, 2.5, 3.0), sp, "tube", GridLayout{6, 8});
+  const ModelPackage a = decode_model_package(encode_model_package(package_of(surface)), "s.msm");
+  EXPECT_EQ(dump(a.surface_params), dump(sp));
+
+  SmrmSettings vs;
+  vs.atoms = 12;
+  const std::string smrm_defaults = dump(vs);
+  perturb(vs);
+  vs.chain.nonlinear = !vs.chain.nonlinear;  // the model's "nonlinear" key, stored beside the declaration
+  ASSERT_NE(dump(vs), smrm_defaults);
+  const SmrmVessel vessel = smrm_phantom(VesselPath::Arc, CrossSectionShape::Elliptical, vs);
+  const ModelPackage b = decode_model_package(encode_model_package(package_of(vessel)), "v.msm");
+  EXPECT_EQ(dump(b.smrm), dump(vs));
+  EXPECT_EQ(b.smrm.atoms, 12);
+  EXPECT_EQ(b.smrm.chain.nonlinear, vs.chain.nonlinear);
 }
 
 TEST(DeclaredParameters, EveryBoundedFieldRejectsAValueOutOfRangeNamingItsPath) {
