@@ -373,7 +373,8 @@ const std::vector<CommandSpec>& commands() {
       {.name = "study",
        .summary = "parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md",
        .usage = "medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N]\n"
-                "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]",
+                "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]\n"
+                "                      [--set P=V[,P=V]]",
        .about =
            "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters\n"
            "(grids, lists, seeded random or Latin-hypercube samples), every run a task on the engine in a\n"
@@ -400,7 +401,12 @@ const std::vector<CommandSpec>& commands() {
                    {.name = "device",
                     .value = "cpu|cuda",
                     .def = "cpu",
-                    .help = "where the runs step (cuda: refused, not yet)"}},
+                    .help = "where the runs step (cuda: refused, not yet)"},
+                   {.name = "set",
+                    .value = "P=V[,P=V]",
+                    .def = "the study file's",
+                    .help = "override a declared study setting: samples.count, samples.method, seed, "
+                            "batch, max_runs (docs/parameters.md)"}},
        .run = cmd_study},
       {.name = "run",
        .summary = "run a scene file (docs/scenes.md): ParaView series, traces, summary",

@@ -117,6 +117,7 @@ def run(
     report: bool = True,
     csv_every_s: float = 2.0,
     max_batches: int | None = None,
+    settings: Any = None,
 ):
     """Runs a study (file, JSON text, dict or Study) into the folder `out` and returns the summary table
     (pandas DataFrame of the finished runs).
@@ -126,9 +127,10 @@ def run(
     (default every core). workers=0 runs every batch in this process without Dask (the 1-process
     reference). resume: complete the study already in `out` (only missing batches are run). yes: allow
     more runs than the study's max_runs (default 100000). max_batches: stop after that many batches
-    (tests; the folder stays resumable). Everything is validated, and the scheduler reached, before
-    anything is written."""
-    st = study if isinstance(study, Study) else load_study(study)
+    (tests; the folder stays resumable). settings: overrides of the study file's declared settings
+    (samples.count, samples.method, seed, batch, max_runs; docs/parameters.md), as load_study takes them.
+    Everything is validated, and the scheduler reached, before anything is written."""
+    st = study if isinstance(study, Study) else load_study(study, settings=settings)
     if st.num_runs > st.max_runs and not yes:
         raise InvalidInput(
             f"{st.origin}: the study has {st.num_runs} runs, more than max_runs = {st.max_runs}: "
