@@ -8,11 +8,29 @@
 // body's require_known list if it has one), then `medspring help --markdown > docs/cli.md`.
 #include "commands.hpp"
 
+#include <stdexcept>
+
+#include "medspring/scene/study_settings.hpp"
+
 namespace medspring::cli {
 
 namespace {
 
 // Options several commands share, with the same meaning.
+// An option whose unit, default and help are a declared field's (core/params.hpp): `calibrate --E-kPa`
+// is FemCaseSettings::E_kPa (scene/study_settings.hpp, docs/parameters.md).
+template <ParamStruct T>
+OptionSpec declared_option(const char* option, const char* field, const char* value) {
+  for (const ParamRow& r : param_rows<T>())
+    if (r.name == field)
+      return {.name = option,
+              .value = value,
+              .unit = r.unit,
+              .def = r.default_value,
+              .help = r.range.empty() ? r.doc : cat(r.doc, "; ", r.range)};
+  throw std::logic_error(cat("apps/commands.cpp: '", field, "' is not a declared field"));
+}
+
 const OptionSpec kJson{.name = "json", .help = "print the results as JSON on stdout"};
 const OptionSpec kQuiet{.name = "quiet", .help = "no progress on stderr"};
 const OptionSpec kForce{.name = "force", .help = "replace a non-empty DIR (refused otherwise)"};
@@ -549,13 +567,9 @@ const std::vector<CommandSpec>& commands() {
            {{.name = "organ", .value = "phantom|kidney", .def = "phantom", .help = "the organ"},
             {.name = "kind", .value = "hybrid|surface|volumetric", .def = "hybrid", .help = "the model kind"},
             {.name = "linear", .help = "linear springs (default Duffing)"},
-            {.name = "E-kPa",
-             .value = "E",
-             .unit = "kPa",
-             .def = "10",
-             .help = "the tissue's Young's modulus"},
-            {.name = "nu", .value = "NU", .def = "0.45", .help = "the tissue's Poisson ratio (< 0.5)"},
-            {.name = "radius", .value = "A", .unit = "mm", .def = "8", .help = "contact disk radius a"},
+            declared_option<FemCaseSettings>("E-kPa", "E_kPa", "E"),
+            declared_option<FemCaseSettings>("nu", "nu", "NU"),
+            declared_option<FemCaseSettings>("radius", "radius", "A"),
             {.name = "nodes", .value = "N", .def = "2000", .help = "node count of the volumetric model"},
             kScenes,
             kJson,

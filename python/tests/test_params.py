@@ -180,3 +180,28 @@ def test_study_settings_are_declared_keywords_properties_and_json():
         m.study_settings_from_json('{"samples": {"count": 0}}', "s.json")
     with pytest.raises(TypeError, match="unknown field"):
         m.StudySettings(no_such_field=1)
+
+
+def test_fem_case_settings_are_declared_once():
+    """FemCaseSettings (scene/study_settings.hpp): the keys of a medspring.study.fem case and the defaults of
+    fem_reference, calibrate and `medspring calibrate` are the declaration's."""
+    if not hasattr(m, "FemCaseSettings"):
+        pytest.skip("built without the FEM layer")
+    import inspect
+
+    from medspring.study import fem
+
+    names = [spec["name"] for spec in m.FemCaseSettings._params]
+    assert names == ["E_kPa", "nu", "radius", "support_depth", "level"]
+    assert fem.CASE_KEYS == tuple(names) + ("support_direction",)
+    d = m.FemCaseSettings()
+    sig = inspect.signature(fem.calibrate)
+    for name in ("E_kPa", "nu", "radius", "support_depth"):
+        assert sig.parameters[name].default == getattr(d, name), name
+        assert f"{name}: float = {getattr(d, name)}" in m.fem_reference.__doc__, name
+    assert f"level: int = {d.level}" in m.fem_reference.__doc__
+    assert m.FemCaseSettings(E_kPa=12.0).E_kPa == 12.0
+    with pytest.raises(m.InvalidInput, match=r"nu: must be < 0.5 \(got 0.5\)"):
+        d.set_text("nu", "0.5")
+    with pytest.raises(m.InvalidInput, match=r"level: must be an integer in 1..3 \(got 4\)"):
+        d.set_text("level", "4")

@@ -35,6 +35,10 @@ std::vector<ParamSet> parameter_sets() {
        "the top-level keys of a study file ([studies.md](studies.md)); `medspring study STUDY --set "
        "NAME=VALUE`",
        "include/medspring/scene/study_settings.hpp", param_rows<StudySettings>()},
+      {"FEM calibration case", "FemCaseSettings",
+       "`medspring calibrate --E-kPa --nu --radius`; the keyword arguments of `medspring.fem_reference` "
+       "and the keys of a case of `medspring.study.fem` ([studies.md](studies.md))",
+       "include/medspring/scene/study_settings.hpp", param_rows<FemCaseSettings>()},
   };
 }
 

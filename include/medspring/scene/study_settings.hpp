@@ -62,6 +62,35 @@ void for_each_field(S& s, V&& v) {
     s.max_runs);
 }
 
+/// One FEM reference case of a calibration (docs/accuracy.md, docs/studies.md): the tissue and the contact
+/// load that `medspring calibrate` fits the springs to, the keyword defaults of medspring.fem_reference and
+/// the per-case keys of medspring.study.fem (one Dask task per case; support_direction, a vector, is the
+/// one case key not declared here). The engine's own checks (fem::validate_material) still apply.
+struct FemCaseSettings {
+  double E_kPa = 10.0;         // Young's modulus of the tissue
+  double nu = 0.45;            // Poisson ratio
+  double radius = 8.0;         // contact disk radius, mm
+  double support_depth = 5.0;  // points within this depth of the extreme point along the support are fixed
+  Index level = 1;             // tetrahedral refinement: 1 the surface as given, 2, 3 subdivided
+};
+template <ParamOf<FemCaseSettings> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"E_kPa", "kPa", "Young's modulus of the tissue (compressible Neo-Hookean)"}.positive(),
+    s.E_kPa);
+  v(ParamSpec{"nu", "", "Poisson ratio of the tissue (the engine also needs > -1)"}.at_most(0.5, true), s.nu);
+  v(ParamSpec{"radius", "mm", "contact disk radius a: the force is spread over |x - centre| < a"}.positive(),
+    s.radius);
+  v(ParamSpec{"support_depth", "mm",
+              "surface points within this depth of the extreme point along the support "
+              "direction are fixed"}
+        .nonnegative(),
+    s.support_depth);
+  v(ParamSpec{"level", "", "tetrahedral refinement: 1 the surface as given, 2 and 3 subdivided"}
+        .at_least(1)
+        .at_most(3),
+    s.level);
+}
+
 /// Reads the declared keys of a study file's JSON object `json_text` (other keys are left to the
 /// caller); errors are InvalidInput "ORIGIN: samples.count: must be ...".
 StudySettings study_settings_from_json(const std::string& json_text, const std::string& origin);

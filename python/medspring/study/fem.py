@@ -27,10 +27,12 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .._medspring import InvalidInput
+from .._medspring import FemCaseSettings, InvalidInput
 
-# fem_reference's keyword arguments a case may set (the rest come from the defaults given to references()).
-CASE_KEYS = ("E_kPa", "nu", "radius", "support_direction", "support_depth", "level")
+# fem_reference's keyword arguments a case may set (the rest come from the defaults given to references()):
+# the declared FemCaseSettings (scene/study_settings.hpp, docs/parameters.md) and the support direction.
+_CASE = FemCaseSettings()
+CASE_KEYS = tuple(spec["name"] for spec in FemCaseSettings._params) + ("support_direction",)
 
 
 def solve_case(vertices: np.ndarray, faces: np.ndarray, case: dict) -> dict:
@@ -141,11 +143,11 @@ def calibrate(
     centres: Any,
     forces: Any,
     held_out: Sequence[dict] = (),
-    E_kPa: float = 10.0,
-    nu: float = 0.45,
-    radius: float = 8.0,
+    E_kPa: float = _CASE.E_kPa,
+    nu: float = _CASE.nu,
+    radius: float = _CASE.radius,
     support_direction=(0.0, 0.0, -1.0),
-    support_depth: float = 5.0,
+    support_depth: float = _CASE.support_depth,
     nonlinear: bool = True,
     client=None,
     scheduler: str | None = None,
