@@ -78,8 +78,7 @@ void for_each_field(S& s, V&& v) {
   v(ParamSpec{"E_kPa", "kPa", "Young's modulus of the tissue (compressible Neo-Hookean)"}.positive(),
     s.E_kPa);
   v(ParamSpec{"nu", "", "Poisson ratio of the tissue (the engine also needs > -1)"}.at_most(0.5, true), s.nu);
-  v(ParamSpec{"radius", "mm", "contact disk radius a: the force is spread over |x - centre| < a"}.positive(),
-    s.radius);
+  v(ParamSpec{"radius", "mm", "contact disk radius a"}.positive(), s.radius);
   v(ParamSpec{"support_depth", "mm",
               "surface points within this depth of the extreme point along the support "
               "direction are fixed"}
