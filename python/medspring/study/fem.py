@@ -27,12 +27,22 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .._medspring import FemCaseSettings, InvalidInput
+from .._medspring import InvalidInput
+
+try:
+    from .._medspring import FemCaseSettings
+except ImportError:  # a build without the FEM layer (no fem_reference either): the module still imports
+    FemCaseSettings = None
 
 # fem_reference's keyword arguments a case may set (the rest come from the defaults given to references()):
 # the declared FemCaseSettings (scene/study_settings.hpp, docs/parameters.md) and the support direction.
-_CASE = FemCaseSettings()
-CASE_KEYS = tuple(spec["name"] for spec in FemCaseSettings._params) + ("support_direction",)
+_CASE = FemCaseSettings() if FemCaseSettings is not None else None
+CASE_KEYS = tuple(spec["name"] for spec in getattr(FemCaseSettings, "_params", ())) + ("support_direction",)
+
+
+def _default(name: str):
+    return getattr(_CASE, name, None)
+
 
 
 def solve_case(vertices: np.ndarray, faces: np.ndarray, case: dict) -> dict:
@@ -143,11 +153,11 @@ def calibrate(
     centres: Any,
     forces: Any,
     held_out: Sequence[dict] = (),
-    E_kPa: float = _CASE.E_kPa,
-    nu: float = _CASE.nu,
-    radius: float = _CASE.radius,
+    E_kPa: float = _default("E_kPa"),
+    nu: float = _default("nu"),
+    radius: float = _default("radius"),
     support_direction=(0.0, 0.0, -1.0),
-    support_depth: float = _CASE.support_depth,
+    support_depth: float = _default("support_depth"),
     nonlinear: bool = True,
     client=None,
     scheduler: str | None = None,
