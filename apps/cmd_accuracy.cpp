@@ -32,6 +32,7 @@
 #include "medspring/physics/loads.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/study_settings.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "scene_support.hpp"
 
@@ -50,9 +51,10 @@ int cmd_accuracy(const Args& args) {
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
-  st.material = fem::Material::from_kpa(args.number("E-kPa", 10.0), args.number("nu", 0.45));
+  const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
+  st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));
   fem::validate_material(st.material, "accuracy: --E-kPa/--nu");
-  st.radius = args.number("radius", 8.0);
+  st.radius = args.number("radius", def.radius);
   require(std::isfinite(st.radius) && st.radius > 0, "accuracy: --radius must be > 0 mm");
   st.quick = args.flag("quick");
   st.quiet = args.flag("quiet") || args.flag("json");
@@ -190,9 +192,10 @@ int cmd_calibrate(const Args& args) {
   args.require_known(
       {"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes"});
   Settings st;
-  st.material = fem::Material::from_kpa(args.number("E-kPa", 10.0), args.number("nu", 0.45));
+  const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
+  st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));
   fem::validate_material(st.material, "calibrate: --E-kPa/--nu");
-  st.radius = args.number("radius", 8.0);
+  st.radius = args.number("radius", def.radius);
   require(std::isfinite(st.radius) && st.radius > 0, "calibrate: --radius must be > 0 mm");
   st.quiet = args.flag("quiet") || args.flag("json");
   const std::string organ = args.get_or("organ", "phantom"), kind = args.get_or("kind", "hybrid");

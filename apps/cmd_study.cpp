@@ -53,10 +53,10 @@ fs::path python_dir() {
 
 int cmd_study(const Args& args) {
   args.require_known(
-      {"out", "scheduler", "workers", "resume", "yes", "quiet", "no-report", "scaling", "device"});
+      {"out", "scheduler", "workers", "resume", "yes", "quiet", "no-report", "scaling", "device", "set"});
   std::vector<std::string> argv = {MEDSPRING_PYTHON_EXECUTABLE, "-m", "medspring.study"};
   for (const auto& p : args.positional()) argv.push_back(p);
-  for (const char* key : {"out", "scheduler", "workers", "scaling", "device"})
+  for (const char* key : {"out", "scheduler", "workers", "scaling", "device", "set"})
     if (auto v = args.get(key)) {
       argv.push_back(std::string("--") + key);
       argv.push_back(*v);

@@ -8,11 +8,29 @@
 // body's require_known list if it has one), then `medspring help --markdown > docs/cli.md`.
 #include "commands.hpp"
 
+#include <stdexcept>
+
+#include "medspring/scene/study_settings.hpp"
+
 namespace medspring::cli {
 
 namespace {
 
 // Options several commands share, with the same meaning.
+// An option whose unit, default and help are a declared field's (core/params.hpp): `calibrate --E-kPa`
+// is FemCaseSettings::E_kPa (scene/study_settings.hpp, docs/parameters.md).
+template <ParamStruct T>
+OptionSpec declared_option(const char* option, const char* field, const char* value) {
+  for (const ParamRow& r : param_rows<T>())
+    if (r.name == field)
+      return {.name = option,
+              .value = value,
+              .unit = r.unit,
+              .def = r.default_value,
+              .help = r.range.empty() ? r.doc : cat(r.doc, "; ", r.range)};
+  throw std::logic_error(cat("apps/commands.cpp: '", field, "' is not a declared field"));
+}
+
 const OptionSpec kJson{.name = "json", .help = "print the results as JSON on stdout"};
 const OptionSpec kQuiet{.name = "quiet", .help = "no progress on stderr"};
 const OptionSpec kForce{.name = "force", .help = "replace a non-empty DIR (refused otherwise)"};
@@ -378,7 +396,8 @@ const std::vector<CommandSpec>& commands() {
       {.name = "study",
        .summary = "parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md",
        .usage = "medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N]\n"
-                "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]",
+                "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]\n"
+                "                      [--set P=V[,P=V]]",
        .about =
            "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters\n"
            "(grids, lists, seeded random or Latin-hypercube samples), every run a task on the engine in a\n"
@@ -408,7 +427,12 @@ const std::vector<CommandSpec>& commands() {
                     .help =
                         "where the runs step: cuda = each task's runs one batch on the GPU engine "
                         "(docs/gpu.md; an error without a GPU), cpu-batch = the same batch path on the CPU, "
-                        "auto = cuda where a GPU is usable, else cpu (said on stderr)"}},
+                        "auto = cuda where a GPU is usable, else cpu (said on stderr)"},
+                    {.name = "set",
+                    .value = "P=V[,P=V]",
+                    .def = "the study file's",
+                    .help = "override a declared study setting: samples.count, samples.method, seed, "
+                            "batch, max_runs (docs/parameters.md)"}},
        .run = cmd_study},
       {.name = "run",
        .summary = "run a scene file (docs/scenes.md): ParaView series, traces, summary",
@@ -494,13 +518,9 @@ const std::vector<CommandSpec>& commands() {
             {.name = "quick", .help = "phantom only, 2 sites, 0.5 N, coarse validation (a smoke test)"},
             kQuiet,
             kJson,
-            {.name = "E-kPa",
-             .value = "E",
-             .unit = "kPa",
-             .def = "10",
-             .help = "the tissue's Young's modulus"},
-            {.name = "nu", .value = "NU", .def = "0.45", .help = "the tissue's Poisson ratio (< 0.5)"},
-            {.name = "radius", .value = "A", .unit = "mm", .def = "8", .help = "contact disk radius a"},
+            declared_option<FemCaseSettings>("E-kPa", "E_kPa", "E"),
+            declared_option<FemCaseSettings>("nu", "nu", "NU"),
+            declared_option<FemCaseSettings>("radius", "radius", "A"),
             {.name = "level",
              .value = "1|2|3",
              .def = "1",
@@ -551,13 +571,9 @@ const std::vector<CommandSpec>& commands() {
            {{.name = "organ", .value = "phantom|kidney", .def = "phantom", .help = "the organ"},
             {.name = "kind", .value = "hybrid|surface|volumetric", .def = "hybrid", .help = "the model kind"},
             {.name = "linear", .help = "linear springs (default Duffing)"},
-            {.name = "E-kPa",
-             .value = "E",
-             .unit = "kPa",
-             .def = "10",
-             .help = "the tissue's Young's modulus"},
-            {.name = "nu", .value = "NU", .def = "0.45", .help = "the tissue's Poisson ratio (< 0.5)"},
-            {.name = "radius", .value = "A", .unit = "mm", .def = "8", .help = "contact disk radius a"},
+            declared_option<FemCaseSettings>("E-kPa", "E_kPa", "E"),
+            declared_option<FemCaseSettings>("nu", "nu", "NU"),
+            declared_option<FemCaseSettings>("radius", "radius", "A"),
             {.name = "nodes", .value = "N", .def = "2000", .help = "node count of the volumetric model"},
             kScenes,
             kJson,

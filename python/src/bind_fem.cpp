@@ -6,9 +6,11 @@
 #include <vector>
 
 #include "bind_common.hpp"
+#include "bind_params.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/physics/loads.hpp"
+#include "medspring/scene/study_settings.hpp"
 
 namespace medspring::python {
 
@@ -23,6 +25,14 @@ fem::SupportRule support_rule(py::handle direction, double depth) {
 }  // namespace
 
 void bind_fem(py::module_& m) {
+  // One FEM reference case (declared in scene/study_settings.hpp): the defaults of fem_reference below and
+  // of medspring.study.fem.
+  py::class_<FemCaseSettings> fem_case(m, "FemCaseSettings",
+                                       "One FEM reference case of a calibration: E_kPa, nu, radius, "
+                                       "support_depth, level (docs/parameters.md).");
+  def_params(fem_case);
+  settings_helpers(fem_case);
+  const FemCaseSettings kCase{};
   m.def(
       "fem_reference",
       [](py::handle vertices, py::handle faces, py::handle centre, py::handle force, double E_kPa, double nu,
@@ -54,8 +64,10 @@ void bind_fem(py::module_& m) {
         out["fixed_fem_nodes"] = fixed;
         return out;
       },
-      "vertices"_a, "faces"_a, "centre"_a, "force"_a, "E_kPa"_a = 10.0, "nu"_a = 0.45, "radius"_a = 8.0,
-      "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0), "support_depth"_a = 5.0, "level"_a = 1,
+      // the defaults are the declaration's (FemCaseSettings, scene/study_settings.hpp)
+      "vertices"_a, "faces"_a, "centre"_a, "force"_a, "E_kPa"_a = kCase.E_kPa, "nu"_a = kCase.nu,
+      "radius"_a = kCase.radius, "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0),
+      "support_depth"_a = kCase.support_depth, "level"_a = static_cast<int>(kCase.level),
       "FEM displacement (V, 3) in mm of the vertices of a closed surface (mm) under a force (N) spread\n"
       "uniformly over the contact disk |x - centre| < radius (mm), with the surface points within\n"
       "support_depth mm of the extreme point along support_direction fixed. Compressible Neo-Hookean\n"
@@ -139,9 +151,9 @@ void bind_fem(py::module_& m) {
         out["support"] = fem::support_nodes(s.V, rule);
         return out;
       },
-      "vertices"_a, "faces"_a, "atoms"_a, "centres"_a, "forces"_a, "E_kPa"_a = 10.0, "nu"_a = 0.45,
-      "radius"_a = 8.0, "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0), "support_depth"_a = 5.0,
-      "nonlinear"_a = true, "fem_displacements"_a = py::none(),
+      "vertices"_a, "faces"_a, "atoms"_a, "centres"_a, "forces"_a, "E_kPa"_a = kCase.E_kPa, "nu"_a = kCase.nu,
+      "radius"_a = kCase.radius, "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0),
+      "support_depth"_a = kCase.support_depth, "nonlinear"_a = true, "fem_displacements"_a = py::none(),
       "Fits the hybrid model's stiffnesses (k_surf, k_spoke, k_cl, k_r; N/mm) on the surface (vertices,\n"
       "faces; mm) with centerline atoms to the FEM response of a tissue (E in kPa, nu) on the training\n"
       "loads: force rows (L, 3) in N over contact disks at centres (L, 3). The support rule pins the same\n"

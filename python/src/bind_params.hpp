@@ -81,6 +81,11 @@ void def_params(py::class_<T, Extra...>& cls) {
   });
   cls.attr("_params") = py::tuple(specs);  // the declarations, in order (tests, tools)
   cls.def(
+      "set_text", [](T& t, const std::string& name, const std::string& text) { set_param(t, name, text); },
+      py::arg("name"), py::arg("text"),
+      "Sets the field `name` (a nested one as 'duffing.eta') from text, as the command line's --set does: "
+      "its type and range checked, InvalidInput naming it otherwise.");
+  cls.def(
       "_param_text",
       [](const T& t, const std::string& name) {
         std::string out;

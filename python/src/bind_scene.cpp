@@ -17,12 +17,14 @@
 #include <vector>
 
 #include "bind_common.hpp"
+#include "bind_params.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/scene/batch.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/file_loader.hpp"
 #include "medspring/scene/runner.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/study_settings.hpp"
 #ifdef MEDSPRING_PYTHON_WITH_FEM
 #include "medspring/fem/volumetric.hpp"
 #endif
@@ -314,6 +316,28 @@ void bind_scene(py::module_& m) {
   m.def(
       "scene_data_dir", [] { return scene_data_dir(); },
       "The folder that ${MEDSPRING_DATA} in scene files stands for.");
+
+  // ---- Study settings (docs/studies.md), declared in scene/study_settings.hpp ----
+  py::enum_<SampleMethod> sample_method(m, "SampleMethod",
+                                        "How a study draws its sampled quantities ('random' or "
+                                        "'latin_hypercube' accepted wherever one is expected).");
+  sample_method.value("Random", SampleMethod::Random).value("LatinHypercube", SampleMethod::LatinHypercube);
+  enum_accepts_strings(
+      sample_method,
+      +[](const std::string& t) { return parse_enum(t, static_cast<SampleMethod*>(nullptr)); });
+  py::class_<StudySamples> samples_cls(m, "StudySamples", "A study file's \"samples\" object.");
+  def_params(samples_cls);
+  settings_helpers(samples_cls);
+  py::class_<StudySettings> study_cls(m, "StudySettings",
+                                      "The declared keys of a study file: samples, seed, batch, max_runs "
+                                      "(docs/parameters.md).");
+  def_params(study_cls);
+  settings_helpers(study_cls);
+  m.def("study_settings_from_json", &study_settings_from_json, py::arg("text"), py::arg("origin") = "study",
+        "The declared keys of a study file's JSON object (text), every one checked; other keys are left "
+        "to the caller. Raises InvalidInput 'ORIGIN: samples.count: must be ...'.");
+  m.def("study_settings_json", &study_settings_json, py::arg("settings"),
+        "A StudySettings as the JSON object a study file holds (text).");
 
   py::class_<SceneRunner>(m, "SceneRunner",
                           "Builds and runs scenes, keeping every model it built (keyed by the scene's "

@@ -157,3 +157,51 @@ def test_flat_properties_share_the_nested_settings():
     assert p.node.mass == 0.6 and p.node.return_k == 0.01
     lo = m.LocalOptions(stiffness="linearized", patch_nodes=12)
     assert lo.settings.solver.stiffness == m.LocalStiffness.Linearized and lo.settings.patch.count == 12
+
+
+def test_study_settings_are_declared_keywords_properties_and_json():
+    """StudySettings (scene/study_settings.hpp): every field a keyword and property, set_text as the
+    command line's --set, and the study file's JSON written and read back by the declaration."""
+    names = [spec["name"] for spec in m.StudySettings._params]
+    assert names == ["samples", "seed", "batch", "max_runs"]
+    assert [spec["name"] for spec in m.StudySamples._params] == ["count", "method"]
+    s = m.StudySettings(seed=7, batch=8, max_runs=50, samples=m.StudySamples(count=4, method="latin_hypercube"))
+    assert (s.seed, s.batch, s.max_runs, s.samples.count) == (7, 8, 50, 4)
+    assert s.samples.method == m.SampleMethod.LatinHypercube
+    doc = json.loads(m.study_settings_json(s))
+    assert doc == {"samples": {"count": 4, "method": "latin_hypercube"}, "seed": 7, "batch": 8, "max_runs": 50}
+    back = m.study_settings_from_json(json.dumps(doc), "s.json")
+    assert json.loads(m.study_settings_json(back)) == doc
+    s.set_text("samples.method", "random")
+    assert s.samples.method == m.SampleMethod.Random
+    with pytest.raises(m.InvalidInput, match="batch: must be an integer in 1..100000"):
+        s.set_text("batch", "0")
+    with pytest.raises(m.InvalidInput, match=r"^s.json: samples.count: must be >= 1 \(got 0\)$"):
+        m.study_settings_from_json('{"samples": {"count": 0}}', "s.json")
+    with pytest.raises(TypeError, match="unknown field"):
+        m.StudySettings(no_such_field=1)
+
+
+def test_fem_case_settings_are_declared_once():
+    """FemCaseSettings (scene/study_settings.hpp): the keys of a medspring.study.fem case and the defaults of
+    fem_reference, calibrate and `medspring calibrate` are the declaration's."""
+    if not hasattr(m, "FemCaseSettings"):
+        pytest.skip("built without the FEM layer")
+    import inspect
+
+    from medspring.study import fem
+
+    names = [spec["name"] for spec in m.FemCaseSettings._params]
+    assert names == ["E_kPa", "nu", "radius", "support_depth", "level"]
+    assert fem.CASE_KEYS == tuple(names) + ("support_direction",)
+    d = m.FemCaseSettings()
+    sig = inspect.signature(fem.calibrate)
+    for name in ("E_kPa", "nu", "radius", "support_depth"):
+        assert sig.parameters[name].default == getattr(d, name), name
+        assert f"{name}: float = {getattr(d, name)}" in m.fem_reference.__doc__, name
+    assert f"level: int = {d.level}" in m.fem_reference.__doc__
+    assert m.FemCaseSettings(E_kPa=12.0).E_kPa == 12.0
+    with pytest.raises(m.InvalidInput, match=r"nu: must be < 0.5 \(got 0.5\)"):
+        d.set_text("nu", "0.5")
+    with pytest.raises(m.InvalidInput, match=r"level: must be an integer in 1..3 \(got 4\)"):
+        d.set_text("level", "4")

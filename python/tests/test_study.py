@@ -283,6 +283,31 @@ def one_line_error(res):
     return lines[0]
 
 
+def test_declared_study_settings_are_read_checked_and_overridden_by_their_declaration(tmp_path):
+    # samples, seed, batch, max_runs: declared in scene/study_settings.hpp (docs/parameters.md)
+    st = study.load_study(small_study())
+    assert (st.settings.seed, st.settings.batch, st.settings.samples.count) == (5, 2, 6)
+    assert st.method == "latin_hypercube" and st.settings.max_runs == ms._medspring.StudySettings().max_runs
+    over = study.load_study(small_study(), settings="seed=7,samples.count=3,samples.method=random")
+    assert (over.seed, over.count, over.method, over.num_runs) == (7, 3, "random", 9)
+    assert study.load_study(small_study(), settings={"batch": 5}).num_batches == 4
+    with pytest.raises(ms.InvalidInput, match=r"study: --set batch: must be an integer in 1\.\.100000 \(got 0\)"):
+        study.load_study(small_study(), settings={"batch": 0})
+    bad = small_study()
+    bad["batch"] = 0
+    with pytest.raises(ms.InvalidInput, match=r"^study: batch: must be an integer in 1\.\.100000 \(got 0\)$"):
+        study.load_study(bad)
+    bad = small_study()
+    bad["samples"]["method"] = "sobol"
+    with pytest.raises(ms.InvalidInput, match="samples.method: expected 'random' or 'latin_hypercube'"):
+        study.load_study(bad)
+    # the command line: --set reaches the same declaration
+    msg = one_line_error(cli(write_study(tmp_path, small_study()), "--out", tmp_path / "o", "--workers", "0",
+                             "--set", "seed=-1"))
+    assert "--set seed: must be >= 0 (got -1)" in msg
+    assert not (tmp_path / "o").exists()
+
+
 def test_bad_studies_are_refused_naming_the_json_path(tmp_path):
     bad = small_study()
     bad["vary"][0]["path"] = "model.parameters.k_srf"

@@ -41,6 +41,12 @@ std::vector<Index> get_indices(ByteReader& r, const char* field, Index bound) {
   }
   return v;
 }
+/// A node list read by get_params (which is structural): every index in [0, bound).
+void check_indices(ByteReader& r, const std::vector<Index>& v, const char* field, Index bound) {
+  for (std::size_t k = 0; k < v.size(); ++k)
+    if (v[k] < 0 || v[k] >= bound)
+      r.fail(cat(field, "[", k, "]: index ", v[k], " out of range [0, ", bound, ")"));
+}
 void put_doubles(ByteWriter& w, const VecX& v) {
   w.u64(static_cast<std::uint64_t>(v.size()));
   w.doubles(v.data(), static_cast<Index>(v.size()));
@@ -58,11 +64,6 @@ E get_enum(ByteReader& r, const char* field, int count) {
   return static_cast<E>(v);
 }
 
-void put_node(ByteWriter& w, const NodeParams& p) {
-  w.f64(p.mass);
-  w.f64(p.beta);
-  w.f64(p.return_k);
-}
 NodeParams get_node(ByteReader& r) {
   NodeParams p;
   p.mass = r.f64();
@@ -85,27 +86,29 @@ DuffingSettings get_duffing(ByteReader& r) {
   return d;
 }
 
+// Version 5: the SMRM settings by declared name (smrm_vessel.hpp), beside the two fields the
+// declaration leaves to the model's own keys (atoms, chain.nonlinear).
 void put_smrm_settings(ByteWriter& w, const SmrmSettings& s) {
   w.i64(s.atoms);
-  w.i64(s.spokes);
-  w.u8(static_cast<std::uint8_t>(s.frames.mode));
-  w.u8(static_cast<std::uint8_t>(s.frames.anchor));
-  const ChainSettings& c = s.chain;
-  for (double v : {c.k, c.kr, c.mass, c.beta}) w.f64(v);
-  w.flag(c.nonlinear);
-  put_duffing(w, c.duffing);
-  w.flag(c.fix_first);
-  w.flag(c.fix_last);
-  w.f64(c.kb);
-  for (double v : {s.k_loc, s.dedup_tolerance, s.max_radius_factor}) w.f64(v);
-  w.u8(static_cast<std::uint8_t>(s.bending));  // version 2
-  w.f64(s.wall.E);
-  w.f64(s.wall.thickness_ratio);
+  w.flag(s.chain.nonlinear);
+  put_params(w, s);
+}
+void check_smrm_sizes(ByteReader& r, std::int64_t atoms, std::int64_t spokes) {
+  if (atoms < 0 || spokes < 0 || atoms > (1 << 24) || spokes > (1 << 24))
+    r.fail(cat("settings: atoms ", atoms, ", spokes ", spokes));
 }
 void get_smrm_settings(ByteReader& r, SmrmSettings& s, std::uint32_t version) {
+  if (version >= 5) {
+    const std::int64_t atoms = r.i64();
+    s.chain.nonlinear = r.flag("chain.nonlinear");
+    get_params(r, s, "smrm settings");
+    check_smrm_sizes(r, atoms, s.spokes);
+    s.atoms = static_cast<Index>(atoms);
+    return;
+  }
+  // versions 1 to 4: the fields in a fixed order
   const std::int64_t atoms = r.i64(), sp = r.i64();
-  if (atoms < 0 || sp < 0 || atoms > (1 << 24) || sp > (1 << 24))
-    r.fail(cat("settings: atoms ", atoms, ", spokes ", sp));
+  check_smrm_sizes(r, atoms, sp);
   s.atoms = static_cast<Index>(atoms);
   s.spokes = static_cast<Index>(sp);
   s.frames.mode = get_enum<FrameMode>(r, "frames.mode", 2);
@@ -220,11 +223,7 @@ std::string encode_model_package(const ModelPackage& p) {
   w.i64(p.grid.rings);
   w.i64(p.grid.spokes);
   if (p.kind == "surface") {
-    const SurfaceBodyParams& s = p.surface_params;
-    put_node(w, s.node);
-    w.f64(s.k);
-    put_duffing(w, s.duffing);
-    put_indices(w, s.fixed);
+    put_params(w, p.surface_params);  // version 5: every declared field by name (physics/model.hpp)
   } else if (p.kind == "hybrid") {
     put_points(w, p.atoms);
     w.flag(p.hybrid.nonlinear);
@@ -298,10 +297,15 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
   p.grid = GridLayout{static_cast<Index>(rings), static_cast<Index>(spokes)};
   if (p.kind == "surface") {
     SurfaceBodyParams& s = p.surface_params;
-    s.node = get_node(r);
-    s.k = r.f64();
-    s.duffing = get_duffing(r);
-    s.fixed = get_indices(r, "fixed", nv);
+    if (version >= 5) {
+      get_params(r, s, "surface parameters");
+      check_indices(r, s.fixed, "fixed", nv);
+    } else {  // versions 1 to 4: the fields in a fixed order
+      s.node = get_node(r);
+      s.k = r.f64();
+      s.duffing = get_duffing(r);
+      s.fixed = get_indices(r, "fixed", nv);
+    }
   } else if (p.kind == "hybrid") {
     HybridSettings& h = p.hybrid;
     p.atoms = get_points(r, "atoms");
@@ -310,9 +314,7 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
       get_params(r, h, "hybrid settings");
       if (h.spokes_per_atom < 0 || h.spokes_per_atom > nv)
         r.fail(cat("spokes_per_atom: ", h.spokes_per_atom, " out of range [0, ", nv, "]"));
-      for (std::size_t k = 0; k < h.fixed.size(); ++k)
-        if (h.fixed[k] < 0 || h.fixed[k] >= nv)
-          r.fail(cat("fixed[", k, "]: index ", h.fixed[k], " out of range [0, ", nv, ")"));
+      check_indices(r, h.fixed, "fixed", nv);
     } else {  // versions 1 and 2: the fields in a fixed order
       h.surface_node = get_node(r);
       h.atom_node = get_node(r);

@@ -9,6 +9,7 @@
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/spring_law.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/study_settings.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "medspring/tools/contact.hpp"
 
@@ -30,6 +31,14 @@ std::vector<ParamSet> parameter_sets() {
        param_rows<LocalOptions>()},
       {"Tool contact", "ContactSettings", "`contact` (with `tools`)", "include/medspring/tools/contact.hpp",
        param_rows<ContactSettings>()},
+      {"Parameter study", "StudySettings",
+       "the top-level keys of a study file ([studies.md](studies.md)); `medspring study STUDY --set "
+       "NAME=VALUE`",
+       "include/medspring/scene/study_settings.hpp", param_rows<StudySettings>()},
+      {"FEM calibration case", "FemCaseSettings",
+       "`medspring calibrate --E-kPa --nu --radius`; the keyword arguments of `medspring.fem_reference` "
+       "and the keys of a case of `medspring.study.fem` ([studies.md](studies.md))",
+       "include/medspring/scene/study_settings.hpp", param_rows<FemCaseSettings>()},
   };
 }
 
@@ -46,8 +55,9 @@ std::string parameter_tables_markdown() {
       "for the key `method`). A nested name `duffing.eta` is the key `eta` of the object `duffing`. Numbers "
       "and names can also be set on the command line: `medspring run SCENE --set integrator.dt=0.25`.\n\n"
       "Declared so far: the sets below. Still read by hand ([scenes.md](scenes.md), [tools.md](tools.md)): "
-      "the volumetric model's parameters, each tool's shape and path, loads, `record`, and the parameter "
-      "studies' specification ([studies.md](studies.md)).\n";
+      "the volumetric model's parameters, each tool's shape and path, loads, `record`, and the lists and "
+      "objects of a study file: its varied quantities, base scene, `set` and `outputs` "
+      "([studies.md](studies.md)).\n";
   for (ParamSet p : parameter_sets()) {
     for (ParamRow& r : p.rows) {  // a '|' would end the table cell
       std::string doc;
@@ -55,7 +65,7 @@ std::string parameter_tables_markdown() {
       r.doc = doc;
     }
     s += cat("\n## ", p.title, "\n\n`", p.struct_name, "`, declared in [", p.declared_in, "](../",
-             p.declared_in, "); in a scene: ", p.scene_path, ".\n\n");
+             p.declared_in, "); in a file: ", p.scene_path, ".\n\n");
     s += params_markdown(p.rows);
   }
   return s;

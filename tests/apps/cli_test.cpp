@@ -329,7 +329,7 @@ TEST(CliHelp, EveryCommandAndKindListsItsOptionsWithUnitsAndDefaults) {
   }
   // units and defaults beside the options
   const Result accuracy = medspring("accuracy --help");
-  EXPECT_NE(accuracy.out.find("  --radius A              contact disk radius a [mm, default 8]"),
+  EXPECT_NE(accuracy.out.find("  --radius A              contact disk radius a; > 0 [mm, default 8]"),
             std::string::npos)
       << accuracy.out;
   EXPECT_NE(medspring("view --help").out.find("[default 8080]"), std::string::npos);

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 
@@ -33,6 +34,48 @@ BodyPtr vessel_tree() {
   r << 2.0, 2.0, 1.9, 1.8, 1.5, 1.4, 1.3, 1.2, 1.1, 1.0;
   return std::make_shared<SmrmTree>(tree_from_parents(X, {-1, 0, 1, 2, 3, 4, 5, 3, 7, 8}, r),
                                     SmrmTreeSettings{.vessel = {.atoms = 9, .spokes = 12}});
+}
+
+// The small models of the committed version-4 packages (tests/models/data/*_v4.msm, written by the
+// field-by-field writer before the settings went through their declarations): every setting away from
+// its default, so that a field read into the wrong place shows.
+SurfaceBodyParams v4_surface_params() {
+  SurfaceBodyParams p;
+  p.node = {0.4, 0.6, 0.03};
+  p.k = 0.07;
+  p.duffing = {DuffingMode::Absolute, 1.5, 12.0, true};
+  p.fixed = {0, 2, 5};
+  return p;
+}
+BodyPtr v4_surface() {
+  return std::make_shared<SurfaceBody>(tube(4, 6, 2.5, 3.0), v4_surface_params(), "v4 tube",
+                                       GridLayout{4, 6});
+}
+SmrmSettings v4_smrm_settings() {
+  SmrmSettings s;
+  s.atoms = 5;
+  s.spokes = 6;
+  s.frames.mode = FrameMode::RMF;
+  s.frames.anchor = FrameAnchor::OneEnd;
+  s.chain.k = 0.25;
+  s.chain.kr = 0.03;
+  s.chain.mass = 0.6;
+  s.chain.beta = 0.4;
+  s.chain.nonlinear = !s.chain.nonlinear;
+  s.chain.duffing = {DuffingMode::Absolute, 1.5, 12.0, false};
+  s.chain.fix_first = true;
+  s.chain.fix_last = false;
+  s.chain.kb = 0.01;
+  s.k_loc = 0.07;
+  s.dedup_tolerance = 2e-3;
+  s.max_radius_factor = 2.5;
+  s.bending = BendingMode::Constant;
+  s.wall = {0.9, 0.2};
+  return s;
+}
+BodyPtr v4_vessel() {
+  return std::make_shared<SmrmVessel>(
+      smrm_phantom(VesselPath::Arc, CrossSectionShape::Elliptical, v4_smrm_settings()));
 }
 
 // 200 updates with a force on node 5 ramped in and released: the final surface.
@@ -186,6 +229,80 @@ TEST(ModelPackage, OutOfRangeFaceIndexNamesTheFace) {
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("face 3"), std::string::npos) << e.what();
   }
+}
+
+TEST(ModelPackage, OutOfRangeFixedNodeAndUnknownParameterAreNamed) {
+  ModelPackage p = package_of(*surface_tube());
+  p.surface_params.fixed = {0, 1, 100000};
+  try {
+    decode_model_package(encode_model_package(p), "t.msm");
+    FAIL();
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("fixed[2]: index 100000 out of range"), std::string::npos)
+        << e.what();
+  }
+  // a field this build does not declare (a newer writer's): refused by name. The first declared
+  // surface field is "mass"; rename it in the payload and re-frame.
+  const std::string bytes = encode_model_package(package_of(*surface_tube()));
+  std::string payload = bytes.substr(kFrameHeaderSize);
+  const std::string key = std::string("\x04\0\0\0", 4) + "mass";
+  const std::size_t at = payload.find(key);
+  ASSERT_NE(at, std::string::npos);
+  payload.replace(at + 4, 4, "mast");
+  try {
+    decode_model_package(frame_payload(kModelPackageMagic, kModelPackageVersion, payload), "n.msm");
+    FAIL();
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown parameter 'mast'"), std::string::npos) << e.what();
+  }
+}
+
+/// Every declared field of p as "name=value" lines.
+template <ParamStruct T>
+std::string settings_text(const T& p) {
+  std::string out;
+  for_each_field(p, [&](const ParamSpec& s, const auto& f) {
+    using F = std::remove_cvref_t<decltype(f)>;
+    if constexpr (ParamStruct<F>)
+      out += cat(s.name, ".{", settings_text(f), "}\n");
+    else
+      out += cat(s.name, "=", param_value_text(f), "\n");
+  });
+  return out;
+}
+
+TEST(ModelPackage, Version4PackagesStillRead) {
+  // tests/models/data/*_v4.msm: written by the version-4 writer (the surface and SMRM settings field by
+  // field, in a fixed order) from v4_surface() and v4_vessel() above.
+  const std::filesystem::path dir = MEDSPRING_SOURCE_DIR "/tests/models/data";
+  struct Case {
+    const char* file;
+    BodyPtr body;
+  };
+  for (const Case& c : {Case{"surface_v4.msm", v4_surface()}, Case{"smrm_v4.msm", v4_vessel()}}) {
+    SCOPED_TRACE(c.file);
+    const std::string bytes = read_file_bytes(dir / c.file, "model package");
+    ASSERT_EQ(static_cast<unsigned char>(bytes[8]), 4u) << "the fixture is a version-4 package";
+    const ModelPackage old = decode_model_package(bytes, c.file);
+    const ModelPackage now = package_of(*c.body);
+    EXPECT_EQ(old.kind, now.kind);
+    EXPECT_EQ(settings_text(old.surface_params), settings_text(now.surface_params));
+    EXPECT_EQ(settings_text(old.smrm), settings_text(now.smrm));
+    EXPECT_EQ(old.smrm.atoms, now.smrm.atoms);
+    EXPECT_EQ(old.smrm.chain.nonlinear, now.smrm.chain.nonlinear);
+    const BodyPtr rebuilt = make_body(old);
+    EXPECT_EQ(model_fingerprint(rebuilt->model()), model_fingerprint(c.body->model()));
+    EXPECT_EQ(run(rebuilt), run(c.body));
+    // written again, it is a version-5 package with the same settings
+    const std::string again = encode_model_package(old);
+    EXPECT_EQ(static_cast<unsigned char>(again[8]), kModelPackageVersion);
+    const ModelPackage back = decode_model_package(again);
+    EXPECT_EQ(settings_text(back.surface_params), settings_text(now.surface_params));
+    EXPECT_EQ(settings_text(back.smrm), settings_text(now.smrm));
+  }
+  // the fixtures' settings are not the defaults (a field read into the wrong place would show)
+  EXPECT_NE(settings_text(v4_surface_params()), settings_text(SurfaceBodyParams{}));
+  EXPECT_NE(settings_text(v4_smrm_settings()), settings_text(SmrmSettings{}));
 }
 
 TEST(ModelPackage, InvalidContentsAreRefusedByMakeBody) {

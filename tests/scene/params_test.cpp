@@ -12,6 +12,7 @@
 #include <string>
 
 #include "medspring/core/check.hpp"
+#include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/models/smrm_vessel.hpp"
@@ -19,6 +20,7 @@
 #include "medspring/physics/model.hpp"
 #include "medspring/scene/parameter_docs.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/study_settings.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "medspring/tools/contact.hpp"
 
@@ -165,6 +167,67 @@ TEST(DeclaredParameters, EveryHybridFieldRoundTripsThroughAModelPackage) {
   const ModelPackage back = decode_model_package(encode_model_package(package_of(kidney, "k")), "k.msm");
   EXPECT_EQ(dump(back.hybrid), dump(h));
   EXPECT_EQ(back.hybrid.nonlinear, h.nonlinear);
+}
+
+TEST(DeclaredParameters, EverySurfaceAndSmrmFieldRoundTripsThroughAModelPackage) {
+  // version 5 (model_package.hpp): the surface and SMRM settings are stored by their declarations too
+  SurfaceBodyParams sp;
+  const std::string surface_defaults = dump(sp);
+  perturb(sp);
+  ASSERT_NE(dump(sp), surface_defaults);
+  const SurfaceBody surface(tube(6, 8, 2.5, 3.0), sp, "tube", GridLayout{6, 8});
+  const ModelPackage a = decode_model_package(encode_model_package(package_of(surface)), "s.msm");
+  EXPECT_EQ(dump(a.surface_params), dump(sp));
+
+  SmrmSettings vs;
+  vs.atoms = 12;
+  const std::string smrm_defaults = dump(vs);
+  perturb(vs);
+  vs.chain.nonlinear = !vs.chain.nonlinear;  // the model's "nonlinear" key, stored beside the declaration
+  ASSERT_NE(dump(vs), smrm_defaults);
+  const SmrmVessel vessel = smrm_phantom(VesselPath::Arc, CrossSectionShape::Elliptical, vs);
+  const ModelPackage b = decode_model_package(encode_model_package(package_of(vessel)), "v.msm");
+  EXPECT_EQ(dump(b.smrm), dump(vs));
+  EXPECT_EQ(b.smrm.atoms, 12);
+  EXPECT_EQ(b.smrm.chain.nonlinear, vs.chain.nonlinear);
+}
+
+TEST(DeclaredParameters, EveryStudySettingRoundTripsThroughAStudyFile) {
+  StudySettings s;
+  const std::string defaults = dump(s);
+  perturb(s);
+  std::istringstream a(defaults), b(dump(s));
+  int lines = 0;
+  for (std::string la, lb; std::getline(a, la) && std::getline(b, lb); ++lines) EXPECT_NE(la, lb);
+  EXPECT_EQ(lines, 5);
+  const StudySettings back = study_settings_from_json(study_settings_json(s), "s.json");
+  EXPECT_EQ(dump(back), dump(s));
+  // the study file's other keys are the caller's (medspring/study/spec.py); absent keys keep defaults
+  const StudySettings partial = study_settings_from_json(
+      R"({"scene": "k.json", "vary": [], "seed": 19, "samples": {"count": 8}})", "s.json");
+  EXPECT_EQ(partial.seed, 19);
+  EXPECT_EQ(partial.samples.count, 8);
+  EXPECT_EQ(partial.samples.method, SampleMethod::Random);
+  EXPECT_EQ(partial.batch, StudySettings{}.batch);
+  const auto refused = [](const std::string& text, const std::string& message) {
+    try {
+      study_settings_from_json(text, "s.json");
+      ADD_FAILURE() << text << " accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(std::string(e.what()), message);
+    }
+  };
+  refused(R"({"batch": 0})", "s.json: batch: must be an integer in 1..100000 (got 0)");
+  refused(R"({"seed": -1})", "s.json: seed: must be >= 0 (got -1)");
+  refused(R"({"samples": {"count": 0}})", "s.json: samples.count: must be >= 1 (got 0)");
+  refused(R"({"samples": {"method": "sobol"}})",
+          "s.json: samples.method: expected 'random' or 'latin_hypercube' (got 'sobol')");
+  refused(R"({"samples": {"cnt": 3}})", "s.json: samples.cnt: unknown key (expected one of: count, method)");
+  refused(R"({"max_runs": 1.5})", "s.json: max_runs: must be an integer (got 1.5)");
+  // --set (medspring study STUDY --set samples.method=latin_hypercube)
+  set_param(s, "samples.method", "latin_hypercube");
+  EXPECT_EQ(s.samples.method, SampleMethod::LatinHypercube);
+  EXPECT_THROW(set_param(s, "batch", "0"), InvalidInput);
 }
 
 TEST(DeclaredParameters, EveryBoundedFieldRejectsAValueOutOfRangeNamingItsPath) {

@@ -1,5 +1,5 @@
 """`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]
-[--device cpu|cuda|cpu-batch|auto]`:
+[--set N=V] [--device cpu|cuda|cpu-batch|auto]`:
 runs a parameter study (docs/studies.md). Errors are one line on stderr with exit code 2."""
 
 from __future__ import annotations
@@ -44,6 +44,9 @@ def main(argv=None) -> int:
     p.add_argument("--scaling", type=int, metavar="RUNS", default=0,
                    help="also time RUNS runs on 1..N local workers (N = --workers or every core) for the report")
     p.add_argument("--max-batches", type=int, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--set", dest="settings", metavar="NAME=VALUE[,NAME=VALUE]", default=None,
+                   help="override the study file's declared settings: samples.count, samples.method, seed, "
+                   "batch, max_runs (docs/parameters.md)")
     p.add_argument("--device", choices=["cpu", "cuda", "cpu-batch", "auto"], default="cpu",
                    help="where the runs step: cpu (default: each run a scene run), cuda (each task's runs one "
                    "batch on the GPU engine; in this process unless --workers/--scheduler), cpu-batch (the "
@@ -77,7 +80,7 @@ def main(argv=None) -> int:
     from .store import Store
 
     try:
-        st = load_study(a.study)
+        st = load_study(a.study, settings=a.settings)
         df = run(st, out=a.out, scheduler=a.scheduler, workers=workers, resume=a.resume, yes=a.yes,
                  progress=not a.quiet, report=not a.no_report, max_batches=a.max_batches, device=a.device)
         if a.scaling > 0:

@@ -29,8 +29,20 @@ import numpy as np
 
 from .._medspring import InvalidInput
 
-# fem_reference's keyword arguments a case may set (the rest come from the defaults given to references()).
-CASE_KEYS = ("E_kPa", "nu", "radius", "support_direction", "support_depth", "level")
+try:
+    from .._medspring import FemCaseSettings
+except ImportError:  # a build without the FEM layer (no fem_reference either): the module still imports
+    FemCaseSettings = None
+
+# fem_reference's keyword arguments a case may set (the rest come from the defaults given to references()):
+# the declared FemCaseSettings (scene/study_settings.hpp, docs/parameters.md) and the support direction.
+_CASE = FemCaseSettings() if FemCaseSettings is not None else None
+CASE_KEYS = tuple(spec["name"] for spec in getattr(FemCaseSettings, "_params", ())) + ("support_direction",)
+
+
+def _default(name: str):
+    return getattr(_CASE, name, None)
+
 
 
 def solve_case(vertices: np.ndarray, faces: np.ndarray, case: dict) -> dict:
@@ -141,11 +153,11 @@ def calibrate(
     centres: Any,
     forces: Any,
     held_out: Sequence[dict] = (),
-    E_kPa: float = 10.0,
-    nu: float = 0.45,
-    radius: float = 8.0,
+    E_kPa: float = _default("E_kPa"),
+    nu: float = _default("nu"),
+    radius: float = _default("radius"),
     support_direction=(0.0, 0.0, -1.0),
-    support_depth: float = 5.0,
+    support_depth: float = _default("support_depth"),
     nonlinear: bool = True,
     client=None,
     scheduler: str | None = None,

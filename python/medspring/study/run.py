@@ -119,6 +119,7 @@ def run(
     csv_every_s: float = 2.0,
     max_batches: int | None = None,
     device: str = "cpu",
+    settings: Any = None,
 ):
     """Runs a study (file, JSON text, dict or Study) into the folder `out` and returns the summary table
     (pandas DataFrame of the finished runs).
@@ -130,11 +131,12 @@ def run(
     more runs than the study's max_runs (default 100000). max_batches: stop after that many batches
     (tests; the folder stays resumable). device: "cpu" (each run a scene run), "cuda" (each batch of runs
     stepped together on the GPU engine, docs/gpu.md "Study runs on the GPU") or "cpu-batch" (the same
-    batch path on the CPU engine). Everything is validated, and the scheduler reached, before anything
-    is written."""
+    batch path on the CPU engine). settings: overrides of the study file's declared settings
+    (samples.count, samples.method, seed, batch, max_runs; docs/parameters.md), as load_study takes them.
+    Everything is validated, and the scheduler reached, before anything is written."""
     if device not in ("cpu", "cuda", "cpu-batch"):
         raise InvalidInput(f"device: expected 'cpu', 'cuda' or 'cpu-batch'; got {device!r}")
-    st = study if isinstance(study, Study) else load_study(study)
+    st = study if isinstance(study, Study) else load_study(study, settings=settings)
     if st.num_runs > st.max_runs and not yes:
         raise InvalidInput(
             f"{st.origin}: the study has {st.num_runs} runs, more than max_runs = {st.max_runs}: "

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .. import _medspring
-from .._medspring import InvalidInput, IoError
+from .._medspring import InvalidInput, IoError, StudySettings, study_settings_from_json
 from ..scenes import apply_overrides, parse_path, scene_document, without_key_times
 
 METRICS = (
@@ -42,9 +42,11 @@ METRICS = (
 TOOL_METRICS = ("tool_peak_force_N", "tool_final_force_N", "tool_peak_penetration_mm")
 
 STUDY_KEYS = ("name", "description", "scene", "set", "vary", "samples", "seed", "outputs", "batch", "max_runs")
+# samples, seed, batch and max_runs are declared once, in C++ (scene/study_settings.hpp, StudySettings):
+# their checks, defaults, docs (docs/parameters.md) and `medspring study --set` come from there.
 SAMPLED_KINDS = ("uniform", "log_uniform", "integers", "choice", "surface_node", "surface_point", "unit_vector")
 LISTED_KINDS = ("values", "grid")
-DEFAULT_MAX_RUNS = 100_000
+DEFAULT_MAX_RUNS = StudySettings().max_runs
 
 
 class _Where:
@@ -183,6 +185,7 @@ class Study:
     field_dtype: str  # float64 | float32
     batch: int
     max_runs: int
+    settings: StudySettings = field(default_factory=StudySettings)  # the declared keys, as read
     num_surface_nodes: int = 0  # of the base model (set by resolve_model)
     surface: Surface = field(default_factory=Surface)  # its rest surface (set by resolve_model)
     grid_shape: tuple = ()
@@ -304,10 +307,39 @@ def _parse_vary(w: _Where, k: int, e: Any) -> Vary:
     return v
 
 
-def load_study(study: Any, base_dir: str | os.PathLike | None = None) -> Study:
+def _apply_settings(s: StudySettings, settings: Any, origin: str) -> tuple:
+    """Overrides of the declared settings: a StudySettings, a dict {name: value} ("samples.count": 4) or
+    "NAME=VALUE[,NAME=VALUE]" text (`medspring study --set`). Returns (settings, names set)."""
+    if settings is None:
+        return s, ()
+    if isinstance(settings, StudySettings):
+        return settings, ("samples.count",) if settings.samples.count != 1 else ()
+    if isinstance(settings, str):
+        items = []
+        for item in settings.split(","):
+            name, eq, value = item.partition("=")
+            if not eq or not name:
+                raise InvalidInput(f"{origin}: --set: expected NAME=VALUE (got '{item}')")
+            items.append((name.strip(), value.strip()))
+    elif isinstance(settings, dict):
+        items = list(settings.items())
+    else:
+        raise InvalidInput(f"{origin}: settings: expected a StudySettings, a dict or NAME=VALUE text")
+    for name, value in items:
+        text = ("true" if value else "false") if isinstance(value, bool) else str(value)
+        try:
+            s.set_text(name, text)
+        except InvalidInput as e:
+            raise InvalidInput(f"{origin}: --set {e}") from None
+    return s, tuple(name for name, _ in items)
+
+
+def load_study(study: Any, base_dir: str | os.PathLike | None = None, settings: Any = None) -> Study:
     """Parses and validates a study: a file name, JSON text or a dict. The base scene is parsed by the
     C++ scene parser, every varied path is tried on it (with its first value) and the model is built
-    once to resolve surface-node samples. Raises InvalidInput / IoError naming the JSON path at fault."""
+    once to resolve surface-node samples. Raises InvalidInput / IoError naming the JSON path at fault.
+    settings: overrides of the file's declared settings (samples.count, samples.method, seed, batch,
+    max_runs; docs/parameters.md): a StudySettings, a dict {name: value} or "NAME=VALUE,..." text."""
     origin = "study"
     if isinstance(study, (str, os.PathLike)) and not os.fspath(study).lstrip().startswith("{"):
         p = Path(study)
@@ -374,22 +406,20 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None) -> Study:
         if p in paths[:k]:
             w.fail(f"vary[{k}].path", f"'{p}' is varied twice")
 
+    # The declared keys (samples, seed, batch, max_runs): read and checked by their declaration.
+    keys = [spec["key"] for spec in StudySettings._params]
+    declared = study_settings_from_json(json.dumps({k: doc[k] for k in keys if k in doc}), origin)
+    declared, overridden = _apply_settings(declared, settings, origin)
     samples = doc.get("samples", {})
-    _keys(w, samples, "samples", ("count", "method"))
+    count_given = "count" in samples or "samples.count" in overridden
     has_sampled = any(v.sampled for v in vary)
-    count = _number(w, samples.get("count", 1), "samples.count", integer=True)
-    if count < 1:
-        w.fail("samples.count", f"must be >= 1 (got {count})")
-    if "count" in samples and not has_sampled:
+    count = declared.samples.count
+    if count_given and not has_sampled:
         w.fail("samples.count", "the study varies nothing by sampling (uniform, choice, surface_node, ...)")
-    if has_sampled and "count" not in samples:
+    if has_sampled and not count_given:
         w.fail("samples", "sampled quantities need samples.count")
-    method = samples.get("method", "random")
-    if method not in ("random", "latin_hypercube"):
-        w.fail("samples.method", f"expected 'random' or 'latin_hypercube'; got {json.dumps(method)}")
-    seed = _number(w, doc.get("seed", 0), "seed", integer=True)
-    if seed < 0:
-        w.fail("seed", f"must be >= 0 (got {seed})")
+    method = declared.samples._param_text("method")
+    seed = declared.seed
 
     outputs = doc.get("outputs", {})
     _keys(w, outputs, "outputs", ("metrics", "fields"))
@@ -417,10 +447,7 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None) -> Study:
         field_dtype = fields.get("dtype", "float64")
         if field_dtype not in ("float64", "float32"):
             w.fail("outputs.fields.dtype", f"expected 'float64' or 'float32'; got {json.dumps(field_dtype)}")
-    batch = _number(w, doc.get("batch", 16), "batch", integer=True)
-    if not 1 <= batch <= 100_000:
-        w.fail("batch", f"must be in [1, 100000] (got {batch})")
-    max_runs = _number(w, doc.get("max_runs", DEFAULT_MAX_RUNS), "max_runs", integer=True)
+    batch, max_runs = declared.batch, declared.max_runs
     name = doc.get("name", Path(origin).stem if origin != "study" else "study")
     if not isinstance(name, str) or not name:
         w.fail("name", "expected non-empty text")
@@ -440,6 +467,7 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None) -> Study:
         field_dtype=field_dtype,
         batch=batch,
         max_runs=max_runs,
+        settings=declared,
         grid_shape=tuple(len(v.values) for v in listed),
     )
     resolve_model(st, w)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._medspring import InvalidInput
+from .._medspring import InvalidInput, study_settings_json
 from .spec import Study
 
 STUDY_FILE = "study.json"
@@ -80,6 +80,7 @@ class Store:
                 "origin": st.origin,
                 "num_runs": st.num_runs,
                 "batch": st.batch,
+                "settings": json.loads(study_settings_json(st.settings)),  # the declared keys (docs/parameters.md)
                 "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             }
             tmp = out / (STUDY_FILE + ".tmp")
