@@ -509,7 +509,11 @@ const std::vector<CommandSpec>& commands() {
              .unit = "N",
              .def = "0.2,0.5,1.0",
              .help = "contact forces (training at 0.5 N or the smallest)"},
-            {.name = "organs", .value = "LIST", .def = "phantom,kidney", .help = "organs: phantom,kidney"},
+            {.name = "organs",
+             .value = "LIST",
+             .def = "phantom,kidney",
+             .help =
+                 "organs: a comma list of phantom, kidney, aorta (the aorta: surface and volumetric kinds)"},
             {.name = "vessel-E-kPa",
              .value = "E",
              .unit = "kPa",
