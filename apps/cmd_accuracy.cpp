@@ -213,14 +213,22 @@ int cmd_calibrate(const Args& args) {
   require(std::isfinite(st.radius) && st.radius > 0, "calibrate: --radius must be > 0 mm");
   st.quiet = args.flag("quiet") || args.flag("json");
   const std::string organ = args.get_or("organ", "phantom"), kind = args.get_or("kind", "hybrid");
-  require(organ == "phantom" || organ == "kidney", "calibrate: --organ must be phantom or kidney");
+  require(organ == "phantom" || organ == "kidney" || organ == "aorta",
+          "calibrate: --organ must be phantom, kidney or aorta");
   require(kind == "hybrid" || kind == "surface" || kind == "volumetric",
           "calibrate: --kind must be hybrid, surface or volumetric");
+  require(!(organ == "aorta" && kind == "hybrid"),
+          "calibrate: --organ aorta has no medial skeleton for the hybrid kind (use surface or volumetric)");
   read_kind_options(args, st, "calibrate");
   Organ o;
   FileLoader loader;
   if (organ == "phantom") {
     o = phantom_organ();
+  } else if (organ == "aorta") {
+    std::string why;
+    auto a = real_aorta(why);
+    if (!a) throw InvalidInput("calibrate: the real aorta could not be built: " + why);
+    o = std::move(*a);
   } else {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");

@@ -534,7 +534,8 @@ const std::vector<CommandSpec>& commands() {
        .run = cmd_accuracy},
       {.name = "calibrate",
        .summary = "fit spring stiffnesses to a tissue (E, nu) on FEM responses; held-out errors",
-       .usage = "medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"
+       .usage = "medspring calibrate [--organ phantom|kidney|aorta] [--kind hybrid|surface|volumetric] "
+                "[--linear]\n"
                 "                           [--E-kPa 10] [--nodes 2000] [--nu 0.45] [--radius 8] [--json] "
                 "[--quiet]",
        .about =
@@ -544,7 +545,7 @@ const std::vector<CommandSpec>& commands() {
            "0.5 N), and reports the error on the held-out loads and sites (docs/accuracy.md). Prints the\n"
            "parameters in N/mm.",
        .options =
-           {{.name = "organ", .value = "phantom|kidney", .def = "phantom", .help = "the organ"},
+           {{.name = "organ", .value = "phantom|kidney|aorta", .def = "phantom", .help = "the organ"},
             {.name = "kind", .value = "hybrid|surface|volumetric", .def = "hybrid", .help = "the model kind"},
             {.name = "linear", .help = "linear springs (default Duffing)"},
             {.name = "E-kPa",

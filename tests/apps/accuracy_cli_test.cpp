@@ -135,4 +135,7 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   EXPECT_NE(run("accuracy --quick --organs aorta,liver --out '" + bad.string() + "'", &err), 0);
   EXPECT_NE(err.find("unknown organ 'liver'"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(bad));
+  // the hybrid kind needs a skeleton: `calibrate` refuses it on the aorta before any solve
+  EXPECT_NE(run("calibrate --organ aorta --kind hybrid", &err), 0);
+  EXPECT_NE(err.find("no medial skeleton"), std::string::npos) << err;
 }
