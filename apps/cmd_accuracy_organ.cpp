@@ -35,7 +35,7 @@
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "scene_support.hpp"
-#if MEDSPRING_HAVE_MESHING
+#ifdef MEDSPRING_HAVE_MESHING
 #include "medspring/meshing/balloon.hpp"
 #endif
 
@@ -422,7 +422,7 @@ fem::SupportRule aorta_support_rule(const Frame& f) {
 }
 
 std::optional<Organ> real_aorta(std::string& why, Index surface_nodes) {
-#if MEDSPRING_HAVE_MESHING
+#ifdef MEDSPRING_HAVE_MESHING
   try {
     const SurfaceMesh raw =
         read_mesh(find_data_file("aorta_totalseg_ct.obj"), {.unit = LengthUnit::Millimetre});
