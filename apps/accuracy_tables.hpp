@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "medspring/fem/organ.hpp"
 #include "medspring/fem/validation.hpp"
 #include "medspring/fem/vessel.hpp"
 #include "medspring/models/volumetric_body.hpp"
@@ -26,7 +27,10 @@ using json = nlohmann::json;
 struct Organ {
   std::string name;
   SurfaceMesh surface;
-  MatX3 atoms;
+  MatX3 atoms;  // the medial skeleton of the hybrid kind (empty: no hybrid rows, e.g. the aorta)
+  // the supports: empty = the bed of the tables (within 20 % of the thickness opposite the load)
+  std::optional<fem::SupportRule> support;
+  std::string support_text;  // the rule in words for accuracy.md (empty: the bed)
   // volumetric kind (issue 23): the TetGen mesh of the surface (made once) and the material it gets
   mutable std::shared_ptr<const VolumetricMesh> vmesh;
   mutable double E_kPa = 10, nu = 0.45;
@@ -88,6 +92,14 @@ Organ phantom_organ();
 /// The real kidney of the bundled scene kidney_1.0N_nonlinear.json; nullopt (and why) when it cannot be
 /// built.
 std::optional<Organ> real_kidney(const std::filesystem::path& scenes, FileLoader& loader, std::string& why);
+/// The aorta of the TotalSegmentator CT (aorta_totalseg_ct.obj, mm) as a solid organ: its balloon surface of
+/// `surface_nodes` nodes, no skeleton (surface and volumetric kinds only), held by the rule of
+/// aorta_support_rule; nullopt (and why) when the data file or the meshing layer is missing.
+std::optional<Organ> real_aorta(std::string& why, Index surface_nodes = 800);
+/// The aorta's supports (docs/accuracy.md, "The aorta"): the surface facing away from the load (outward
+/// normal within 60 degrees of -e3, a bed along the whole vessel, as the aorta lies on the spine) and the
+/// cut cap where the segmentation met the scan's edge (within 1 mm of the lowest point, -z).
+fem::SupportRule aorta_support_rule(const Frame& f);
 
 /// One row of the closed-form validation (fem/validation.hpp) as JSON.
 json validation_json(const fem::ValidationResult& r);

@@ -87,15 +87,23 @@ int cmd_accuracy(const Args& args) {
   }
   j["validation"] = val;
 
-  // --organs phantom,kidney (default both; --quick: the phantom)
+  // --organs: a comma list of phantom, kidney, aorta (default phantom,kidney; --quick: the phantom)
   const std::string organ_list = args.get_or("organs", "phantom,kidney");
-  require(organ_list == "phantom" || organ_list == "kidney" || organ_list == "phantom,kidney" ||
-              organ_list == "kidney,phantom",
-          "accuracy: --organs must be phantom, kidney or phantom,kidney (got '", organ_list, "')");
+  bool want_phantom = false, want_kidney = false, want_aorta = false;
+  {
+    std::stringstream ss(organ_list);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      require(item == "phantom" || item == "kidney" || item == "aorta", "accuracy: --organs: unknown organ '",
+              item, "' (expected a comma list of phantom, kidney, aorta)");
+      (item == "phantom" ? want_phantom : item == "kidney" ? want_kidney : want_aorta) = true;
+    }
+    require(want_phantom || want_kidney || want_aorta, "accuracy: --organs must name at least one organ");
+  }
   std::vector<Organ> organs;
-  if (!vessel_only && organ_list.find("phantom") != std::string::npos) organs.push_back(phantom_organ());
+  if (!vessel_only && want_phantom) organs.push_back(phantom_organ());
   FileLoader loader;
-  if ((!st.quick || indentation_only) && !vessel_only && organ_list.find("kidney") != std::string::npos) {
+  if ((!st.quick || indentation_only) && !vessel_only && want_kidney) {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");
     std::string why;
@@ -103,6 +111,13 @@ int cmd_accuracy(const Args& args) {
       organs.push_back(std::move(*k));
     else
       j["notes"].push_back("real kidney left out: " + why);
+  }
+  if (!vessel_only && !indentation_only && want_aorta) {  // the aorta as a solid organ (surface, volumetric)
+    std::string why;
+    if (auto a = real_aorta(why))
+      organs.push_back(std::move(*a));
+    else
+      j["notes"].push_back("real aorta left out: " + why);
   }
   // The vessel material and wall (checked before any solve)
   const fem::Material vessel_mat =
@@ -143,8 +158,10 @@ int cmd_accuracy(const Args& args) {
   require(!(indentation_only && args.flag("no-indentation")),
           "accuracy: --indentation-only and --no-indentation exclude each other");
   if ((!st.quick || indentation_only) && !vessel_only && !args.flag("no-indentation") &&
-      !organs.empty()) {             // a rigid sphere (issue 18)
-    const Organ& o = organs.back();  // the real kidney when it could be built
+      std::any_of(organs.begin(), organs.end(), [](const Organ& o) { return o.atoms.rows() > 0; })) {
+    // a rigid sphere (issue 18) on the last kidney (the real one when it could be built; not the aorta)
+    const Organ& o =
+        *std::find_if(organs.rbegin(), organs.rend(), [](const Organ& og) { return og.atoms.rows() > 0; });
     const Frame f = principal_frame(o.surface.V);
     IndentationOrgan io{o.name,
                         o.surface,
@@ -199,14 +216,22 @@ int cmd_calibrate(const Args& args) {
   require(std::isfinite(st.radius) && st.radius > 0, "calibrate: --radius must be > 0 mm");
   st.quiet = args.flag("quiet") || args.flag("json");
   const std::string organ = args.get_or("organ", "phantom"), kind = args.get_or("kind", "hybrid");
-  require(organ == "phantom" || organ == "kidney", "calibrate: --organ must be phantom or kidney");
+  require(organ == "phantom" || organ == "kidney" || organ == "aorta",
+          "calibrate: --organ must be phantom, kidney or aorta");
   require(kind == "hybrid" || kind == "surface" || kind == "volumetric",
           "calibrate: --kind must be hybrid, surface or volumetric");
+  require(!(organ == "aorta" && kind == "hybrid"),
+          "calibrate: --organ aorta has no medial skeleton for the hybrid kind (use surface or volumetric)");
   read_kind_options(args, st, "calibrate");
   Organ o;
   FileLoader loader;
   if (organ == "phantom") {
     o = phantom_organ();
+  } else if (organ == "aorta") {
+    std::string why;
+    auto a = real_aorta(why);
+    if (!a) throw InvalidInput("calibrate: the real aorta could not be built: " + why);
+    o = std::move(*a);
   } else {
     const fs::path scenes =
         find_folder(args.get("scenes"), MEDSPRING_SOURCE_SCENES_DIR, "scenes", "bundled scenes", "phantom");

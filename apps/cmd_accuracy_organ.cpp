@@ -22,6 +22,8 @@
 #include "medspring/fem/validation.hpp"
 #include "medspring/fem/vessel.hpp"
 #include "medspring/fem/volumetric.hpp"
+#include "medspring/io/data_dir.hpp"
+#include "medspring/io/mesh_io.hpp"
 #include "medspring/medial/chain.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/smrm_vessel.hpp"
@@ -33,6 +35,9 @@
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "scene_support.hpp"
+#ifdef MEDSPRING_HAVE_MESHING
+#include "medspring/meshing/balloon.hpp"
+#endif
 
 namespace medspring::cli::accuracy {
 
@@ -171,8 +176,8 @@ void note(const Settings& s, const std::string& line) {
 // Everything measured on one organ.
 json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind> kinds, bool convergence) {
   const Frame f = principal_frame(o.surface.V);
-  const fem::SupportRule rule{-f.e3, 0.2 * f.thickness};
-  const std::vector<Index> support = fem::support_nodes(o.surface.V, rule);
+  const fem::SupportRule rule = o.support ? *o.support : fem::SupportRule{-f.e3, 0.2 * f.thickness};
+  const std::vector<Index> support = fem::support_nodes(o.surface, rule);
   const std::vector<double> ts =
       st.quick ? std::vector<double>{-0.3, 0.3} : std::vector<double>{-0.45, -0.15, 0.15, 0.45};
   const std::vector<Index> sites = pick_sites(o.surface.V, f, ts);
@@ -185,14 +190,23 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                                  : *std::min_element(forces.begin(), forces.end());
   // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
   const std::size_t train_sites = st.quick ? 1 : 2;
-  json out = {
-      {"organ", o.name},
-      {"surface_nodes", o.surface.num_vertices()},
-      {"support_nodes", support.size()},
-      {"support_rule",
-       {{"direction", {rule.direction(0), rule.direction(1), rule.direction(2)}}, {"depth_mm", rule.depth}}},
-      {"contact_radius_mm", st.radius},
-      {"sites", sites}};
+  json out = {{"organ", o.name},
+              {"surface_nodes", o.surface.num_vertices()},
+              {"support_nodes", support.size()},
+              {"support_rule",
+               {{"direction", {rule.direction(0), rule.direction(1), rule.direction(2)}},
+                {"depth_mm", rule.depth},
+                {"facing_deg", rule.facing_deg},
+                {"caps",
+                 [&] {
+                   json caps = json::array();
+                   for (const auto& [d, depth] : rule.caps)
+                     caps.push_back({{"direction", {d(0), d(1), d(2)}}, {"depth_mm", depth}});
+                   return caps;
+                 }()},
+                {"text", o.support_text}}},
+              {"contact_radius_mm", st.radius},
+              {"sites", sites}};
 
   fem::OrganMeshSettings ms;
   ms.subdivisions = st.level - 1;
@@ -273,6 +287,10 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     kinds.push_back({"hybrid", true, true});
     kinds.push_back({"hybrid", false, true});
   }
+  if (o.atoms.rows() == 0 &&
+      std::erase_if(kinds, [](const Kind& k) { return k.base == "hybrid"; }) > 0)  // no medial skeleton
+    out["notes"].push_back(
+        "hybrid kind left out: it needs a medial skeleton (a kidney's), this organ has none");
   if (!st.kinds.empty())
     std::erase_if(
         kinds, [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
@@ -394,6 +412,37 @@ std::optional<Organ> real_kidney(const fs::path& scenes, FileLoader& loader, std
     why = e.what();
     return std::nullopt;
   }
+}
+
+fem::SupportRule aorta_support_rule(const Frame& f) {
+  fem::SupportRule r{-f.e3, 0.0};
+  r.facing_deg = 60;
+  r.caps = {{Vec3(0, 0, -1), 1.0}};
+  return r;
+}
+
+std::optional<Organ> real_aorta(std::string& why, Index surface_nodes) {
+#ifdef MEDSPRING_HAVE_MESHING
+  try {
+    const SurfaceMesh raw =
+        read_mesh(find_data_file("aorta_totalseg_ct.obj"), {.unit = LengthUnit::Millimetre});
+    Organ o;
+    o.name = "real aorta (solid)";
+    o.surface = balloon_surface(raw, {.target_nodes = surface_nodes});
+    o.support = aorta_support_rule(principal_frame(o.surface.V));
+    o.support_text =
+        "surface facing away from the load (outward normal within 60 deg of -e3: a bed along the whole "
+        "vessel) + the cut cap (within 1 mm of the lowest point, -z)";
+    return o;
+  } catch (const Error& e) {
+    why = e.what();
+    return std::nullopt;
+  }
+#else
+  (void)surface_nodes;
+  why = "this medspring was built without the meshing layer (CGAL), which makes the aorta's surface";
+  return std::nullopt;
+#endif
 }
 
 }  // namespace medspring::cli::accuracy

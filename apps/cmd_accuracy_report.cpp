@@ -74,7 +74,11 @@ std::string markdown(const json& j) {
     md << "FEM: " << o["fem"]["nodes"] << " nodes, " << o["fem"]["elements"]
        << " quadratic tetrahedra (C3D10), " << o["fem"]["fixed_nodes"] << " fixed; median CalculiX solve "
        << pct(o["fem"]["median_solve_s"].get<double>()) << " s. Spring support: " << o["support_nodes"]
-       << " pinned surface nodes.\n";
+       << " pinned surface nodes";
+    if (o.contains("support_rule") && !o["support_rule"].value("text", std::string()).empty())
+      md << " (" << o["support_rule"]["text"].get<std::string>() << ")";
+    md << ".\n";
+    for (const auto& n : o.value("notes", json::array())) md << n.get<std::string>() << ".\n";
     if (o["fem"].contains("convergence")) {
       const auto& c = o["fem"]["convergence"];
       md << "Mesh convergence of the reference (site 0, 0.2 N): contact displacement "

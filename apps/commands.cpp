@@ -537,7 +537,11 @@ const std::vector<CommandSpec>& commands() {
              .unit = "N",
              .def = "0.2,0.5,1.0",
              .help = "contact forces (training at 0.5 N or the smallest)"},
-            {.name = "organs", .value = "LIST", .def = "phantom,kidney", .help = "organs: phantom,kidney"},
+            {.name = "organs",
+             .value = "LIST",
+             .def = "phantom,kidney",
+             .help =
+                 "organs: a comma list of phantom, kidney, aorta (the aorta: surface and volumetric kinds)"},
             {.name = "vessel-E-kPa",
              .value = "E",
              .unit = "kPa",
@@ -558,7 +562,8 @@ const std::vector<CommandSpec>& commands() {
        .run = cmd_accuracy},
       {.name = "calibrate",
        .summary = "fit spring stiffnesses to a tissue (E, nu) on FEM responses; held-out errors",
-       .usage = "medspring calibrate [--organ phantom|kidney] [--kind hybrid|surface|volumetric] [--linear]\n"
+       .usage = "medspring calibrate [--organ phantom|kidney|aorta] [--kind hybrid|surface|volumetric] "
+                "[--linear]\n"
                 "                           [--E-kPa 10] [--nodes 2000] [--nu 0.45] [--radius 8] [--json] "
                 "[--quiet]",
        .about =
@@ -568,7 +573,7 @@ const std::vector<CommandSpec>& commands() {
            "0.5 N), and reports the error on the held-out loads and sites (docs/accuracy.md). Prints the\n"
            "parameters in N/mm.",
        .options =
-           {{.name = "organ", .value = "phantom|kidney", .def = "phantom", .help = "the organ"},
+           {{.name = "organ", .value = "phantom|kidney|aorta", .def = "phantom", .help = "the organ"},
             {.name = "kind", .value = "hybrid|surface|volumetric", .def = "hybrid", .help = "the model kind"},
             {.name = "linear", .help = "linear springs (default Duffing)"},
             declared_option<FemCaseSettings>("E-kPa", "E_kPa", "E"),

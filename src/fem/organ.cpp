@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
@@ -17,8 +18,41 @@
 
 namespace medspring::fem {
 
+std::vector<Index> apply_support_rule(const MatX3& P, const MatX3& N, const SupportRule& rule,
+                                      const std::vector<Index>& candidates) {
+  require(std::isfinite(rule.facing_deg) && rule.facing_deg >= 0 && rule.facing_deg <= 90,
+          "support rule: facing_deg must be in [0, 90] degrees (got ", rule.facing_deg, ")");
+  std::vector<Index> out = points_near_extreme(P, rule.direction, rule.depth, candidates);
+  if (rule.facing_deg > 0) {
+    require(N.rows() == P.rows(), "support rule: facing_deg > 0 needs a normal per point (", N.rows(),
+            " normals for ", P.rows(), " points)");
+    const Vec3 d = rule.direction.normalized();
+    const double c = std::cos(rule.facing_deg * std::numbers::pi / 180.0);
+    auto facing = [&](Index i) {
+      if (N.row(i).dot(d) >= c) out.push_back(i);
+    };
+    if (candidates.empty())
+      for (Index i = 0; i < P.rows(); ++i) facing(i);
+    else
+      for (Index i : candidates) facing(i);
+  }
+  for (const auto& [dir, depth] : rule.caps)
+    for (Index i : points_near_extreme(P, dir, depth, candidates)) out.push_back(i);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 std::vector<Index> support_nodes(const MatX3& surface, const SupportRule& rule) {
-  return points_near_extreme(surface, rule.direction, rule.depth);
+  require(rule.facing_deg == 0,
+          "support rule: facing_deg > 0 needs the surface's normals (pass the surface mesh)");
+  return apply_support_rule(surface, MatX3(), rule);
+}
+
+std::vector<Index> support_nodes(const SurfaceMesh& surface, const SupportRule& rule) {
+  MatX3 N;
+  vertex_normals(surface.V, surface.F, N);
+  return apply_support_rule(surface.V, N, rule);
 }
 
 SurfaceMesh subdivide_midpoint(const SurfaceMesh& surface) {
@@ -59,8 +93,19 @@ OrganReference::OrganReference(const SurfaceMesh& surface, const Material& mater
   for (int i = 0; i < settings.subdivisions; ++i) s = subdivide_midpoint(s);
   problem_ = FemProblem(tet_mesh_from_surface(s, ts), material);
   boundary_ = boundary_faces(problem_.mesh);
-  problem_.fixed =
-      points_near_extreme(problem_.mesh.X, support.direction, support.depth, boundary_nodes(problem_.mesh));
+  MatX3 normals;  // area-weighted outward normals of the boundary nodes (corner triangles), for facing_deg
+  if (support.facing_deg > 0) {
+    normals = MatX3::Zero(problem_.mesh.num_nodes(), 3);
+    for (Index f = 0; f < boundary_.rows(); ++f) {
+      const Vec3 a = problem_.mesh.X.row(boundary_(f, 0)), b = problem_.mesh.X.row(boundary_(f, 1)),
+                 c = problem_.mesh.X.row(boundary_(f, 2));
+      const Vec3 n = (b - a).cross(c - a);  // twice the area times the unit normal
+      for (int k = 0; k < 6; ++k) normals.row(boundary_(f, k)) += n.transpose();
+    }
+    for (Index i = 0; i < normals.rows(); ++i)
+      if (normals.row(i).norm() > 0) normals.row(i).normalize();
+  }
+  problem_.fixed = apply_support_rule(problem_.mesh.X, normals, support, boundary_nodes(problem_.mesh));
   validate_problem(problem_);  // a support region that leaves rigid motion free is refused here
   sample_ = locate_on_boundary(problem_.mesh, boundary_, surface.V);
 }

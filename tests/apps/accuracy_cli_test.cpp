@@ -99,3 +99,43 @@ TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
   EXPECT_NE(err.find("E must be > 0"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(out));
 }
+
+// The aorta as a solid organ (issue 23, docs/accuracy.md "The aorta as a solid organ"): surface and
+// volumetric kinds only (no skeleton for the hybrid kind), held by the facing bed + cut cap rule; the
+// volumetric kind from E and nu alone within the issue's 10 % RMS on the held-out site.
+TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
+  const fs::path out = medspring::testing::temp_dir("accuracy-aorta") / "acc";
+  std::string err;
+  ASSERT_EQ(
+      run("accuracy --quick --quiet --organs aorta --kinds volumetric,hybrid --nodes 1000 --no-validation "
+          "--no-vessel --out '" +
+              out.string() + "'",
+          &err),
+      0)
+      << err;
+  std::ifstream in(out / "accuracy.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  if (j["organs"].empty()) GTEST_SKIP() << "the aorta data file is not here: " << j["notes"].dump();
+  const auto& o = j["organs"][0];
+  EXPECT_EQ(o["organ"], "real aorta (solid)");
+  EXPECT_EQ(o["support_rule"]["facing_deg"].get<double>(), 60.0);
+  EXPECT_EQ(o["support_rule"]["caps"].size(), 1u);
+  EXPECT_GT(o["support_nodes"].get<int>(), 50);
+  EXPECT_LT(o["support_nodes"].get<int>(), 800 / 2);  // a bed, not the whole vessel
+  EXPECT_NE(o["notes"].dump().find("hybrid kind left out"), std::string::npos) << o["notes"].dump();
+  ASSERT_EQ(o["models"].size(), 2u);  // volumetric (linear), default and calibrated; no hybrid row
+  for (const auto& m : o["models"]) {
+    EXPECT_EQ(m["base"], "volumetric");
+    if (m["calibrated"].get<bool>()) continue;
+    EXPECT_GT(m["held_out_mean_rms_pct"].get<double>(), 0.0);
+    EXPECT_LT(m["held_out_mean_rms_pct"].get<double>(), 10.0);
+  }
+  // an unknown organ is refused with the name, nothing written
+  const fs::path bad = medspring::testing::temp_dir("accuracy-aorta-bad") / "acc";
+  EXPECT_NE(run("accuracy --quick --organs aorta,liver --out '" + bad.string() + "'", &err), 0);
+  EXPECT_NE(err.find("unknown organ 'liver'"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(bad));
+  // the hybrid kind needs a skeleton: `calibrate` refuses it on the aorta before any solve
+  EXPECT_NE(run("calibrate --organ aorta --kind hybrid", &err), 0);
+  EXPECT_NE(err.find("no medial skeleton"), std::string::npos) << err;
+}

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <iostream>
@@ -15,6 +16,7 @@
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/tet_mesh.hpp"
 #include "medspring/geometry/phantoms.hpp"
+#include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/forces.hpp"
@@ -480,3 +482,65 @@ TEST(VolumetricStatics, ModifiedNewtonAndSmallStrainResponseAgreeWithFullNewton)
 
 }  // namespace
 }  // namespace medspring
+
+// The support rule of an organ that no single slab holds (docs/accuracy.md, "The aorta"): a bed of the
+// surface facing away from the load plus a cut cap; the FEM and the spring model hold the same region, and
+// a rule that holds a single point (every rotation about it free) is refused on both sides.
+TEST(SupportRule, AFacingBedAndACapHoldAVesselLikeOrganAndALonePointIsRefused) {
+  SurfaceMesh s = icosphere(2, 10.0);
+  s.V.col(0) *= 4.0;  // a 80 x 20 x 20 mm cigar
+  fem::SupportRule rule{Vec3(0, 0, -1), 0.0};
+  rule.facing_deg = 60;
+  rule.caps = {{Vec3(-1, 0, 0), 1.0}};
+  MatX3 N;
+  vertex_normals(s.V, s.F, N);
+  const std::vector<Index> held = fem::support_nodes(s, rule);
+  const double xmin = s.V.col(0).minCoeff();
+  std::vector<char> in(static_cast<std::size_t>(s.num_vertices()), 0);
+  for (Index i : held) in[static_cast<std::size_t>(i)] = 1;
+  Index bed = 0, cap = 0;
+  for (Index i = 0; i < s.num_vertices(); ++i) {
+    const bool facing = -N(i, 2) >= 0.5, at_cap = s.V(i, 0) <= xmin + 1.0;
+    const bool lowest = s.V(i, 2) == s.V.col(2).minCoeff();
+    EXPECT_EQ(in[static_cast<std::size_t>(i)] != 0, facing || at_cap || lowest) << "node " << i;
+    bed += facing ? 1 : 0;
+    cap += at_cap ? 1 : 0;
+  }
+  EXPECT_GT(bed, 20);
+  EXPECT_GE(cap, 1);
+  // the bed runs along the whole organ (a slab under the lowest point would not)
+  double lo = 1e9, hi = -1e9;
+  for (Index i : held)
+    if (-N(i, 2) >= 0.5) lo = std::min(lo, s.V(i, 0)), hi = std::max(hi, s.V(i, 0));
+  EXPECT_LT(lo, -25.0);
+  EXPECT_GT(hi, 25.0);
+  EXPECT_THROW(fem::support_nodes(s.V, rule), InvalidInput);  // needs the normals
+  fem::SupportRule bad = rule;
+  bad.facing_deg = 120;
+  EXPECT_THROW(fem::support_nodes(s, bad), InvalidInput);
+
+  // the FEM holds the same region of its boundary: every fixed node faces away or lies at the cap
+  const fem::OrganReference ref(s, fem::Material::from_kpa(10, 0.45), rule);
+  EXPECT_GT(ref.fixed_fem_nodes().size(), held.size());  // corners and mid-edge nodes
+  for (Index i : ref.fixed_fem_nodes())
+    EXPECT_TRUE(ref.mesh().X(i, 2) < 0 || ref.mesh().X(i, 0) <= xmin + 1.0) << "FEM node " << i;
+
+  // the lowest point(s) held (one, or two on a line): refused by the FEM (rigid motions free) and by the
+  // volumetric kind (no return springs)
+  const fem::SupportRule lone{Vec3(0, 0, -1), 0.0};
+  ASSERT_LE(fem::support_nodes(s, lone).size(), 2u);
+  try {
+    const fem::OrganReference r(s, fem::Material::from_kpa(10, 0.45), lone);
+    ADD_FAILURE() << "a single support point accepted by the FEM";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("rigid motion"), std::string::npos) << e.what();
+  }
+  VolumetricSettings st;
+  st.fixed = fem::support_nodes(s, lone);
+  try {
+    const VolumetricBody b(fem::volumetric_mesh(s, {.target_nodes = 300}), st, "cigar");
+    ADD_FAILURE() << "a single support point accepted by the volumetric kind";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("collinear or coincident"), std::string::npos) << e.what();
+  }
+}

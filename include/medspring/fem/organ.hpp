@@ -9,10 +9,12 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "medspring/fem/calculix.hpp"
 #include "medspring/fem/matching.hpp"
+#include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/models/body.hpp"
 
 namespace medspring::fem {
@@ -26,10 +28,16 @@ struct ContactLoad {
 };
 
 /// The support region by rule: the surface points within `depth` mm of the extreme point along
-/// `direction` (e.g. the posterior-most point of a kidney lying on the abdominal wall).
+/// `direction` (e.g. the posterior-most point of a kidney lying on the abdominal wall). Two optional
+/// additions for organs that no single slab holds (a curved vessel, docs/accuracy.md "The aorta"):
+/// `facing_deg` > 0 also holds every surface point whose outward normal lies within that angle of
+/// `direction` (a bed along the whole organ), and `caps` holds further extreme regions (direction,
+/// depth), e.g. a vessel's cut cap.
 struct SupportRule {
   Vec3 direction = Vec3(0, 0, -1);
-  double depth = 5.0;  // mm
+  double depth = 5.0;       // mm
+  double facing_deg = 0.0;  // 0: off; else in (0, 90]
+  std::vector<std::pair<Vec3, double>> caps{};
 };
 
 struct OrganMeshSettings {
@@ -64,8 +72,16 @@ class OrganReference {
 /// The surface with every triangle split into 4 at its edge midpoints (the same polyhedron).
 SurfaceMesh subdivide_midpoint(const SurfaceMesh& surface);
 
-/// Surface nodes of `surface` picked by the rule (the spring model's pinned nodes).
+/// Surface nodes of `surface` picked by the rule (the spring model's pinned nodes). The MatX3 form refuses
+/// a rule with facing_deg > 0 (it needs the surface's normals: pass the mesh).
 std::vector<Index> support_nodes(const MatX3& surface, const SupportRule& rule);
+std::vector<Index> support_nodes(const SurfaceMesh& surface, const SupportRule& rule);
+
+/// The rule applied to points P with outward unit normals N (#P x 3; may be empty when facing_deg == 0),
+/// among `candidates` (all when empty): the sorted union of the extreme slab, the facing points and the
+/// caps. InvalidInput for a zero direction, a negative depth or facing_deg outside [0, 90].
+std::vector<Index> apply_support_rule(const MatX3& P, const MatX3& N, const SupportRule& rule,
+                                      const std::vector<Index>& candidates = {});
 
 /// Static equilibrium of a spring model (built with the support nodes pinned) under the disk load, as
 /// displacement of its surface nodes (#S x 3, mm). The disk load becomes nodal forces on the surface
