@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "medspring/builders/centerline_build.hpp"
@@ -15,6 +16,8 @@
 #include "medspring/models/model_package.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
+#include "medspring/skeleton/centerline_tree.hpp"
+#include "medspring/skeleton/voxelize.hpp"
 
 namespace medspring {
 
@@ -92,6 +95,60 @@ std::shared_ptr<SmrmTree> blended(const CenterlineTree& ct, const SmrmTreeSettin
   return tree;
 }
 
+// A tree from a closed surface mesh or a segmentation (--branches all): the tree skeleton of the mask
+// (the voxelised mesh), merged into branches, and the rebuilt surface's distance to the input.
+VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_clock::time_point t0) {
+  LoadedOrgan organ = load_organ(st.source, {.allow_open_tube = true});
+  if (organ.from_mask && organ.components > 1)
+    throw InvalidInput(cat(organ.name, ": label ", organ.label, " has ", organ.components,
+                           " separate components (26-connected); a vessel tree must be one component (",
+                           organ.notes.empty() ? std::string() : organ.notes.front(), ")"));
+  VesselSummary s;
+  s.input = organ.name;
+  s.input_kind = organ.from_mask ? "mask" : "mesh";
+  s.notes = organ.notes;
+  s.warnings = organ.warnings;
+  MaskVolume mask;
+  if (organ.from_mask) {
+    mask = organ.mask;
+  } else {
+    SurfaceMesh closed = organ.surface;
+    const std::vector<BoundaryCap> caps = close_boundary_loops(closed);  // open ends of a tube mesh
+    if (!caps.empty())
+      s.notes.push_back(cat(caps.size(), " open end(s) of the mesh capped for voxelisation"));
+    // a tree is long and thin: the voxel size from the bounding box's volume (about 2 million voxels),
+    // not from its smallest extent (the default would resolve a flat Y at 48 voxels across its depth)
+    const Vec3 ext = (closed.V.colwise().maxCoeff() - closed.V.colwise().minCoeff()).transpose();
+    VoxelizeSettings vset;
+    vset.voxel_size = std::cbrt(std::max(ext.prod(), 1e-9) / 2e6);
+    VoxelizeStats vs;
+    mask = voxelize(closed, vset, &vs);
+    s.notes.push_back(cat("voxelised at ", vs.voxel_size, " mm (", vs.inside_voxels, " voxels)"));
+  }
+  const TreeSkeleton sk = extract_centerline_tree(mask);
+  for (const auto& n : sk.notes) s.notes.push_back("tree skeleton: " + n);
+  s.input_branches = sk.endpoints;
+  SmrmTreeSettings ts;
+  ts.vessel = st.smrm;
+  const CenterlineTree ct = merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min));
+  std::shared_ptr<SmrmTree> tree =
+      st.blend ? blended(ct, ts, st.blend_spacing, s) : std::make_shared<SmrmTree>(ct, ts);
+  VesselBuild out = finish_tree(std::move(tree), s, t0);
+  VesselSummary& r = out.summary;
+  const SmrmTree& t = *out.tree;
+  const SurfaceMesh rebuilt{t.rest_surface(), t.faces()};
+  const SurfaceDistance d = surface_distance(rebuilt, organ.surface);
+  r.has_distance = true;
+  r.hausdorff_mm = d.hausdorff;
+  r.mean_distance_mm = d.mean;
+  const VecX dn = distances_to_surface(t.rest_surface(), organ.surface);
+  r.to_input_max_mm = dn.maxCoeff();
+  r.to_input_mean_mm = dn.mean();
+  out.input = std::move(organ.surface);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
 }  // namespace
 
 TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain, double spacing_mm) {
@@ -167,7 +224,7 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
           "vessel: a blended (watertight) surface applies to a tree (all branches)");
   require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");
   require(st.smrm.spokes >= 3, "vessel: spokes must be >= 3 (got ", st.smrm.spokes, ")");
-  require(!st.all_branches || has_line, "vessel: all branches (a tree) need a centerline file");
+  if (has_organ && st.all_branches) return tree_from_organ(st, t0);
   VesselBuild out;
   VesselSummary& s = out.summary;
   std::shared_ptr<SmrmVessel> vessel;
