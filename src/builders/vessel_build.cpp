@@ -151,12 +151,11 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
 
 }  // namespace
 
-TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain, double spacing_mm) {
-  require(std::isfinite(spacing_mm) && spacing_mm >= 0,
-          "vessel tree surface: blend spacing must be >= 0 mm (got ", spacing_mm, ")");
-  const MatX3& C = plain.branch_vessel(0).rest_atoms();
-  const double spacing = spacing_mm > 0 ? spacing_mm : (C.row(1) - C.row(0)).norm();
-  const Index spokes = plain.settings().vessel.spokes;
+namespace {
+
+// The path tubes at base ring spacing `spacing` (each path its first simple spacing of spacing x 1, 0.9,
+// 1.1, ...) and their union.
+TreeSurface path_tube_union(const CenterlineTree& ct, Index spokes, double spacing) {
   // Rings too far apart on a tight bend, or too close on a wavy wide stretch (neighbouring rings of a
   // 12 mm radius tilt into each other), make a tube cross itself: every path takes the first ring
   // spacing of spacing x (1, 0.9, 1.1, 0.8, 1.2, ...) that gives a simple tube.
@@ -190,9 +189,42 @@ TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain
   r.spacing_max_mm = *std::max_element(used.begin(), used.end());
   r.notes.push_back(cat("path tube ring spacing ", r.spacing_min_mm, "..", r.spacing_max_mm,
                         " mm (the first of ", spacing, " mm x 1, 0.9, 1.1, ... without self-intersection)"));
-  r.mesh = union_of_closed_meshes(tubes, "vessel tree surface");
-  const ClosedManifoldReport cm = check_closed_manifold(r.mesh);
   r.path_tubes = static_cast<Index>(tubes.size());
+  r.mesh = union_of_closed_meshes(tubes, "vessel tree surface");
+  return r;
+}
+
+}  // namespace
+
+TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain, double spacing_mm) {
+  require(std::isfinite(spacing_mm) && spacing_mm >= 0,
+          "vessel tree surface: blend spacing must be >= 0 mm (got ", spacing_mm, ")");
+  const MatX3& C = plain.branch_vessel(0).rest_atoms();
+  const double spacing = spacing_mm > 0 ? spacing_mm : (C.row(1) - C.row(0)).norm();
+  const Index spokes = plain.settings().vessel.spokes;
+  // A tube vertex that falls exactly on another tube's edge (a planar, mirror-symmetric tree, or a
+  // coincidence) leaves zero-area triangles in CGAL's union: then the whole tree takes the next base
+  // spacing of spacing x (1, 0.97, 1.03, 0.94, 1.06).
+  const std::vector<double> bases{1.0, 0.97, 1.03, 0.94, 1.06};
+  TreeSurface r;
+  std::string first_error;
+  for (double m : bases) {
+    try {
+      r = path_tube_union(ct, spokes, m * spacing);
+    } catch (const InvalidInput& e) {
+      if (std::string(e.what()).find("zero-area") == std::string::npos) throw;
+      if (first_error.empty()) first_error = e.what();
+      if (m == bases.back())
+        throw InvalidInput(cat(first_error, "; also at base ring spacings ", bases[1] * spacing, " to ",
+                               bases.back() * spacing, " mm"));
+      continue;
+    }
+    if (m != 1.0)
+      r.notes.push_back(cat("base ring spacing ", m * spacing, " mm (", spacing,
+                            " mm left zero-area triangles in the union: ", first_error, ")"));
+    break;
+  }
+  const ClosedManifoldReport cm = check_closed_manifold(r.mesh);
   r.closed = cm.ok();
   r.components = cm.mesh.components;
   r.self_intersections = self_intersections(r.mesh, "vessel tree surface");

@@ -2,9 +2,12 @@
 #include "medspring/meshing/mesh_union.hpp"
 
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 
+#include <cmath>
 #include <iterator>
+#include <numbers>
 #include <utility>
 #include <vector>
 
@@ -44,6 +47,20 @@ SurfaceMesh union_of_closed_meshes(const std::vector<SurfaceMesh>& parts, const 
     acc = std::move(out);
   }
   SurfaceMesh s = from_cgal(acc, what + ": union");
+  // Where a vertex of one part lies exactly on another part's edge (a planar, mirror-symmetric tree),
+  // the corefinement leaves zero-area triangles: collapse or flip them away (caps over 179.99 degrees,
+  // needles over 1e6 : 1), only when there are any (other unions stay as they were).
+  const MeshReport rep = validate_mesh(s);
+  if (rep.degenerate_faces > 0) {
+    PMP::experimental::remove_almost_degenerate_faces(acc, std::cos(179.99 * std::numbers::pi / 180.0), 1e6,
+                                                      1e-3 * rep.bbox_diagonal);
+    acc.collect_garbage();
+    s = from_cgal(acc, what + ": union");
+    const MeshReport again = validate_mesh(s);
+    require(again.degenerate_faces == 0, what, ": the union has ", again.degenerate_faces,
+            " zero-area triangles left after removing ", rep.degenerate_faces, " (", again.first_problem,
+            ")");
+  }
   if (signed_volume(s.V, s.F) < 0.0) s.F.col(1).swap(s.F.col(2));
   return s;
 }

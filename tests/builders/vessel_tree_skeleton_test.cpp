@@ -1,17 +1,21 @@
-// Vessel trees from a segmentation or a closed surface mesh (issue 17, docs/vessels.md): the tree skeleton
-// of every endpoint on a procedural Y (its mask, and the union of its tubes as a mesh) finds the two
-// outlets and the junction, and the rebuilt tree surface lies within a voxel or two of the input.
+// Vessel trees from a segmentation or a closed surface mesh (issue 17, docs/vessels.md): build_vessel with
+// all branches on a procedural Y (its mask, and the union of its tubes as a mesh) gives 3 branches and 1
+// junction, one watertight surface exact at rest and within a voxel or two of the input; the real aorta
+// mask gives one tube; bad input is refused (the skeleton itself: tests/skeleton/centerline_tree_test.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <string>
 
 #include "medspring/builders/vessel_build.hpp"
 #include "medspring/io/mesh_io.hpp"
 #include "medspring/io/volume_io.hpp"
 #include "medspring/meshing/mesh_repair.hpp"
 #include "medspring/meshing/mesh_union.hpp"
+#include "medspring/meshing/surface_distance.hpp"
+#include "medspring/physics/state.hpp"
 #include "medspring/skeleton/centerline_tree.hpp"
 #include "test_support.hpp"
 
@@ -59,41 +63,6 @@ SurfaceMesh y_mesh() {
   return blended_tree_surface(ct, SmrmTree(ct, ts), 1.5).mesh;
 }
 
-TEST(VesselTreeSkeleton, YMaskGivesTwoOutletsMeetingAtTheFork) {
-  const MaskVolume mask = y_mask(0.5);
-  const TreeSkeleton t = extract_centerline_tree(mask);
-  for (const auto& l : t.lines)
-    std::cerr << "DEBUG line " << l.size() << " from " << l.points.row(0) << " to " << l.points.row(l.size() - 1)
-              << " r0 " << l.radii[0] << "\n";
-  for (const auto& n : t.notes) std::cerr << "DEBUG " << n << "\n";
-  ASSERT_EQ(t.lines.size(), 2u);
-  EXPECT_EQ(t.components, 1);
-  const CenterlineTree ct = merge_centerlines(t.lines);
-  ASSERT_EQ(ct.branches.size(), 3u);
-  EXPECT_EQ(ct.junctions(), 1);
-  // the root is the widest end (the trunk's, at x = 0, trimmed by about its radius)
-  const Vec3 root = ct.branches[0].line.points.row(0).transpose();
-  EXPECT_LT(root.x(), 6.0) << root.transpose();
-  // the junction lies near the fork (the skeleton of a Y meets a little into the wider trunk)
-  const Centerline& trunk = ct.branches[0].line;
-  const Vec3 junction = trunk.points.row(trunk.size() - 1).transpose();
-  EXPECT_LT((junction - kJ).norm(), 4.0) << junction.transpose();
-  // every point of the skeleton is near the Y's axis, and the radii are those of the tube (+- 1 voxel)
-  for (const auto& b : ct.branches)
-    for (Index k = 0; k < b.line.size(); ++k) {
-      const Vec3 p = b.line.points.row(k).transpose();
-      const double axis =
-          std::min({capsule_distance(p, kA, kJ), capsule_distance(p, kJ, kB1), capsule_distance(p, kJ, kB2)});
-      EXPECT_LT(axis, 1.0) << p.transpose();
-      const double r_true = (p.x() < kJ.x() - 4.0) ? 4.0 : (p.x() > kJ.x() + 6.0 ? 3.0 : -1.0);
-      if (r_true > 0) EXPECT_NEAR(b.line.radii[k], r_true, 0.75) << p.transpose();
-    }
-  // bad input: an empty mask
-  MaskVolume empty = mask;
-  std::fill(empty.data.begin(), empty.data.end(), 0);
-  EXPECT_THROW(extract_centerline_tree(empty), InvalidInput);
-}
-
 TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheInput) {
   const std::filesystem::path dir = testing::temp_dir("vessel-tree-skeleton");
   {  // the Y as a label volume
@@ -126,15 +95,125 @@ TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheIn
     EXPECT_TRUE(s.blended && s.surface_closed);
     EXPECT_EQ(s.surface_components, 1);
     ASSERT_TRUE(s.has_distance);
-    // every rebuilt node lies on the input wall (within about a voxel and the ring discretisation);
-    // the Hausdorff distance also counts the input's ends beyond the trimmed skeleton (about a radius)
-    EXPECT_LT(s.to_input_max_mm, 1.0);
-    EXPECT_LT(s.to_input_mean_mm, 0.4);
-    EXPECT_LT(s.hausdorff_mm, 5.0);
+    // every rebuilt node away from the ends (the flat caps of the tree's path tubes, cut about a radius
+    // short of the input's rounded tips) lies on the input wall within about a voxel; the Hausdorff
+    // distance also counts the ends
+    const MatX3& S = v.tree->rest_surface();
+    std::vector<Vec3> ends{v.centerlines[0].points.row(0).transpose()};
+    for (const Centerline& c : v.centerlines) ends.push_back(c.points.row(c.size() - 1).transpose());
+    std::vector<Index> away;
+    for (Index k = 0; k < S.rows(); ++k) {
+      bool near_end = false;
+      for (const Vec3& e : ends) near_end = near_end || (S.row(k).transpose() - e).norm() < 5.0;
+      if (!near_end) away.push_back(k);
+    }
+    ASSERT_GT(away.size(), S.rows() / 2);
+    MatX3 A(static_cast<Index>(away.size()), 3);
+    for (std::size_t q = 0; q < away.size(); ++q) A.row(static_cast<Index>(q)) = S.row(away[q]);
+    const VecX d = distances_to_surface(A, v.input);
+    std::cout << (from_mask ? "  mask" : "  mesh") << " Y: " << s.branches << " branches, " << s.junctions
+              << " junction(s), rest error " << s.rest_error_mm << " mm, Hausdorff " << s.hausdorff_mm
+              << " mm, mean " << s.mean_distance_mm << " mm; nodes away from the ends to the input: max "
+              << d.maxCoeff() << " mm, mean " << d.mean() << " mm\n";
+    EXPECT_LT(d.maxCoeff(), 1.0);
+    EXPECT_LT(d.mean(), 0.4);
+    EXPECT_LT(s.hausdorff_mm, 8.0);  // the ends: cut a radius + a voxel short of the input's tips
     EXPECT_GT(s.hausdorff_mm, 0.0);
     write_vessel_files(dir, v);  // the package of a tree from a mask
     EXPECT_TRUE(std::filesystem::exists(dir / "vessel.msm"));
   }
+}
+
+// A planar, mirror-symmetric Y (the case CGAL's union left zero-area triangles in, refused before): the
+// blended surface is one closed manifold, exact at rest.
+TEST(VesselTreeSkeleton, PlanarSymmetricYBlendsIntoOneWatertightSurface) {
+  MatX3 atoms(7, 3);
+  atoms << 0, 0, 0, 15, 0, 0, 30, 0, 0, 42, 10, 0, 54, 20, 0, 42, -10, 0, 54, -20, 0;
+  VecX radii(7);
+  radii << 4, 4, 4, 3, 3, 3, 3;
+  const CenterlineTree ct = tree_from_parents(atoms, {-1, 0, 1, 2, 3, 2, 5}, radii);
+  SmrmTreeSettings ts;
+  ts.vessel.atoms = 9;
+  TreeSurface r;
+  const auto tree = make_blended_tree(ct, ts, 0.0, &r);
+  for (const auto& n : r.notes) std::cout << "  " << n << "\n";
+  EXPECT_TRUE(r.closed);
+  EXPECT_EQ(r.components, 1);
+  EXPECT_EQ(r.self_intersections, 0);
+  EXPECT_GT(r.volume_mm3, 0.0);
+  EXPECT_TRUE(validate_mesh(r.mesh).valid()) << validate_mesh(r.mesh).first_problem;
+  State st = make_state(tree->model());
+  MatX3 S;
+  tree->map_to_surface(st, S);
+  EXPECT_LE((S - tree->rest_surface()).rowwise().norm().maxCoeff(), 1e-9);
+}
+
+// The real TotalSegmentator aorta (arch + descending aorta, no branch stubs; ../shared/data/README.md):
+// the tree of every endpoint is one branch without junctions, and its surface is within a few mm of the
+// mask's isosurface.
+TEST(VesselTreeSkeleton, RealAortaSegmentationIsOneBranch) {
+  VesselBuildSettings st;
+  st.source.mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");
+  st.source.label = 1;
+  st.all_branches = true;
+  const VesselBuild v = build_vessel(st);
+  const VesselSummary& s = v.summary;
+  std::cout << s.text();
+  EXPECT_EQ(s.branches, 1);
+  EXPECT_EQ(s.junctions, 0);
+  EXPECT_LE(s.rest_error_mm, 1e-9);
+  ASSERT_TRUE(s.has_distance);
+  // the tree's cross-sections are circles of the skeleton's inscribed radius (the aorta's are not: the
+  // single-vessel build marches its spokes to the wall instead); measured 2.3 mm mean, 11.3 mm max
+  EXPECT_LT(s.to_input_mean_mm, 3.0);
+}
+
+TEST(VesselTreeSkeleton, BadSegmentationsAreRefusedWithTheReason) {
+  const std::filesystem::path dir = testing::temp_dir("vessel-tree-bad");
+  auto label_file = [&](const std::string& name, const MaskVolume& m, std::int32_t label) {
+    LabelVolume l;
+    l.dims = m.dims;
+    l.spacing = m.spacing;
+    l.origin = m.origin;
+    l.direction = m.direction;
+    l.data.assign(m.data.begin(), m.data.end());
+    for (auto& x : l.data) x *= label;
+    write_label_volume(dir / name, l);
+    return dir / name;
+  };
+  auto refused = [](const VesselBuildSettings& st, const std::string& words) {
+    try {
+      build_vessel(st);
+      ADD_FAILURE() << "accepted; expected: " << words;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  VesselBuildSettings st;
+  st.all_branches = true;
+  MaskVolume y = y_mask(1.0);
+  st.source.mask = label_file("y3.mha", y, 3);
+  st.source.label = 5;  // absent
+  refused(st, "5");
+  MaskVolume empty = y;
+  std::fill(empty.data.begin(), empty.data.end(), 0);
+  st.source.mask = label_file("empty.mha", empty, 1);
+  st.source.label = 1;
+  refused(st, "");
+  MaskVolume ball = y;  // a blob: its skeleton is only a spur
+  for (Index k = 0; k < ball.dims[2]; ++k)
+    for (Index j = 0; j < ball.dims[1]; ++j)
+      for (Index i = 0; i < ball.dims[0]; ++i)
+        ball.at(i, j, k) = (ball.to_world(Vec3(i, j, k)) - Vec3(20, 0, 0)).norm() <= 8.0 ? 1 : 0;
+  st.source.mask = label_file("ball.mha", ball, 1);
+  refused(st, "spur");
+  MaskVolume two = y;  // two components
+  for (Index k = 0; k < two.dims[2]; ++k)
+    for (Index j = 0; j < two.dims[1]; ++j)
+      for (Index i = 0; i < two.dims[0]; ++i)
+        if (std::abs(two.to_world(Vec3(i, j, k)).x() - 15.0) < 1.5) two.at(i, j, k) = 0;
+  st.source.mask = label_file("two.mha", two, 1);
+  refused(st, "components");
 }
 
 }  // namespace
