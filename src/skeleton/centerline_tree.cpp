@@ -15,7 +15,7 @@ using namespace skeleton_detail;
 
 namespace {
 
-// Multi-source Dijkstra over the voxel graph, grown incrementally: sources() adds nodes at distance 0 and
+// Multi-source Dijkstra over the voxel graph, grown incrementally: add() puts nodes at distance 0 and
 // relaxes (distances only decrease). `step(w)` is the cost factor of entering w (1: geodesic length).
 struct Field {
   const Graph* g = nullptr;
@@ -284,14 +284,11 @@ TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonS
     }
   }
   out.dropped = grown.dropped;
-  struct {
-    std::vector<Index> leaves;
-  } picked{grown.leaves};
 
   // the skeleton's branches: voxel runs between the root, junctions (>= 2 children) and leaves
   std::vector<Index> children(V, 0);
   std::vector<char> on(V, 0);
-  for (Index e : picked.leaves)
+  for (Index e : grown.leaves)
     for (Index v = e; v >= 0 && !on[v]; v = parent[v]) on[v] = 1;
   for (Index v = 0; v < V; ++v)
     if (on[v] && parent[v] >= 0) ++children[parent[v]];
@@ -338,7 +335,7 @@ TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonS
     }
     return seg_curve[static_cast<std::size_t>(seg_of[lo_end])];
   };
-  for (Index e : picked.leaves) {
+  for (Index e : grown.leaves) {
     std::vector<Index> stops{e};  // junctions and R on the way, leaf first
     for (Index v = parent[e]; v >= 0; v = parent[v])
       if (v == R || children[v] >= 2) stops.push_back(v);
