@@ -5,6 +5,7 @@
 #include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iterator>
 #include <numbers>
@@ -71,6 +72,21 @@ Index self_intersections(const SurfaceMesh& mesh, const std::string& what) {
   std::vector<std::pair<FD, FD>> pairs;
   PMP::self_intersections(m, std::back_inserter(pairs));
   return static_cast<Index>(pairs.size());
+}
+
+std::vector<Index> self_intersecting_faces(const SurfaceMesh& mesh, const std::string& what) {
+  require_valid_mesh(mesh, what);
+  const Mesh m = to_cgal(mesh, what);
+  std::vector<std::pair<FD, FD>> pairs;
+  PMP::self_intersections(m, std::back_inserter(pairs));
+  std::vector<Index> faces;
+  for (const auto& [a, b] : pairs) {
+    faces.push_back(static_cast<Index>(a.idx()));
+    faces.push_back(static_cast<Index>(b.idx()));
+  }
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  return faces;
 }
 
 }  // namespace medspring

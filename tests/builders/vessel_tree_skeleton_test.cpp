@@ -63,6 +63,32 @@ SurfaceMesh y_mesh() {
   return blended_tree_surface(ct, SmrmTree(ct, ts), 1.5).mesh;
 }
 
+// Distances to the input of the rebuilt nodes away from the tree's ends: nodes farther than the end
+// atom's radius + 2 mm from every end (the root's start, every leaf's end) of the tree.
+VecX away_from_ends(const VesselBuild& v) {
+  const MatX3& S = v.tree->rest_surface();
+  std::vector<std::pair<Vec3, double>> ends{
+      {v.centerlines[0].points.row(0).transpose(), v.centerlines[0].radii[0]}};
+  for (std::size_t b = 0; b < v.centerlines.size(); ++b) {
+    const Centerline& c = v.centerlines[b];
+    bool leaf = true;
+    for (Index q = 0; q < v.tree->num_branches(); ++q)
+      leaf = leaf && v.tree->parent(q) != static_cast<Index>(b);
+    if (leaf) ends.emplace_back(c.points.row(c.size() - 1).transpose(), c.radii[c.size() - 1]);
+  }
+  std::vector<Index> away;
+  for (Index k = 0; k < S.rows(); ++k) {
+    bool near_end = false;
+    for (const auto& [e, r] : ends) near_end = near_end || (S.row(k).transpose() - e).norm() < r + 2.0;
+    if (!near_end) away.push_back(k);
+  }
+  EXPECT_GT(away.size(), static_cast<std::size_t>(S.rows() / 2));
+  MatX3 A(static_cast<Index>(away.size()), 3);
+  for (std::size_t q = 0; q < away.size(); ++q) A.row(static_cast<Index>(q)) = S.row(away[q]);
+  const VecX d = distances_to_surface(A, v.input);
+  return d;
+}
+
 TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheInput) {
   const std::filesystem::path dir = testing::temp_dir("vessel-tree-skeleton");
   {  // the Y as a label volume
@@ -96,27 +122,15 @@ TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheIn
     EXPECT_EQ(s.surface_components, 1);
     ASSERT_TRUE(s.has_distance);
     // every rebuilt node away from the ends (the flat caps of the tree's path tubes, cut about a radius
-    // short of the input's rounded tips) lies on the input wall within about a voxel; the Hausdorff
-    // distance also counts the ends
-    const MatX3& S = v.tree->rest_surface();
-    std::vector<Vec3> ends{v.centerlines[0].points.row(0).transpose()};
-    for (const Centerline& c : v.centerlines) ends.push_back(c.points.row(c.size() - 1).transpose());
-    std::vector<Index> away;
-    for (Index k = 0; k < S.rows(); ++k) {
-      bool near_end = false;
-      for (const Vec3& e : ends) near_end = near_end || (S.row(k).transpose() - e).norm() < 5.0;
-      if (!near_end) away.push_back(k);
-    }
-    ASSERT_GT(away.size(), S.rows() / 2);
-    MatX3 A(static_cast<Index>(away.size()), 3);
-    for (std::size_t q = 0; q < away.size(); ++q) A.row(static_cast<Index>(q)) = S.row(away[q]);
-    const VecX d = distances_to_surface(A, v.input);
+    // short of the input's rounded tips) lies on the input wall; the Hausdorff distance also counts the
+    // ends
+    const VecX d = away_from_ends(v);
     std::cout << (from_mask ? "  mask" : "  mesh") << " Y: " << s.branches << " branches, " << s.junctions
               << " junction(s), rest error " << s.rest_error_mm << " mm, Hausdorff " << s.hausdorff_mm
               << " mm, mean " << s.mean_distance_mm << " mm; nodes away from the ends to the input: max "
               << d.maxCoeff() << " mm, mean " << d.mean() << " mm\n";
     EXPECT_LT(d.maxCoeff(), 1.0);
-    EXPECT_LT(d.mean(), 0.4);
+    EXPECT_LT(d.mean(), 0.1);
     EXPECT_LT(s.hausdorff_mm, 8.0);  // the ends: cut a radius + a voxel short of the input's tips
     EXPECT_GT(s.hausdorff_mm, 0.0);
     write_vessel_files(dir, v);  // the package of a tree from a mask
@@ -156,16 +170,35 @@ TEST(VesselTreeSkeleton, RealAortaSegmentationIsOneBranch) {
   st.source.mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");
   st.source.label = 1;
   st.all_branches = true;
-  const VesselBuild v = build_vessel(st);
-  const VesselSummary& s = v.summary;
-  std::cout << s.text();
-  EXPECT_EQ(s.branches, 1);
-  EXPECT_EQ(s.junctions, 0);
-  EXPECT_LE(s.rest_error_mm, 1e-9);
-  ASSERT_TRUE(s.has_distance);
-  // the tree's cross-sections are circles of the skeleton's inscribed radius (the aorta's are not: the
-  // single-vessel build marches its spokes to the wall instead); measured 2.3 mm mean, 11.3 mm max
-  EXPECT_LT(s.to_input_mean_mm, 3.0);
+  for (const bool blend : {false, true}) {
+    SCOPED_TRACE(blend ? "blend" : "tubes");
+    st.blend = blend;
+    const VesselBuild v = build_vessel(st);
+    const VesselSummary& s = v.summary;
+    EXPECT_EQ(s.branches, 1);
+    EXPECT_EQ(s.junctions, 0);
+    EXPECT_LE(s.rest_error_mm, 1e-9);
+    ASSERT_TRUE(s.has_distance);
+    const VecX d = away_from_ends(v);
+    std::cout << "  aorta mask, " << (blend ? "--blend (marched to the wall)" : "tubes (circles)") << ": "
+              << s.surface_nodes << " nodes, Hausdorff " << s.hausdorff_mm << " mm, mean "
+              << s.mean_distance_mm << " mm; nodes away from the ends to the input: max " << d.maxCoeff()
+              << " mm, mean " << d.mean() << " mm\n";
+    if (blend) {  // marched to the wall: the target (within 2 mm of the input away from the cut
+                  // ends) holds but for a few nodes at the bend of the descending aorta whose rays from the
+                  // skeleton's axis find no wall (measured: 8 of 1202 nodes, up to 11.2 mm)
+      EXPECT_TRUE(s.surface_closed);
+      EXPECT_EQ(s.self_intersections, 0);
+      Index over = 0;
+      for (Index k = 0; k < d.size(); ++k) over += d[k] > 2.0;
+      std::cout << "  nodes away from the ends farther than 2 mm from the input: " << over << " of "
+                << d.size() << "\n";
+      EXPECT_LT(over, d.size() / 100);
+      EXPECT_LT(d.mean(), 0.2);
+    } else {  // circles of the skeleton's inscribed radius: the aorta's cross-sections are not circles
+      EXPECT_LT(d.mean(), 3.0);
+    }
+  }
 }
 
 TEST(VesselTreeSkeleton, BadSegmentationsAreRefusedWithTheReason) {
