@@ -139,20 +139,26 @@ std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeS
   }
   // where the marched surface crosses itself (a junction's crotch), the nodes of the crossing faces go
   // back to the union's surface, a few rounds
-  Index kept = 0;
-  for (int round = 0; round < 8; ++round) {
-    const std::vector<Index> bad = self_intersecting_faces(m, "marched vessel tree surface");
-    if (bad.empty()) break;
-    for (Index f : bad)
-      for (int c = 0; c < 3; ++c) {
-        const Index v = m.F(f, c);
-        if (m.V.row(v) != tree.rest_surface().row(v)) {
-          m.V.row(v) = tree.rest_surface().row(v);
-          ++kept;
+  Index kept = 0, self = 0;
+  try {  // a marched node on another's place leaves a zero-area triangle: refused below, circles kept
+    for (int round = 0; round < 8; ++round) {
+      const std::vector<Index> bad = self_intersecting_faces(m, "marched vessel tree surface");
+      if (bad.empty()) break;
+      for (Index f : bad)
+        for (int c = 0; c < 3; ++c) {
+          const Index v = m.F(f, c);
+          if (m.V.row(v) != tree.rest_surface().row(v)) {
+            m.V.row(v) = tree.rest_surface().row(v);
+            ++kept;
+          }
         }
-      }
+    }
+    self = self_intersections(m, "marched vessel tree surface");
+  } catch (const InvalidInput& e) {
+    s.warnings.push_back(cat("the watertight surface was not marched to the input's wall (", e.what(),
+                             "); it keeps the skeleton's circular cross-sections"));
+    return nullptr;
   }
-  const Index self = self_intersections(m, "marched vessel tree surface");
   if (self > 0) {
     s.warnings.push_back(
         cat("the watertight surface was not marched to the input's wall: it would intersect "
