@@ -274,26 +274,9 @@ int build_vessel_cmd(const Args& args) {
     require(u.has_value(), "option --unit: required with --centerline (mm, cm or m: the file does not say)");
     st.centerline_unit = parse_length_unit(*u);
     if (args.get("branch")) st.branch = count_option(args, "branch", 0, 0);
-    if (const auto b = args.get("branches")) {
-      require(*b == "all", "option --branches: '", *b, "' is not 'all' (one branch: --branch N)");
-      require(!args.get("branch"), "give at most one of --branch and --branches");
-      st.all_branches = true;
-    }
-    if (args.flag("blend") || args.get("blend-spacing")) {  // the watertight junction surface (a tree)
-      require(st.all_branches, "option --blend: applies to a tree (--branches all)");
-      st.blend = true;
-      if (args.get("blend-spacing")) {
-        st.blend_spacing = args.number("blend-spacing", 0.0);
-        require(st.blend_spacing > 0 && std::isfinite(st.blend_spacing),
-                "option --blend-spacing: must be > 0 mm");
-      }
-    }
     require(!args.get("label"), "option --label: applies to --segmentation only");
   } else {
-    require(!args.get("branch") && !args.get("branches"),
-            "options --branch, --branches: apply to --centerline only");
-    require(!args.get("blend") && !args.get("blend-spacing"),
-            "options --blend, --blend-spacing: apply to --centerline with --branches all");
+    require(!args.get("branch"), "option --branch: applies to --centerline only");
     if (mesh) {
       st.source.mesh = *mesh;
       require(!args.get("label"), "option --label: applies to --segmentation only");
@@ -310,6 +293,20 @@ int build_vessel_cmd(const Args& args) {
                 "option --label: ", label, " is out of range");
         st.source.label = static_cast<std::int32_t>(label);
       }
+    }
+  }
+  if (const auto b = args.get("branches")) {  // a tree: every polyline, or the skeleton's every endpoint
+    require(*b == "all", "option --branches: '", *b, "' is not 'all' (one branch: --branch N)");
+    require(!args.get("branch"), "give at most one of --branch and --branches");
+    st.all_branches = true;
+  }
+  if (args.flag("blend") || args.get("blend-spacing")) {  // the watertight junction surface (a tree)
+    require(st.all_branches, "option --blend: applies to a tree (--branches all)");
+    st.blend = true;
+    if (args.get("blend-spacing")) {
+      st.blend_spacing = args.number("blend-spacing", 0.0);
+      require(st.blend_spacing > 0 && std::isfinite(st.blend_spacing),
+              "option --blend-spacing: must be > 0 mm");
     }
   }
   st.smrm.atoms = count_option(args, "atoms", 40, 3);

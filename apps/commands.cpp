@@ -306,20 +306,24 @@ const std::vector<CommandSpec>& commands() {
              .options = {kMask, kLabel, kMesh, kUnit, kAtoms40, kPath, kBuildOut, kBuildJson, kForce}},
             {.name = "vessel",
              .summary = "the SMRM vessel (§5, docs/vessels.md): atoms, spokes, the rebuilt surface",
-             .usage =
-                 "medspring build vessel --centerline FILE --unit mm|cm|m [--branch N | --branches all]\n"
-                 "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE "
-                 "[--label "
-                 "N]\n"
-                 "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
-                 "                              --out DIR [--json] [--force]",
+             .usage = "medspring build vessel --centerline FILE --unit mm|cm|m [--branch N]\n"
+                      "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE "
+                      "[--label "
+                      "N]\n"
+                      "                              [--branches all [--blend [--blend-spacing MM]]]\n"
+                      "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
+                      "                              --out DIR [--json] [--force]",
              .about = "The SMRM vessel (§5, docs/vessels.md): atoms with radii, spokes, the rebuilt surface "
                       "and its rest\n"
                       "reconstruction error; from a mesh or segmentation the centerline of §3 and spokes "
                       "marched to the\n"
                       "boundary, with the Hausdorff and mean distance of the rebuilt surface to the input. "
-                      "Writes\n"
-                      "surface.vtp, atoms.vtp, spokes.vtp, vessel.msm and summary.json.",
+                      "With\n"
+                      "--branches all: a vessel tree (every polyline of the file; from a mesh or "
+                      "segmentation the\n"
+                      "skeleton of every endpoint, junctions where the paths meet). Writes surface.vtp, "
+                      "atoms.vtp,\n"
+                      "spokes.vtp, vessel.msm and summary.json.",
              .options =
                  {{.name = "centerline",
                    .value = "FILE",
@@ -331,7 +335,9 @@ const std::vector<CommandSpec>& commands() {
                   {.name = "branches",
                    .value = "all",
                    .help = "every polyline, merged into a tree where they share their start (shared "
-                           "junction atoms, one tube per branch; its vessel.msm is of kind smrm_tree)"},
+                           "junction atoms, one tube per branch; its vessel.msm is of kind smrm_tree); with "
+                           "--mesh or --segmentation: the tree skeleton of every endpoint, junctions where "
+                           "the paths meet"},
                   {.name = "blend",
                    .help = "with --branches all: one watertight surface (the union of the closed path tubes, "
                            "bound to the branch atoms)"},

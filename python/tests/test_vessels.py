@@ -80,7 +80,7 @@ def test_tree_model_package_round_trip(tmp_path):
 
 
 # Out of plane and not mirror-symmetric: a planar symmetric Y puts tube vertices of the union exactly on
-# each other's edges, and CGAL leaves zero-area triangles (refused; docs/vessels.md).
+# each other's edges, and CGAL leaves zero-area triangles (now collapsed; docs/vessels.md).
 Y_ATOMS = np.array([[0, 0, 0], [5, 0.3, 0.2], [10, 0.5, -0.2], [15, 0.2, 0.1], [20, 3.3, 1.1], [25, 6.2, 2.3],
                     [30, 9.4, 3.1], [19.6, -3.2, -0.7], [24.1, -6.3, -1.6], [28.7, -9.1, -2.2]], float)
 Y_PARENT = np.array([-1, 0, 1, 2, 3, 4, 5, 3, 7, 8])

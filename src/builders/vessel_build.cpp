@@ -3,18 +3,22 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "medspring/builders/centerline_build.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"
+#include "medspring/medial/reconstruction.hpp"
 #include "medspring/meshing/mesh_repair.hpp"
 #include "medspring/meshing/mesh_union.hpp"
 #include "medspring/meshing/surface_distance.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
+#include "medspring/skeleton/centerline_tree.hpp"
+#include "medspring/skeleton/voxelize.hpp"
 
 namespace medspring {
 
@@ -92,14 +96,147 @@ std::shared_ptr<SmrmTree> blended(const CenterlineTree& ct, const SmrmTreeSettin
   return tree;
 }
 
+// --blend from a mesh or a mask: the watertight surface's nodes marched to the input's wall (the §5.6
+// spokes of the single vessel). A node moves along the ray from the closest point of the nearest branch
+// axis through it, to the first hit within 4 local radii; end-cap nodes (a ray within 72.5 degrees of
+// the axis) and misses stay. Null when the marched surface would intersect itself (then the circles
+// stay, with a warning).
+std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeSettings& ts,
+                                       const SmrmTree& tree, const SurfaceMesh& input, VesselSummary& s) {
+  SurfaceMesh m{tree.rest_surface(), tree.faces()};
+  Index moved = 0, missed = 0, caps = 0;
+  for (Index k = 0; k < m.num_vertices(); ++k) {
+    const Vec3 p = m.V.row(k).transpose();
+    double best = std::numeric_limits<double>::infinity();
+    Vec3 a = Vec3::Zero(), t = Vec3::UnitX();
+    double r_loc = 0.0;
+    for (Index b = 0; b < tree.num_branches(); ++b) {
+      const SmrmVessel& v = tree.branch_vessel(b);
+      const MatX3& C = v.rest_atoms();
+      const PolylinePoint q = closest_point_on_polyline(C, p);
+      if (q.distance >= best) continue;
+      const Index i = std::min<Index>(q.segment, static_cast<Index>(C.rows()) - 2);
+      const double lam = q.segment > i ? 1.0 : q.lambda;
+      best = q.distance;
+      const Vec3 c0 = C.row(i).transpose(), c1 = C.row(i + 1).transpose();
+      a = (1.0 - lam) * c0 + lam * c1;
+      t = (c1 - c0).normalized();
+      r_loc = (1.0 - lam) * v.atom_radius()[i] + lam * v.atom_radius()[i + 1];
+    }
+    const Vec3 d = p - a;
+    if (d.norm() < 1e-9 || std::abs(d.normalized().dot(t)) > 0.3) {
+      ++caps;
+      continue;
+    }
+    const Vec3 w = d.normalized();
+    const double hit = first_ray_hit(input, a, w, 4.0 * r_loc);
+    if (std::isfinite(hit)) {
+      m.V.row(k) = (a + hit * w).transpose();
+      ++moved;
+    } else {
+      ++missed;
+    }
+  }
+  // where the marched surface crosses itself (a junction's crotch), the nodes of the crossing faces go
+  // back to the union's surface, a few rounds
+  Index kept = 0, self = 0;
+  try {  // a marched node on another's place leaves a zero-area triangle: refused below, circles kept
+    for (int round = 0; round < 8; ++round) {
+      const std::vector<Index> bad = self_intersecting_faces(m, "marched vessel tree surface");
+      if (bad.empty()) break;
+      for (Index f : bad)
+        for (int c = 0; c < 3; ++c) {
+          const Index v = m.F(f, c);
+          if (m.V.row(v) != tree.rest_surface().row(v)) {
+            m.V.row(v) = tree.rest_surface().row(v);
+            ++kept;
+          }
+        }
+    }
+    self = self_intersections(m, "marched vessel tree surface");
+  } catch (const InvalidInput& e) {
+    s.warnings.push_back(cat("the watertight surface was not marched to the input's wall (", e.what(),
+                             "); it keeps the skeleton's circular cross-sections"));
+    return nullptr;
+  }
+  if (self > 0) {
+    s.warnings.push_back(
+        cat("the watertight surface was not marched to the input's wall: it would intersect "
+            "itself (",
+            self, " triangle pairs); it keeps the skeleton's circular cross-sections"));
+    return nullptr;
+  }
+  moved -= kept;
+  s.notes.push_back(cat("watertight surface marched to the input's wall: ", moved, " nodes moved, ", missed,
+                        " without a hit within 4 radii, ", caps, " on the end caps, ", kept,
+                        " put back where the marched surface crossed itself"));
+  s.surface_volume_mm3 = signed_volume(m.V, m.F);
+  return std::make_shared<SmrmTree>(ct, ts, m);
+}
+
+// A tree from a closed surface mesh or a segmentation (--branches all): the tree skeleton of the mask
+// (the voxelised mesh), merged into branches, and the rebuilt surface's distance to the input.
+VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_clock::time_point t0) {
+  LoadedOrgan organ = load_organ(st.source, {.allow_open_tube = true});
+  if (organ.from_mask && organ.components > 1)
+    throw InvalidInput(cat(organ.name, ": label ", organ.label, " has ", organ.components,
+                           " separate components (26-connected); a vessel tree must be one component (",
+                           organ.notes.empty() ? std::string() : organ.notes.front(), ")"));
+  VesselSummary s;
+  s.input = organ.name;
+  s.input_kind = organ.from_mask ? "mask" : "mesh";
+  s.notes = organ.notes;
+  s.warnings = organ.warnings;
+  MaskVolume mask;
+  if (organ.from_mask) {
+    mask = organ.mask;
+  } else {
+    SurfaceMesh closed = organ.surface;
+    const std::vector<BoundaryCap> caps = close_boundary_loops(closed);  // open ends of a tube mesh
+    if (!caps.empty())
+      s.notes.push_back(cat(caps.size(), " open end(s) of the mesh capped for voxelisation"));
+    // a tree is long and thin: the voxel size from the bounding box's volume (about 2 million voxels),
+    // not from its smallest extent (the default would resolve a flat Y at 48 voxels across its depth)
+    const Vec3 ext = (closed.V.colwise().maxCoeff() - closed.V.colwise().minCoeff()).transpose();
+    VoxelizeSettings vset;
+    vset.voxel_size = std::cbrt(std::max(ext.prod(), 1e-9) / 2e6);
+    VoxelizeStats vs;
+    mask = voxelize(closed, vset, &vs);
+    s.notes.push_back(cat("voxelised at ", vs.voxel_size, " mm (", vs.inside_voxels, " voxels)"));
+  }
+  const TreeSkeleton sk = extract_centerline_tree(mask);
+  for (const auto& n : sk.notes) s.notes.push_back("tree skeleton: " + n);
+  s.input_branches = sk.endpoints;
+  SmrmTreeSettings ts;
+  ts.vessel = st.smrm;
+  const CenterlineTree ct = merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min));
+  std::shared_ptr<SmrmTree> tree =
+      st.blend ? blended(ct, ts, st.blend_spacing, s) : std::make_shared<SmrmTree>(ct, ts);
+  if (st.blend)
+    if (auto marched = marched_tree(ct, ts, *tree, organ.surface, s)) tree = std::move(marched);
+  VesselBuild out = finish_tree(std::move(tree), s, t0);
+  VesselSummary& r = out.summary;
+  const SmrmTree& t = *out.tree;
+  const SurfaceMesh rebuilt{t.rest_surface(), t.faces()};
+  const SurfaceDistance d = surface_distance(rebuilt, organ.surface);
+  r.has_distance = true;
+  r.hausdorff_mm = d.hausdorff;
+  r.mean_distance_mm = d.mean;
+  const VecX dn = distances_to_surface(t.rest_surface(), organ.surface);
+  r.to_input_max_mm = dn.maxCoeff();
+  r.to_input_mean_mm = dn.mean();
+  out.input = std::move(organ.surface);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
 }  // namespace
 
-TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain, double spacing_mm) {
-  require(std::isfinite(spacing_mm) && spacing_mm >= 0,
-          "vessel tree surface: blend spacing must be >= 0 mm (got ", spacing_mm, ")");
-  const MatX3& C = plain.branch_vessel(0).rest_atoms();
-  const double spacing = spacing_mm > 0 ? spacing_mm : (C.row(1) - C.row(0)).norm();
-  const Index spokes = plain.settings().vessel.spokes;
+namespace {
+
+// The path tubes at base ring spacing `spacing` (each path its first simple spacing of spacing x 1, 0.9,
+// 1.1, ...) and their union.
+TreeSurface path_tube_union(const CenterlineTree& ct, Index spokes, double spacing) {
   // Rings too far apart on a tight bend, or too close on a wavy wide stretch (neighbouring rings of a
   // 12 mm radius tilt into each other), make a tube cross itself: every path takes the first ring
   // spacing of spacing x (1, 0.9, 1.1, 0.8, 1.2, ...) that gives a simple tube.
@@ -133,9 +270,42 @@ TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain
   r.spacing_max_mm = *std::max_element(used.begin(), used.end());
   r.notes.push_back(cat("path tube ring spacing ", r.spacing_min_mm, "..", r.spacing_max_mm,
                         " mm (the first of ", spacing, " mm x 1, 0.9, 1.1, ... without self-intersection)"));
-  r.mesh = union_of_closed_meshes(tubes, "vessel tree surface");
-  const ClosedManifoldReport cm = check_closed_manifold(r.mesh);
   r.path_tubes = static_cast<Index>(tubes.size());
+  r.mesh = union_of_closed_meshes(tubes, "vessel tree surface");
+  return r;
+}
+
+}  // namespace
+
+TreeSurface blended_tree_surface(const CenterlineTree& ct, const SmrmTree& plain, double spacing_mm) {
+  require(std::isfinite(spacing_mm) && spacing_mm >= 0,
+          "vessel tree surface: blend spacing must be >= 0 mm (got ", spacing_mm, ")");
+  const MatX3& C = plain.branch_vessel(0).rest_atoms();
+  const double spacing = spacing_mm > 0 ? spacing_mm : (C.row(1) - C.row(0)).norm();
+  const Index spokes = plain.settings().vessel.spokes;
+  // A tube vertex that falls exactly on another tube's edge (a planar, mirror-symmetric tree, or a
+  // coincidence) leaves zero-area triangles in CGAL's union: then the whole tree takes the next base
+  // spacing of spacing x (1, 0.97, 1.03, 0.94, 1.06).
+  const std::vector<double> bases{1.0, 0.97, 1.03, 0.94, 1.06};
+  TreeSurface r;
+  std::string first_error;
+  for (double m : bases) {
+    try {
+      r = path_tube_union(ct, spokes, m * spacing);
+    } catch (const InvalidInput& e) {
+      if (std::string(e.what()).find("zero-area") == std::string::npos) throw;
+      if (first_error.empty()) first_error = e.what();
+      if (m == bases.back())
+        throw InvalidInput(cat(first_error, "; also at base ring spacings ", bases[1] * spacing, " to ",
+                               bases.back() * spacing, " mm"));
+      continue;
+    }
+    if (m != 1.0)
+      r.notes.push_back(cat("base ring spacing ", m * spacing, " mm (", spacing,
+                            " mm left zero-area triangles in the union: ", first_error, ")"));
+    break;
+  }
+  const ClosedManifoldReport cm = check_closed_manifold(r.mesh);
   r.closed = cm.ok();
   r.components = cm.mesh.components;
   r.self_intersections = self_intersections(r.mesh, "vessel tree surface");
@@ -167,7 +337,7 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
           "vessel: a blended (watertight) surface applies to a tree (all branches)");
   require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");
   require(st.smrm.spokes >= 3, "vessel: spokes must be >= 3 (got ", st.smrm.spokes, ")");
-  require(!st.all_branches || has_line, "vessel: all branches (a tree) need a centerline file");
+  if (has_organ && st.all_branches) return tree_from_organ(st, t0);
   VesselBuild out;
   VesselSummary& s = out.summary;
   std::shared_ptr<SmrmVessel> vessel;

@@ -2,9 +2,13 @@
 #include "medspring/meshing/mesh_union.hpp"
 
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 
+#include <algorithm>
+#include <cmath>
 #include <iterator>
+#include <numbers>
 #include <utility>
 #include <vector>
 
@@ -44,6 +48,20 @@ SurfaceMesh union_of_closed_meshes(const std::vector<SurfaceMesh>& parts, const 
     acc = std::move(out);
   }
   SurfaceMesh s = from_cgal(acc, what + ": union");
+  // Where a vertex of one part lies exactly on another part's edge (a planar, mirror-symmetric tree),
+  // the corefinement leaves zero-area triangles: collapse or flip them away (caps over 179.99 degrees,
+  // needles over 1e6 : 1), only when there are any (other unions stay as they were).
+  const MeshReport rep = validate_mesh(s);
+  if (rep.degenerate_faces > 0) {
+    PMP::experimental::remove_almost_degenerate_faces(acc, std::cos(179.99 * std::numbers::pi / 180.0), 1e6,
+                                                      1e-3 * rep.bbox_diagonal);
+    acc.collect_garbage();
+    s = from_cgal(acc, what + ": union");
+    const MeshReport again = validate_mesh(s);
+    require(again.degenerate_faces == 0, what, ": the union has ", again.degenerate_faces,
+            " zero-area triangles left after removing ", rep.degenerate_faces, " (", again.first_problem,
+            ")");
+  }
   if (signed_volume(s.V, s.F) < 0.0) s.F.col(1).swap(s.F.col(2));
   return s;
 }
@@ -54,6 +72,21 @@ Index self_intersections(const SurfaceMesh& mesh, const std::string& what) {
   std::vector<std::pair<FD, FD>> pairs;
   PMP::self_intersections(m, std::back_inserter(pairs));
   return static_cast<Index>(pairs.size());
+}
+
+std::vector<Index> self_intersecting_faces(const SurfaceMesh& mesh, const std::string& what) {
+  require_valid_mesh(mesh, what);
+  const Mesh m = to_cgal(mesh, what);
+  std::vector<std::pair<FD, FD>> pairs;
+  PMP::self_intersections(m, std::back_inserter(pairs));
+  std::vector<Index> faces;
+  for (const auto& [a, b] : pairs) {
+    faces.push_back(static_cast<Index>(a.idx()));
+    faces.push_back(static_cast<Index>(b.idx()));
+  }
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  return faces;
 }
 
 }  // namespace medspring

@@ -15,6 +15,7 @@
 #include "medspring/models/surface_body.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/skeleton/centerline_extraction.hpp"
+#include "medspring/skeleton/centerline_tree.hpp"
 #include "medspring/skeleton/voxelize.hpp"
 
 namespace medspring {
@@ -218,11 +219,28 @@ struct Builder {
     return p;
   }
 
+  // A vessel tree from the skeleton of every endpoint of a mask (a segmentation, or a voxelised mesh).
+  BodyPtr tree_from_mask(const MaskVolume& mask, const std::string& where) {
+    TreeSkeleton sk;
+    try {
+      sk = extract_centerline_tree(mask);
+    } catch (const InvalidInput& e) {
+      fail(where, e.what());
+    }
+    for (const auto& n : sk.notes) out.notes.push_back("tree skeleton: " + n);
+    return tree_body(sk.lines, std::max(0.05, 1e-3 * sk.h_min));
+  }
+
   BodyPtr tree_body() {
     const ModelSource& s = scene.model.source;
-    const std::vector<Centerline> lines =
-        files("model.source.centerline").read_centerlines(s.centerline, s.centerline_unit, s.radius_array);
-    const CenterlineTree ct = merge_centerlines(lines);
+    return tree_body(
+        files("model.source.centerline").read_centerlines(s.centerline, s.centerline_unit, s.radius_array),
+        0.05);
+  }
+
+  BodyPtr tree_body(const std::vector<Centerline>& lines, double tolerance) {
+    const ModelSource& s = scene.model.source;
+    const CenterlineTree ct = merge_centerlines(lines, tolerance);
     auto t = std::make_shared<SmrmTree>(ct, SmrmTreeSettings{scene.model.smrm});
     if (s.blend) {  // one watertight surface: the union of the closed path tubes (CGAL, in the loader)
       std::vector<std::string> notes;
@@ -266,6 +284,12 @@ struct Builder {
         return smrm_body(smrm_phantom(s.path, s.cross_section, m.smrm));
       case ModelSource::Type::Mesh: {
         const SurfaceMesh organ = read_organ_mesh();
+        if (m.kind == ModelKind::Smrm && s.all_branches) {  // a tree: the skeleton of the voxelised mesh
+          const Vec3 ext = (organ.V.colwise().maxCoeff() - organ.V.colwise().minCoeff()).transpose();
+          VoxelizeSettings vset;  // about 2 million voxels in the bounding box (as build vessel)
+          vset.voxel_size = std::cbrt(std::max(ext.prod(), 1e-9) / 2e6);
+          return tree_from_mask(voxelize(organ, vset), "model.source.mesh");
+        }
         if (m.kind == ModelKind::Surface) return surface_body(maybe_balloon(organ), name);
         if (m.kind == ModelKind::Volumetric) return volumetric_body(maybe_balloon(organ), name);
         SkeletonSettings sk;
@@ -282,6 +306,8 @@ struct Builder {
         const MaskVolume mask = read_mask();
         SkeletonSettings sk;
         sk.atom_count = m.atoms > 0 ? m.atoms : 40;
+        if (m.kind == ModelKind::Smrm && s.all_branches)
+          return tree_from_mask(mask, "model.source.segmentation");
         if (m.kind == ModelKind::Smrm) {
           const SkeletonResult r = extract_centerline(mask, sk);
           skeleton_atoms(r);

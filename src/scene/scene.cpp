@@ -119,37 +119,15 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
            cat("phantom '", s.phantom, "' cannot make a ", to_string(m.kind),
                " model (kidney: surface, hybrid or volumetric; tube: surface; vessel: smrm)"));
   }
-  if (mesh) {
-    Obj p(c, *mesh, o.at("mesh"));
-    const json* f = p.get("file");
-    if (!f) fail(c, p.at("file"), "is required");
-    s.mesh = resolve_file(c, *f, p.at("file"));
-    s.mesh_unit = parse_unit(p, "unit");
-    p.finish();
-    if (!line) s.type = ModelSource::Type::Mesh;
-  }
-  if (seg) {
-    s.type = ModelSource::Type::Segmentation;
-    Obj p(c, *seg, o.at("segmentation"));
-    const json* f = p.get("file");
-    if (!f) fail(c, p.at("file"), "is required");
-    s.segmentation = resolve_file(c, *f, p.at("file"));
-    const Index label = p.index("label", 1, 1);
-    s.label = static_cast<std::int32_t>(label);
-    p.finish();
-  }
-  if (line) {
-    s.type = ModelSource::Type::Centerline;
-    Obj p(c, *line, o.at("centerline"));
-    const json* f = p.get("file");
-    if (!f) fail(c, p.at("file"), "is required");
-    s.centerline = resolve_file(c, *f, p.at("file"));
-    s.centerline_unit = parse_unit(p, "unit");
-    s.branch = p.index("branch", 0, 0);
+  // "branches": "all" (a vessel tree: every polyline of a centerline file, or the skeleton of every
+  // endpoint of a mesh or segmentation) and its watertight surface ("blend", "blend_spacing_mm")
+  auto tree_keys = [&](Obj& p) {
     if (const json* all = p.get("branches")) {
       if (!all->is_string() || all->get<std::string>() != "all")
         fail(c, p.at("branches"), "must be \"all\" (one branch: \"branch\": N)");
       if (p.get("branch")) fail(c, p.at("branches"), "give \"branch\" or \"branches\", not both");
+      if (m.kind != ModelKind::Smrm)
+        fail(c, p.at("branches"), cat("a vessel tree is an smrm model, not ", to_string(m.kind)));
       s.all_branches = true;
     }
     s.blend = p.boolean("blend", false);
@@ -161,6 +139,37 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
     }
     if (s.blend && !s.all_branches)
       fail(c, p.at("blend"), "a watertight (blended) surface applies to a tree (\"branches\": \"all\")");
+  };
+  if (mesh) {
+    Obj p(c, *mesh, o.at("mesh"));
+    const json* f = p.get("file");
+    if (!f) fail(c, p.at("file"), "is required");
+    s.mesh = resolve_file(c, *f, p.at("file"));
+    s.mesh_unit = parse_unit(p, "unit");
+    if (!line) tree_keys(p);  // a tree from the mesh's skeleton (not for the boundary of a centerline)
+    p.finish();
+    if (!line) s.type = ModelSource::Type::Mesh;
+  }
+  if (seg) {
+    s.type = ModelSource::Type::Segmentation;
+    Obj p(c, *seg, o.at("segmentation"));
+    const json* f = p.get("file");
+    if (!f) fail(c, p.at("file"), "is required");
+    s.segmentation = resolve_file(c, *f, p.at("file"));
+    const Index label = p.index("label", 1, 1);
+    s.label = static_cast<std::int32_t>(label);
+    tree_keys(p);
+    p.finish();
+  }
+  if (line) {
+    s.type = ModelSource::Type::Centerline;
+    Obj p(c, *line, o.at("centerline"));
+    const json* f = p.get("file");
+    if (!f) fail(c, p.at("file"), "is required");
+    s.centerline = resolve_file(c, *f, p.at("file"));
+    s.centerline_unit = parse_unit(p, "unit");
+    s.branch = p.index("branch", 0, 0);
+    tree_keys(p);
     s.radius_array = p.string("radius_array", s.radius_array);
     if (const json* r = p.get("range_mm")) {
       const std::string rp = p.at("range_mm");

@@ -25,6 +25,12 @@ json vec_json(const Vec3& v) {
 std::string scene_to_json(const Scene& s) {
   const ModelSource& src = s.model.source;
   json source;
+  auto tree_keys = [&](json& obj) {  // a vessel tree (docs/vessels.md)
+    if (!src.all_branches) return;
+    obj["branches"] = "all";
+    obj["blend"] = src.blend;
+    if (src.blend && src.blend_spacing > 0) obj["blend_spacing_mm"] = src.blend_spacing;
+  };
   switch (src.type) {
     case ModelSource::Type::Phantom: {
       json p = {{"name", src.phantom}};
@@ -40,18 +46,15 @@ std::string scene_to_json(const Scene& s) {
       break;
     case ModelSource::Type::Segmentation:
       source["segmentation"] = {{"file", src.segmentation.string()}, {"label", src.label}};
+      tree_keys(source["segmentation"]);
       break;
     case ModelSource::Type::Centerline: {
       json cl = {{"file", src.centerline.string()},
                  {"unit", to_string(src.centerline_unit)},
                  {"branch", src.branch},
                  {"radius_array", src.radius_array}};
-      if (src.all_branches) {
-        cl.erase("branch");
-        cl["branches"] = "all";
-        cl["blend"] = src.blend;
-        if (src.blend && src.blend_spacing > 0) cl["blend_spacing_mm"] = src.blend_spacing;
-      }
+      if (src.all_branches) cl.erase("branch");
+      tree_keys(cl);
       if (src.range_start > 0 || std::isfinite(src.range_end))
         cl["range_mm"] = {src.range_start,
                           std::isfinite(src.range_end) ? json(src.range_end) : json(nullptr)};
@@ -59,7 +62,10 @@ std::string scene_to_json(const Scene& s) {
       break;
     }
   }
-  if (!src.mesh.empty()) source["mesh"] = {{"file", src.mesh.string()}, {"unit", to_string(src.mesh_unit)}};
+  if (!src.mesh.empty()) {
+    source["mesh"] = {{"file", src.mesh.string()}, {"unit", to_string(src.mesh_unit)}};
+    if (src.type == ModelSource::Type::Mesh) tree_keys(source["mesh"]);
+  }
 
   json params;
   const SceneModel& m = s.model;

@@ -255,6 +255,49 @@ TEST(CliBuildVessel, SceneWithABlendedTreeRunsTheWatertightSurfaceAndExportsIt) 
   EXPECT_FALSE(fs::exists(tmp / "bad2"));
 }
 
+TEST(CliBuildVessel, TreeFromTheAortaSegmentationAndItsScene) {
+  // --branches all from a segmentation: the tree skeleton of every endpoint. The TotalSegmentator aorta
+  // is one arch + descending tube (no branch stubs): 1 branch, 0 junctions. A scene takes the same source.
+  const fs::path tmp = testing::temp_dir("cli-vessel-mask-tree");
+  const fs::path mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");
+  const CliRun r = run_cli("build vessel --segmentation \"" + mask.string() +
+                               "\" --label 1 --branches all --out \"" + (tmp / "tree").string() + "\" --json",
+                           tmp);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json_number(r.out, "branches"), 1);
+  EXPECT_EQ(json_number(r.out, "junctions"), 0);
+  EXPECT_LE(json_number(r.out, "rest_error_mm"), 1e-9);
+  EXPECT_GT(json_number(r.out, "hausdorff_mm"), 0.0);
+  EXPECT_TRUE(fs::exists(tmp / "tree" / "vessel.msm"));
+
+  std::ofstream(tmp / "tree.json")
+      << R"({"name": "tree", "model": {"kind": "smrm", "atoms": 20, "source": {"segmentation": {"file": ")"
+      << mask.string() << R"(", "label": 1, "branches": "all"}}},
+    "loads": [{"node": 300, "direction": "inward_normal", "magnitude": 0.5, "t_ramp": 20, "t_release": 100}],
+    "duration": 200})";
+  const CliRun s = run_cli(
+      "run \"" + (tmp / "tree.json").string() + "\" --out \"" + (tmp / "run").string() + "\" --quiet --json",
+      tmp);
+  ASSERT_EQ(s.code, 0) << s.err;
+  EXPECT_NE(s.out.find("\"kind\": \"smrm_tree\""), std::string::npos) << s.out;
+  std::ifstream back(tmp / "run" / "scene.json");
+  std::stringstream text;
+  text << back.rdbuf();
+  EXPECT_NE(text.str().find("\"branches\": \"all\""), std::string::npos) << text.str();
+
+  // a tree is an smrm model: one line naming the JSON path, nothing written
+  std::ofstream(tmp / "bad.json")
+      << R"({"name": "bad", "model": {"kind": "hybrid", "source": {"segmentation": {"file": ")"
+      << mask.string() << R"(", "branches": "all"}}}, "duration": 10})";
+  const CliRun bad =
+      run_cli("run \"" + (tmp / "bad.json").string() + "\" --out \"" + (tmp / "bad").string() + "\"", tmp);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("model.source.segmentation.branches: a vessel tree is an smrm model"),
+            std::string::npos)
+      << bad.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+}
+
 TEST(CliBuildVessel, FromTheAortaSegmentationReportsItsDistanceToTheInput) {
   const fs::path tmp = testing::temp_dir("cli-vessel-mask");
   const fs::path mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");

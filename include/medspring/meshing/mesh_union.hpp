@@ -23,4 +23,7 @@ SurfaceMesh union_of_closed_meshes(const std::vector<SurfaceMesh>& parts, const 
 /// The mesh must be valid and manifold (InvalidInput otherwise).
 Index self_intersections(const SurfaceMesh& mesh, const std::string& what = "surface");
 
+/// The faces in at least one intersecting pair (ascending, each once); empty = none.
+std::vector<Index> self_intersecting_faces(const SurfaceMesh& mesh, const std::string& what = "surface");
+
 }  // namespace medspring

