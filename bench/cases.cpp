@@ -2,9 +2,15 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <memory>
+#include <numbers>
+#include <numeric>
+#include <random>
 
+#include "medspring/geometry/locality.hpp"
 #include "medspring/geometry/phantoms.hpp"
+#include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/state.hpp"
@@ -51,6 +57,43 @@ BenchCase tube_case(const std::string& name, const std::string& group, Index rin
   return b;
 }
 
+// Locality (issue 15): a hybrid model (tube surface + atoms on its axis and their spokes, kidney
+// parameters) built from a mesh whose numbering is shuffled, simulated as numbered (`shuffled`) or
+// renumbered for locality by HybridKidney (`rcm`, its default for this size). Same nodes, springs, load.
+BenchCase hybrid_locality_case(const std::string& name, Index rings, Index spokes, bool renumber) {
+  BenchCase b;
+  b.name = name;
+  b.group = "locality";
+  const Index atoms = 100;
+  b.nodes = static_cast<long>(rings) * spokes + atoms;
+  b.springs = 0;  // surface edges + centerline + spokes (counted at build)
+  b.setup = [=] {
+    const double radius = 2.5 * static_cast<double>(spokes) / (2.0 * std::numbers::pi);
+    const SurfaceMesh t = tube(rings, spokes, 2.5, radius);
+    std::vector<Index> order(static_cast<std::size_t>(t.num_vertices()));
+    std::iota(order.begin(), order.end(), 0);
+    std::shuffle(order.begin(), order.end(), std::mt19937_64(15));
+    const SurfaceMesh m = permute_vertices(t, order);
+    MatX3 A = MatX3::Zero(atoms, 3);
+    for (Index a = 0; a < atoms; ++a)
+      A(a, 0) =
+          2.5 * static_cast<double>(rings - 1) * (static_cast<double>(a) + 0.5) / static_cast<double>(atoms);
+    const std::vector<Index> user = inverse_permutation(order);  // tube node -> the mesh's numbering
+    HybridSettings hs;                                           // one end ring pinned
+    for (Index j = 0; j < spokes; ++j) hs.fixed.push_back(user[static_cast<std::size_t>(j)]);
+    auto body = std::make_shared<HybridKidney>(m, A, hs, name, nullptr,
+                                               renumber ? Index{0} : std::numeric_limits<Index>::max());
+    auto sim = std::make_shared<Sim>();
+    sim->model = body->model();
+    sim->settings.dt = 0.5;
+    sim->state = make_state(sim->model, sim->settings);
+    const Index c = body->dof_of(user[static_cast<std::size_t>((rings / 2) * spokes)]);
+    sim->state.f_ext.row(c) = Vec3(0, 0, -0.5).transpose();
+    return std::function<void()>([sim] { step(sim->model, sim->state, sim->settings); });
+  };
+  return b;
+}
+
 }  // namespace
 
 std::vector<BenchCase> all_cases(const CaseOptions& options) {
@@ -72,6 +115,10 @@ std::vector<BenchCase> all_cases(const CaseOptions& options) {
   cases.push_back(tube_case("scaling_tube_10k_explicit_nonlinear", "scaling", 100, 100, true));
   cases.push_back(tube_case("scaling_tube_100k_explicit_nonlinear", "scaling", 400, 250, true));
   if (options.large) cases.push_back(tube_case("tube_1M_explicit_nonlinear", "scaling", 1000, 1000, true));
+  if (options.large)
+    for (const bool renumber : {false, true})
+      cases.push_back(hybrid_locality_case(
+          renumber ? "locality_hybrid_100k_rcm" : "locality_hybrid_100k_shuffled", 400, 250, renumber));
 #if MEDSPRING_BENCH_TABLES
   for (TableCase& t : table_cases()) cases.push_back(std::move(t.bench));  // Tables I and II (D-18)
 #endif

@@ -237,6 +237,11 @@ void bind_models(py::module_& m) {
       .def_property_readonly(
           "spokes", [](py::object self) { return view_of(self.cast<const HybridKidney&>().spokes(), self); },
           "(K, 2) rows (surface node, atom), read-only view.")
+      .def_property_readonly(
+          "dof_of_surface", [](const HybridKidney& k) { return copy_of(k.dof_of_surface()); },
+          "DOF (model node) of every surface node: a large surface with scattered numbering is simulated in "
+          "reverse Cuthill-McKee order (empty array: DOF = surface node; atoms always follow the surface "
+          "nodes). Loads, fixed nodes, spokes, surface, normals keep the mesh's numbering.")
       .def_property_readonly("settings", &HybridKidney::settings, "HybridSettings (a copy).")
       .def_property_readonly("stats", &HybridKidney::stats, "HybridStats.");
   m.def(

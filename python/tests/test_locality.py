@@ -1,5 +1,5 @@
 """Issue 15: normals computed when read; a large mesh with scattered numbering simulated in locality
-order behind SurfaceBody's map, the user's numbering kept at every interface."""
+order behind SurfaceBody's (and HybridKidney's) map, the user's numbering kept at every interface."""
 
 import numpy as np
 
@@ -31,6 +31,28 @@ def test_large_shuffled_mesh_keeps_the_users_numbering():
     dof = body.dof_of_surface
     assert sorted(dof.tolist()) == list(range(t.num_vertices))
     assert ms.SurfaceBody(t).dof_of_surface.size == 0  # ring-by-ring numbering is kept
+    sim = ms.Simulation(body)
+    node = int(new_of_old[(rings // 2) * spokes + spokes // 4])
+    sim.set_loads([ms.PointLoad(node=node, force=(0, 0, -0.5), t_ramp=0)])
+    sim.update(nsteps=10)
+    assert int(np.argmax(np.linalg.norm(sim.displacement(), axis=1))) == node
+    np.testing.assert_array_equal(sim.surface, sim.positions[dof])
+    np.testing.assert_array_equal(body.rest_surface, mesh.V)
+
+
+def test_large_shuffled_hybrid_keeps_the_users_numbering():
+    rings, spokes = 160, 128
+    t = ms.tube(rings, spokes, 2.5, 2.5 * spokes / (2 * np.pi))
+    old_of_new = np.random.default_rng(16).permutation(t.num_vertices)
+    new_of_old = np.argsort(old_of_new)
+    mesh = ms.SurfaceMesh(np.ascontiguousarray(t.V[old_of_new]), new_of_old[t.F].astype(np.int32))
+    atoms = np.zeros((30, 3))
+    atoms[:, 0] = 2.5 * (rings - 1) * (np.arange(30) + 0.5) / 30  # on the tube's axis
+    body = ms.HybridKidney(mesh, atoms)
+    dof = body.dof_of_surface
+    assert sorted(dof.tolist()) == list(range(t.num_vertices))
+    assert ms.HybridKidney(t, atoms).dof_of_surface.size == 0  # ring-by-ring numbering is kept
+    assert body.atom_dof(0) == t.num_vertices  # atoms follow the surface nodes
     sim = ms.Simulation(body)
     node = int(new_of_old[(rings // 2) * spokes + spokes // 4])
     sim.set_loads([ms.PointLoad(node=node, force=(0, 0, -0.5), t_ramp=0)])

@@ -105,7 +105,7 @@ MatX2i union_spokes(const MatX3& S, const MatX3& A, Index K, const MaskVolume* m
 }
 
 HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const HybridSettings& st,
-                           std::string name, const MaskVolume* mask)
+                           std::string name, const MaskVolume* mask, Index locality_min_nodes)
     : F_(surface.F), rest_surface_(surface.V), settings_(st) {
   require_memory(kModelBuildBytesPerNode * static_cast<double>(surface.num_vertices()),
                  cat(name, ": a hybrid model of ", surface.num_vertices(), " surface nodes"));
@@ -121,11 +121,28 @@ HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const
             " coincide (a centerline spring needs a non-zero rest length)");
   const Index ns = surface.num_vertices();
   num_atoms_ = static_cast<Index>(atoms.rows());
+  for (std::size_t q = 0; q < st.fixed.size(); ++q) require_index(st.fixed[q], ns, name, ": fixed[", q, "]");
+  // Locality (issue 15): a large, badly numbered surface is simulated in its RCM order (DOF d = surface
+  // node order[d]); everything else below is in the user's numbering and mapped by dof().
+  std::vector<Index> order;  // order[dof] = surface node (empty: identity)
+  MatX2i E;                  // surface springs, in DOF numbering
+  if (ns >= locality_min_nodes) {
+    order = locality_order(surface);
+    SurfaceMesh ordered = permute_vertices(surface, order);
+    if (2 * mesh_bandwidth(ordered) < mesh_bandwidth(surface)) {
+      dof_of_surface_ = inverse_permutation(order);
+      E = unique_edges(ordered.F);  // sorted by DOF: springs in locality order too
+    } else {
+      order.clear();
+    }
+  }
+  if (order.empty()) E = unique_edges(surface.F);
   const DuffingSettings duff = st.nonlinear ? st.duffing : DuffingSettings{.mode = DuffingMode::Linear};
   ModelBuilder b(name);
-  for (Index i = 0; i < ns; ++i) b.add_node(surface.V.row(i).transpose(), st.surface_node);
+  for (Index d = 0; d < ns; ++d)
+    b.add_node(surface.V.row(order.empty() ? d : order[static_cast<std::size_t>(d)]).transpose(),
+               st.surface_node);
   for (Index a = 0; a < num_atoms_; ++a) b.add_node(atoms.row(a).transpose(), st.atom_node);
-  const MatX2i E = unique_edges(surface.F);
   const MaskVolume* filter = st.visibility_filter ? mask : nullptr;
   spokes_ = union_spokes(surface.V, atoms, st.spokes_per_atom, filter, &stats_.visibility);
   stats_.visibility_filtered = filter != nullptr;
@@ -134,18 +151,19 @@ HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const
   for (Index a = 0; a + 1 < num_atoms_; ++a) b.add_spring(ns + a, ns + a + 1, st.k_cl, duff);  // centerline
   spoke_length_ = VecX::Zero(ns);
   std::vector<Index> per_atom(static_cast<std::size_t>(num_atoms_), 0);
+  std::vector<std::pair<Index, Index>> spoke_springs;  // (atom, DOF): by atom, then DOF
+  spoke_springs.reserve(static_cast<std::size_t>(spokes_.rows()));
   for (Index s = 0; s < spokes_.rows(); ++s) {
     const Index i = spokes_(s, 0), a = spokes_(s, 1);
     const double L = (surface.V.row(i) - atoms.row(a)).norm();
     require(L >= 1e-9, name, ": surface node ", i, " coincides with atom ", a);
-    b.add_spring(i, ns + a, st.k_spoke, duff);  // spokes (D-9)
+    spoke_springs.emplace_back(a, dof_of(i));
     spoke_length_[i] = spoke_length_[i] > 0 ? std::min(spoke_length_[i], L) : L;
     ++per_atom[a];
   }
-  for (std::size_t q = 0; q < st.fixed.size(); ++q) {
-    require_index(st.fixed[q], ns, name, ": fixed[", q, "]");
-    b.set_fixed(st.fixed[q]);
-  }
+  if (!order.empty()) std::sort(spoke_springs.begin(), spoke_springs.end());  // identity: already sorted
+  for (const auto& [a, d] : spoke_springs) b.add_spring(d, ns + a, st.k_spoke, duff);  // spokes (D-9)
+  for (const Index f : st.fixed) b.set_fixed(dof_of(f));
   for (std::size_t q = 0; q < st.fixed_atoms.size(); ++q) {
     require_index(st.fixed_atoms[q], num_atoms_, name, ": fixed_atoms[", q, "]");
     b.set_fixed(ns + st.fixed_atoms[q]);
@@ -162,15 +180,25 @@ HybridKidney::HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const
 }
 
 void HybridKidney::map_to_surface(const State& state, MatX3& surface) const {
-  surface = state.x.topRows(num_surface_nodes());
+  if (dof_of_surface_.empty()) {
+    surface = state.x.topRows(num_surface_nodes());
+    return;
+  }
+  const Index n = num_surface_nodes();
+  surface.resize(n, 3);
+  for (Index s = 0; s < n; ++s) surface.row(s) = state.x.row(dof_of_surface_[static_cast<std::size_t>(s)]);
 }
 
 void HybridKidney::transfer_force(Index node, const Vec3& F, MatX3& f_dof) const {
-  f_dof.row(node) += F.transpose();
+  f_dof.row(dof_of(node)) += F.transpose();
 }
 
 std::vector<std::uint8_t> HybridKidney::fixed_surface_nodes() const {
-  return {model_.fixed.begin(), model_.fixed.begin() + num_surface_nodes()};
+  if (dof_of_surface_.empty()) return {model_.fixed.begin(), model_.fixed.begin() + num_surface_nodes()};
+  std::vector<std::uint8_t> out(dof_of_surface_.size());
+  for (std::size_t s = 0; s < out.size(); ++s)
+    out[s] = model_.fixed[static_cast<std::size_t>(dof_of_surface_[s])];
+  return out;
 }
 
 MatX3 kidney_phantom_atoms(Index count) {

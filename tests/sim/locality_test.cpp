@@ -162,6 +162,34 @@ TEST(Locality, ShuffledLargeMeshSimulatesIdenticallyInTheUsersNumbering) {
   }
 }
 
+// The hybrid kidney does the same from kLocalityReorderMinNodes surface nodes on (by default): a shuffled
+// 20,480-node tube with atoms on its axis is simulated in RCM order (atoms after the surface nodes), a
+// well-numbered one as it is. (The real kidney against its unrenumbered twin: builders_tests,
+// kidney_locality_test.cpp.)
+TEST(Locality, LargeShuffledHybridIsRenumberedByDefault) {
+  const Index rings = 160, spokes = 128;
+  const double radius = 2.5 * spokes / (2 * 3.141592653589793);
+  const SurfaceMesh t = tube(rings, spokes, 2.5, radius);
+  const SurfaceMesh s = permute_vertices(t, shuffled(t.num_vertices(), 16));
+  MatX3 atoms(30, 3);
+  for (Index a = 0; a < 30; ++a)  // on the tube's axis (x)
+    atoms.row(a) =
+        Vec3(2.5 * static_cast<double>(rings - 1) * (static_cast<double>(a) + 0.5) / 30.0, 0, 0).transpose();
+  EXPECT_TRUE(HybridKidney(t, atoms, {}, "ordered").dof_of_surface().empty());
+  const HybridKidney h(s, atoms, {}, "shuffled");
+  ASSERT_EQ(static_cast<Index>(h.dof_of_surface().size()), s.num_vertices());
+  SurfaceMesh dof_mesh{h.model().x0.topRows(s.num_vertices()), MatX3i(s.F.rows(), 3)};
+  for (Index f = 0; f < s.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) dof_mesh.F(f, c) = h.dof_of(s.F(f, c));
+  EXPECT_LT(mesh_bandwidth(dof_mesh), 4 * spokes);
+  EXPECT_EQ(h.model().x0.bottomRows(30), atoms);
+  EXPECT_EQ(h.atom_dof(0), s.num_vertices());
+  // a force on a user's node lands on its DOF
+  MatX3 f = MatX3::Zero(h.model().num_nodes(), 3);
+  h.transfer_force(77, Vec3(1, 2, 3), f);
+  EXPECT_EQ(f.row(h.dof_of(77)), Vec3(1, 2, 3).transpose());
+}
+
 TEST(LazyNormals, ComputedWhenReadAndCurrentAfterEveryUpdate) {
   auto body = std::make_shared<HybridKidney>(hybrid_kidney_phantom());
   Simulation sim(body);

@@ -6,8 +6,8 @@
 //
 // A spring pass reads the two end nodes of every spring; with the nodes numbered so that neighbours
 // have close numbers (small bandwidth) those reads hit the cache. Builders that generate their meshes
-// (the balloon surface of the kidney pipeline) emit them in this order; a user's own mesh keeps its
-// numbering unless the user reorders it (the permutation maps node lists both ways).
+// (the balloon surface of the kidney pipeline) emit them in this order; a large user mesh is simulated in
+// this order by SurfaceBody and HybridKidney behind a surface <-> DOF map (users keep their numbering).
 #pragma once
 
 #include <vector>
@@ -17,6 +17,11 @@
 #include "medspring/geometry/topology.hpp"
 
 namespace medspring {
+
+/// Models built from a user's mesh (SurfaceBody, HybridKidney) renumber it only from this many surface
+/// nodes on (smaller models fit in the cache anyway), and only when its bandwidth is more than twice that
+/// of its locality_order.
+inline constexpr Index kLocalityReorderMinNodes = 20000;
 
 /// Reverse Cuthill-McKee order of a graph: order[new] = old. Each connected component is numbered from
 /// a pseudo-peripheral node (George-Liu), neighbours by increasing degree (ties: lower index); the

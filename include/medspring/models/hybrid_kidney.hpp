@@ -5,10 +5,19 @@
 //   State s = make_state(kidney.model());
 //   kidney.transfer_force(223, F, s.f_ext);                 // a force on a surface node
 //   step(kidney.model(), s, {.dt = 0.5});
+//
+// Locality (issue 15): a large surface (>= kLocalityReorderMinNodes nodes) whose numbering scatters
+// neighbours (bandwidth more than twice that of its reverse Cuthill-McKee order, geometry/locality.hpp)
+// is simulated in that order, as SurfaceBody does: the model's first #S nodes (the DOFs) are the surface
+// nodes renumbered, the atoms follow in their own order (atom_dof). Everything indexed by surface node
+// (settings.fixed, loads, tool contact, local patches, spokes(), spoke_length(), surface(), normals,
+// output files, model packages) keeps the mesh's own numbering; only the raw DOF arrays (model(),
+// state.x/v, Python positions/velocities) are in the model's order, dof_of_surface() relating the two.
 #pragma once
 
 #include <vector>
 
+#include "medspring/geometry/locality.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/geometry/volume.hpp"
 #include "medspring/models/body.hpp"
@@ -92,8 +101,11 @@ class HybridKidney final : public Body {
   /// surface: closed organ surface (mm); atoms: #A x 3 centerline atoms (mm) in order along the skeleton;
   /// mask: the organ's voxels when known (the skeleton's mask): spokes then pass D-9's visibility filter
   /// unless settings.visibility_filter is off.
+  /// locality_min_nodes: the surface is renumbered for locality (see above) only from this many nodes on
+  /// (0: whenever its order helps, as for a small shuffled mesh; a huge value: never).
   HybridKidney(const SurfaceMesh& surface, const MatX3& atoms, const HybridSettings& settings = {},
-               std::string name = "kidney", const MaskVolume* mask = nullptr);
+               std::string name = "kidney", const MaskVolume* mask = nullptr,
+               Index locality_min_nodes = kLocalityReorderMinNodes);
 
   std::string kind() const override { return "hybrid"; }
   const Model& model() const override { return model_; }
@@ -108,6 +120,12 @@ class HybridKidney final : public Body {
   Index num_atoms() const { return num_atoms_; }
   /// DOF index of atom a (atoms follow the surface nodes).
   Index atom_dof(Index a) const { return num_surface_nodes() + a; }
+  /// The DOF (model node) of every surface node; empty when they coincide (small or well-ordered meshes).
+  const std::vector<Index>& dof_of_surface() const { return dof_of_surface_; }
+  Index dof_of(Index surface_node) const {
+    return dof_of_surface_.empty() ? surface_node : dof_of_surface_[static_cast<std::size_t>(surface_node)];
+  }
+  /// Spokes as rows (surface node, atom), surface nodes in the mesh's numbering.
   const MatX2i& spokes() const { return spokes_; }
   const HybridSettings& settings() const { return settings_; }
   HybridStats stats() const { return stats_; }
@@ -118,6 +136,7 @@ class HybridKidney final : public Body {
   MatX3 rest_surface_;
   MatX2i spokes_;
   VecX spoke_length_;
+  std::vector<Index> dof_of_surface_;  // surface node -> DOF (empty: identity)
   HybridSettings settings_;
   HybridStats stats_;
   Index num_atoms_ = 0;

@@ -8,13 +8,11 @@
 // Python positions/velocities) are in the model's order, dof_of_surface() relating the two.
 #pragma once
 
+#include "medspring/geometry/locality.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/models/body.hpp"
 
 namespace medspring {
-
-/// Meshes of fewer nodes keep their numbering as DOF order (their springs fit in the cache anyway).
-inline constexpr Index kLocalityReorderMinNodes = 20000;
 
 class SurfaceBody final : public Body {
  public:
