@@ -38,7 +38,9 @@ namespace {
 namespace fs = std::filesystem;
 
 volatile std::sig_atomic_t g_stop = 0;
-extern "C" void on_stop_signal(int) { g_stop = 1; }
+extern "C" void on_stop_signal(int) {
+  g_stop = 1;
+}
 
 constexpr std::size_t kMaxRequestHead = 16 * 1024;
 constexpr double kConnectionTimeout = 10.0;  // s without progress: the connection is dropped
@@ -134,7 +136,8 @@ Response serve(const Site& site, const std::string& method, const std::string& t
   }
   std::string raw = target.substr(0, target.find_first_of("?#"));
   std::string path;
-  if (raw.empty() || raw[0] != '/' || !url_decode(raw, path)) return error_response(400, "Bad Request", target);
+  if (raw.empty() || raw[0] != '/' || !url_decode(raw, path))
+    return error_response(400, "Bad Request", target);
   if (path.find('\\') != std::string::npos) return error_response(403, "Forbidden", target);
   std::vector<std::string> parts;
   std::stringstream ss(path);
@@ -147,18 +150,21 @@ Response serve(const Site& site, const std::string& method, const std::string& t
   fs::path root = site.web, file = site.web;
   std::size_t first = 0;
   if (parts[0] == "models") {
-    if (site.models.empty()) return error_response(404, "Not Found", cat(target, " (no models folder: --models DIR)"));
+    if (site.models.empty())
+      return error_response(404, "Not Found", cat(target, " (no models folder: --models DIR)"));
     root = file = site.models;
     first = 1;
   } else if (parts[0] == "node_modules") {
     const bool three = parts.size() > 3 && parts[1] == "three" &&
                        (parts[2] == "build" || (parts[2] == "examples" && parts[3] == "jsm"));
-    if (!three) return error_response(403, "Forbidden", cat(target, " (only three.js is served from node_modules)"));
+    if (!three)
+      return error_response(403, "Forbidden", cat(target, " (only three.js is served from node_modules)"));
   }
   for (std::size_t k = first; k < parts.size(); ++k) file /= parts[k];
   std::error_code ec;
   const fs::path real = fs::weakly_canonical(file, ec);
-  if (ec || !within(root, real)) return error_response(403, "Forbidden", cat(target, " (outside the served folders)"));
+  if (ec || !within(root, real))
+    return error_response(403, "Forbidden", cat(target, " (outside the served folders)"));
   if (!fs::is_regular_file(real, ec)) return error_response(404, "Not Found", target);
   std::ifstream in(real, std::ios::binary);
   if (!in) return error_response(403, "Forbidden", cat(target, " (unreadable)"));
@@ -177,7 +183,9 @@ struct Connection {
   std::chrono::steady_clock::time_point last;
 };
 
-void set_nonblocking(int fd) { ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL, 0) | O_NONBLOCK); }
+void set_nonblocking(int fd) {
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL, 0) | O_NONBLOCK);
+}
 
 /// Parses the request head once it is complete and queues the response.
 void respond(const Site& site, Connection& c, bool quiet) {
@@ -206,7 +214,8 @@ int cmd_view(const Args& args) {
   const bool quiet = args.flag("quiet");
 
   Site site;
-  site.web = fs::canonical(find_folder(args.get("web"), MEDSPRING_SOURCE_WEB_DIR, "web", "web page", "index.html"));
+  site.web =
+      fs::canonical(find_folder(args.get("web"), MEDSPRING_SOURCE_WEB_DIR, "web", "web page", "index.html"));
   std::error_code ec;
   if (const auto m = args.get("models")) {
     if (!fs::is_directory(*m, ec)) throw IoError(cat("--models ", *m, ": not a folder"));
@@ -215,8 +224,10 @@ int cmd_view(const Args& args) {
     site.models = fs::canonical(site.web / "models");
   }
   if (!fs::exists(site.web / "dist" / "medspring.mjs", ec))
-    std::fprintf(stderr, "medspring view: warning: %s missing (build the engine: bash web/build.sh); the page "
-                 "will show an error\n", (site.web / "dist" / "medspring.mjs").c_str());
+    std::fprintf(stderr,
+                 "medspring view: warning: %s missing (build the engine: bash web/build.sh); the page "
+                 "will show an error\n",
+                 (site.web / "dist" / "medspring.mjs").c_str());
   if (!fs::exists(site.web / "node_modules" / "three" / "build" / "three.module.js", ec))
     std::fprintf(stderr, "medspring view: warning: three.js missing in %s (run npm ci in web/)\n",
                  (site.web / "node_modules").c_str());
@@ -238,7 +249,7 @@ int cmd_view(const Args& args) {
   ::getsockname(lfd, reinterpret_cast<sockaddr*>(&addr), &len);
   set_nonblocking(lfd);
 
-  struct sigaction sa{};
+  struct sigaction sa {};
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);
   ::sigaction(SIGINT, &sa, nullptr);
@@ -277,7 +288,8 @@ int cmd_view(const Args& args) {
           if (c.in.find("\r\n\r\n") != std::string::npos) {
             respond(site, c, quiet);
           } else if (c.in.size() > kMaxRequestHead) {
-            c.out = serialize(error_response(431, "Request Header Fields Too Large", "request head over 16 KiB"));
+            c.out =
+                serialize(error_response(431, "Request Header Fields Too Large", "request head over 16 KiB"));
             c.responding = true;
           }
         } else if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {

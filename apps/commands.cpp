@@ -434,7 +434,7 @@ const std::vector<CommandSpec>& commands() {
                         "where the runs step: cuda = each task's runs one batch on the GPU engine "
                         "(docs/gpu.md; an error without a GPU), cpu-batch = the same batch path on the CPU, "
                         "auto = cuda where a GPU is usable, else cpu (said on stderr)"},
-                    {.name = "set",
+                   {.name = "set",
                     .value = "P=V[,P=V]",
                     .def = "the study file's",
                     .help = "override a declared study setting: samples.count, samples.method, seed, "

@@ -36,7 +36,8 @@ std::string press_csv(const Body& body, Index node, double mm) {
   std::ostringstream os;
   os.precision(17);
   os << "time_ms,x,y,z\n";
-  for (auto [t, s] : std::vector<std::pair<double, double>>{{0, 0}, {100, 1}, {600, 1}, {700, 0}, {1000, 0}}) {
+  for (auto [t, s] :
+       std::vector<std::pair<double, double>>{{0, 0}, {100, 1}, {600, 1}, {700, 0}, {1000, 0}}) {
     const Vec3 p = x0 + s * d;
     os << t << "," << p.x() << "," << p.y() << "," << p.z() << "\n";
   }
@@ -52,15 +53,24 @@ int run(int argc, char** argv) {
   std::string trajectory_file, out_trajectory, out_trace, params;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--node") node = std::stol(need(i, argc, argv));
-    else if (a == "--press") press = std::stod(need(i, argc, argv));
-    else if (a == "--trajectory") trajectory_file = need(i, argc, argv);
-    else if (a == "--out-trajectory") out_trajectory = need(i, argc, argv);
-    else if (a == "--out-trace") out_trace = need(i, argc, argv);
-    else if (a == "--params") params = need(i, argc, argv);
-    else if (a == "--linear") linear = true;
-    else if (a == "--local") local = true;
-    else throw InvalidInput(cat("unknown option ", a));
+    if (a == "--node")
+      node = std::stol(need(i, argc, argv));
+    else if (a == "--press")
+      press = std::stod(need(i, argc, argv));
+    else if (a == "--trajectory")
+      trajectory_file = need(i, argc, argv);
+    else if (a == "--out-trajectory")
+      out_trajectory = need(i, argc, argv);
+    else if (a == "--out-trace")
+      out_trace = need(i, argc, argv);
+    else if (a == "--params")
+      params = need(i, argc, argv);
+    else if (a == "--linear")
+      linear = true;
+    else if (a == "--local")
+      local = true;
+    else
+      throw InvalidInput(cat("unknown option ", a));
   }
   if (node < 0 || out_trace.empty()) throw InvalidInput("--node and --out-trace are required");
 
@@ -108,7 +118,8 @@ int run(int argc, char** argv) {
 
   std::ofstream out(out_trace);
   out.precision(17);
-  out << "time_ms,tool_x,tool_y,tool_z,contact_x,contact_y,contact_z,reaction_x,reaction_y,reaction_z,saturated,"
+  out << "time_ms,tool_x,tool_y,tool_z,contact_x,contact_y,contact_z,reaction_x,reaction_y,reaction_z,"
+         "saturated,"
          "compute_us\n";
   for (const HapticSample& s : loop.samples()) {
     out << s.t;
