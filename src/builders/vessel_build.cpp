@@ -24,6 +24,18 @@ namespace medspring {
 
 namespace {
 
+// The rebuilt rest surface against the input surface: Hausdorff and mean distance (both ways, sampled) and
+// the rebuilt nodes' distance to the input (max, mean), into the summary.
+void measure_distance_to_input(const SurfaceMesh& rebuilt, const SurfaceMesh& input, VesselSummary& s) {
+  const SurfaceDistance d = surface_distance(rebuilt, input);
+  s.has_distance = true;
+  s.hausdorff_mm = d.hausdorff;
+  s.mean_distance_mm = d.mean;
+  const VecX dn = distances_to_surface(rebuilt.V, input);
+  s.to_input_max_mm = dn.maxCoeff();
+  s.to_input_mean_mm = dn.mean();
+}
+
 // The summary of a tree build (centerline input, every branch).
 VesselBuild finish_tree(std::shared_ptr<SmrmTree> tree, VesselSummary s,
                         std::chrono::steady_clock::time_point t0) {
@@ -217,14 +229,7 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   VesselBuild out = finish_tree(std::move(tree), s, t0);
   VesselSummary& r = out.summary;
   const SmrmTree& t = *out.tree;
-  const SurfaceMesh rebuilt{t.rest_surface(), t.faces()};
-  const SurfaceDistance d = surface_distance(rebuilt, organ.surface);
-  r.has_distance = true;
-  r.hausdorff_mm = d.hausdorff;
-  r.mean_distance_mm = d.mean;
-  const VecX dn = distances_to_surface(t.rest_surface(), organ.surface);
-  r.to_input_max_mm = dn.maxCoeff();
-  r.to_input_mean_mm = dn.mean();
+  measure_distance_to_input(SurfaceMesh{t.rest_surface(), t.faces()}, organ.surface, r);
   out.input = std::move(organ.surface);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
@@ -424,13 +429,7 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   s.spokes_without_hit = v.report().spokes_without_hit;
   for (const auto& n : v.report().notes) s.notes.push_back(n);
   if (out.input.num_faces() > 0) {
-    const SurfaceDistance d = surface_distance(SurfaceMesh{v.rest_surface(), v.faces()}, out.input);
-    s.has_distance = true;
-    s.hausdorff_mm = d.hausdorff;
-    s.mean_distance_mm = d.mean;
-    const VecX dn = distances_to_surface(v.rest_surface(), out.input);
-    s.to_input_max_mm = dn.maxCoeff();
-    s.to_input_mean_mm = dn.mean();
+    measure_distance_to_input(SurfaceMesh{v.rest_surface(), v.faces()}, out.input, s);
   }
   Centerline atoms_line;
   atoms_line.name = v.name();

@@ -209,28 +209,23 @@ struct NodeArrays {
 /// Outcome codes of one node's update (the guard, §2.5).
 inline constexpr int kNodeOk = 0, kNodeTooFast = 1, kNodeNonFinite = 2;
 
-/// One fused substep of the node of table row r: force (external load from `loads` rows, return spring,
-/// springs) and symplectic update with implicit damping, reading x, v and writing xo, vo. x and xo are
-/// distinct buffers (every node reads its neighbours' old positions); v and vo may be one buffer (a node
-/// reads only its own velocity, before writing it). A pinned node keeps x and v. Returns a kNode* code.
-template <bool Soft, bool Stiff, class R>
-MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R>& T, int r, R h, R vmax2,
-                                     const R* loads, const R* x, const R* v, R* xo, R* vo, R& stiff) {
-  const int a = row_node(T, r);
-  const int q = 3 * a;
-  if (N.fixed[a]) {
-    xo[q] = x[q];
-    xo[q + 1] = x[q + 1];
-    xo[q + 2] = x[q + 2];
+/// A pinned node keeps its position and velocity (vo == v: nothing to copy).
+template <class R>
+MEDSPRING_HD inline void keep_node(int q, const R* x, const R* v, R* xo, R* vo) {
+  xo[q] = x[q];
+  xo[q + 1] = x[q + 1];
+  xo[q + 2] = x[q + 2];
+  if (vo != v) {
     vo[q] = v[q];
     vo[q + 1] = v[q + 1];
     vo[q + 2] = v[q + 2];
-    if constexpr (Stiff) {  // its springs still count for the stability measure
-      R g[3] = {R(0), R(0), R(0)};
-      gather_spring_forces<Soft, true>(T, r, a, x, stiff, g);
-    }
-    return kNodeOk;
   }
+}
+
+/// Node a's external load (row N.load_slot[a] of `loads`, if any) plus its return spring, into g.
+template <class R>
+MEDSPRING_HD inline void load_and_return_force(const NodeArrays<R>& N, int a, const R* loads, const R* x,
+                                               R* g) {
   R fe[3] = {R(0), R(0), R(0)};  // registers (a pointer to a local array would spill it to the stack)
   const int slot = N.load_slot[a];
   if (slot >= 0) {
@@ -238,9 +233,15 @@ MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R
     fe[1] = loads[3 * slot + 1];
     fe[2] = loads[3 * slot + 2];
   }
-  R g[3];
-  return_force(fe, x + q, N.x0 + q, N.kr[a], g);
-  gather_spring_forces<Soft, Stiff>(T, r, a, x, stiff, g);
+  return_force(fe, x + 3 * a, N.x0 + 3 * a, N.kr[a], g);
+}
+
+/// Node a's symplectic update with implicit damping under its total force g (reads x, v; writes xo, vo;
+/// vo may be v). Returns a kNode* code (the guard, §2.5).
+template <class R>
+MEDSPRING_HD inline int advance_node(const NodeArrays<R>& N, int a, R h, R vmax2, const R* x, const R* v,
+                                     const R* g, R* xo, R* vo) {
+  const int q = 3 * a;
   const R mass = N.mass[a];
   const R c = step_coefficient(mass, N.damping[a], h);
   R vn[3];
@@ -251,6 +252,29 @@ MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R
   symplectic_position(h, x + q, vn, xo + q);
   if (!velocity_ok(v2, vmax2)) return isfinite(v2) ? kNodeTooFast : kNodeNonFinite;
   return kNodeOk;
+}
+
+/// One fused substep of the node of table row r: force (external load from `loads` rows, return spring,
+/// springs) and symplectic update with implicit damping, reading x, v and writing xo, vo. x and xo are
+/// distinct buffers (every node reads its neighbours' old positions); v and vo may be one buffer (a node
+/// reads only its own velocity, before writing it). A pinned node keeps x and v. Returns a kNode* code.
+template <bool Soft, bool Stiff, class R>
+MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R>& T, int r, R h, R vmax2,
+                                     const R* loads, const R* x, const R* v, R* xo, R* vo, R& stiff) {
+  const int a = row_node(T, r);
+  const int q = 3 * a;
+  if (N.fixed[a]) {
+    keep_node(q, x, v, xo, vo);
+    if constexpr (Stiff) {  // its springs still count for the stability measure
+      R g[3] = {R(0), R(0), R(0)};
+      gather_spring_forces<Soft, true>(T, r, a, x, stiff, g);
+    }
+    return kNodeOk;
+  }
+  R g[3];
+  load_and_return_force(N, a, loads, x, g);
+  gather_spring_forces<Soft, Stiff>(T, r, a, x, stiff, g);
+  return advance_node(N, a, h, vmax2, x, v, g, xo, vo);
 }
 
 /// One thread's share of a substep in the one-block-per-model kernel (docs/gpu.md): rows t, t + threads,

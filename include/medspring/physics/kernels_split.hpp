@@ -19,6 +19,16 @@ struct SplitRows {
   const int* part_begin = nullptr;  // (heavy + 1) slots of split node h: part_begin[h] .. part_begin[h+1]
 };
 
+/// A chunk row's spring force sum (its springs in table order), written to out[0..2].
+template <bool Soft, bool Stiff, class R>
+MEDSPRING_HD inline void chunk_force(const SpringTable<R>& T, int r, const R* x, R& stiff, R* out) {
+  R f[3] = {R(0), R(0), R(0)};  // registers
+  gather_spring_forces<Soft, Stiff>(T, r, row_node(T, r), x, stiff, f);
+  out[0] = f[0];
+  out[1] = f[1];
+  out[2] = f[2];
+}
+
 /// Phase 1 of a substep for thread t: whole rows as block_rows does (x read, xo written, v in place);
 /// chunk rows write their springs' force sum to parts[3 slot ..]. Returns the largest kNode* code.
 template <bool Soft, bool Stiff, class R>
@@ -32,11 +42,7 @@ MEDSPRING_HD inline int split_phase1(const NodeArrays<R>& N, const SpringTable<R
       const int c = node_substep<Soft, Stiff>(N, T, r, h, vmax2, loads, x, v, xo, v, stiff);
       code = c > code ? c : code;
     } else {
-      R f[3] = {R(0), R(0), R(0)};
-      gather_spring_forces<Soft, Stiff>(T, r, row_node(T, r), x, stiff, f);
-      parts[3 * p] = f[0];
-      parts[3 * p + 1] = f[1];
-      parts[3 * p + 2] = f[2];
+      chunk_force<Soft, Stiff>(T, r, x, stiff, parts + 3 * p);
     }
   }
   return code;
@@ -48,42 +54,18 @@ MEDSPRING_HD inline int split_phase1(const NodeArrays<R>& N, const SpringTable<R
 template <class R>
 MEDSPRING_HD inline int split_node_advance(const NodeArrays<R>& N, int a, R h, R vmax2, const R* loads,
                                            const R* x, const R* v, R* xo, R* vo, const R* parts, int count) {
-  const int q = 3 * a;
   if (N.fixed[a]) {
-    xo[q] = x[q];
-    xo[q + 1] = x[q + 1];
-    xo[q + 2] = x[q + 2];
-    if (vo != v) {
-      vo[q] = v[q];
-      vo[q + 1] = v[q + 1];
-      vo[q + 2] = v[q + 2];
-    }
+    keep_node(3 * a, x, v, xo, vo);
     return kNodeOk;
   }
-  R fe[3] = {R(0), R(0), R(0)};
-  const int slot = N.load_slot[a];
-  if (slot >= 0) {
-    fe[0] = loads[3 * slot];
-    fe[1] = loads[3 * slot + 1];
-    fe[2] = loads[3 * slot + 2];
-  }
   R g[3];
-  return_force(fe, x + q, N.x0 + q, N.kr[a], g);
+  load_and_return_force(N, a, loads, x, g);
   for (int p = 0; p < count; ++p) {
     g[0] += parts[3 * p];
     g[1] += parts[3 * p + 1];
     g[2] += parts[3 * p + 2];
   }
-  const R mass = N.mass[a];
-  const R c = step_coefficient(mass, N.damping[a], h);
-  R vn[3];
-  const R v2 = symplectic_velocity(mass, c, h, v + q, g, vn);
-  vo[q] = vn[0];
-  vo[q + 1] = vn[1];
-  vo[q + 2] = vn[2];
-  symplectic_position(h, x + q, vn, xo + q);
-  if (!velocity_ok(v2, vmax2)) return isfinite(v2) ? kNodeTooFast : kNodeNonFinite;
-  return kNodeOk;
+  return advance_node(N, a, h, vmax2, x, v, g, xo, vo);
 }
 
 /// Phase 2 (after a barrier) for thread t: each split node h = t, t + threads, ...: load and return
@@ -121,11 +103,7 @@ MEDSPRING_HD inline int grid_split_gather(const NodeArrays<R>& N, const SpringTa
   const int p = G.part[r];
   if (p == -1) return node_substep<Soft, Stiff>(N, T, r, h, vmax2, loads, x, v, xo, vo, stiff);
   if (p >= 0) {
-    R f[3] = {R(0), R(0), R(0)};
-    gather_spring_forces<Soft, Stiff>(T, r, row_node(T, r), x, stiff, f);
-    parts[3 * p] = f[0];
-    parts[3 * p + 1] = f[1];
-    parts[3 * p + 2] = f[2];
+    chunk_force<Soft, Stiff>(T, r, x, stiff, parts + 3 * p);
   }
   return kNodeOk;
 }

@@ -1,0 +1,68 @@
+// Options several commands share, with the same meaning (apps/commands.cpp, apps/commands_build.cpp).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "cli.hpp"
+#include "medspring/core/params.hpp"
+
+namespace medspring::cli {
+
+// An option whose unit, default and help are a declared field's (core/params.hpp): `calibrate --E-kPa`
+// is FemCaseSettings::E_kPa (scene/study_settings.hpp, docs/parameters.md).
+template <ParamStruct T>
+inline OptionSpec declared_option(const char* option, const char* field, const char* value) {
+  for (const ParamRow& r : param_rows<T>())
+    if (r.name == field)
+      return {.name = option,
+              .value = value,
+              .unit = r.unit,
+              .def = r.default_value,
+              .help = r.range.empty() ? r.doc : cat(r.doc, "; ", r.range)};
+  throw std::logic_error(cat("apps/command_options.hpp: '", field, "' is not a declared field"));
+}
+
+inline const OptionSpec kJson{.name = "json", .help = "print the results as JSON on stdout"};
+inline const OptionSpec kQuiet{.name = "quiet", .help = "no progress on stderr"};
+inline const OptionSpec kForce{.name = "force", .help = "replace a non-empty DIR (refused otherwise)"};
+inline OptionSpec out_dir(const std::string& help) {
+  return {.name = "out", .value = "DIR", .help = help};
+}
+inline const OptionSpec kScenes{.name = "scenes",
+                                .value = "DIR",
+                                .def = "the source tree's scenes/, then <prefix>/share/medspring/scenes",
+                                .help = "the bundled scene folder"};
+inline const OptionSpec kUnit{
+    .name = "unit", .value = "mm|cm|m", .help = "length unit of the input's coordinates"};
+inline const OptionSpec kLabel{
+    .name = "label",
+    .value = "N",
+    .def = "the only non-zero label",
+    .help = "the organ's label in the mask (several components: the largest is used)"};
+inline const OptionSpec kAtoms40{.name = "atoms", .value = "N", .def = "40", .help = "centerline atoms"};
+inline const OptionSpec kPath{
+    .name = "path",
+    .value = "mst|dijkstra",
+    .def = "mst",
+    .help =
+        "skeleton path: maximum spanning tree of the distance map (D-7) or the penalised "
+        "shortest path (TEASAR-style; straighter in flat organs)"};
+inline const OptionSpec kBuildOut{
+    .name = "out",
+    .value = "DIR",
+    .help = "output folder, written whole or not at all; a non-empty one needs --force"};
+inline const OptionSpec kBuildJson{
+    .name = "json",
+    .help =
+        "print the summary as JSON (counts, valence histogram, Hausdorff and mean "
+        "distance to the input in mm, atoms outside, spokes per atom, build time)"};
+inline const OptionSpec kMesh{
+    .name = "mesh", .value = "FILE", .help = "closed organ surface (.obj .stl .ply .vtp .vtk)"};
+inline const OptionSpec kMask{
+    .name = "mask", .value = "FILE", .help = "label volume (.nii .nii.gz .mha .mhd .nrrd)"};
+
+/// `medspring build` and its kinds (commands_build.cpp).
+CommandSpec build_command();
+
+}  // namespace medspring::cli
