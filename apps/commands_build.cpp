@@ -4,6 +4,13 @@
 
 namespace medspring::cli {
 
+namespace {
+const OptionSpec kCloseHoles{
+    .name = "close-holes",
+    .value = "N",
+    .help = "close holes of up to N edges first (an open mesh is refused otherwise)"};
+}  // namespace
+
 CommandSpec build_command() {
   return {
       .name = "build",
@@ -25,9 +32,7 @@ CommandSpec build_command() {
                      "MaximumInscribedSphereRadius), spokes.vtp and summary.json.",
             .options = {kMesh,
                         kUnit,
-                        {.name = "close-holes",
-                         .value = "N",
-                         .help = "close holes of up to N edges first (an open mesh is refused otherwise)"},
+                        kCloseHoles,
                         kMask,
                         kLabel,
                         {.name = "nodes", .value = "N", .def = "458", .help = "surface nodes"},
@@ -125,9 +130,7 @@ CommandSpec build_command() {
             .options =
                 {kMesh,
                  kUnit,
-                 {.name = "close-holes",
-                  .value = "N",
-                  .help = "close holes of up to N edges first (an open mesh is refused otherwise)"},
+                 kCloseHoles,
                  kMask,
                  kLabel,
                  {.name = "nodes", .value = "N", .def = "2000", .help = "nodes in all (surface + interior)"},
