@@ -63,7 +63,8 @@ def main(argv=None) -> int:
         # device is refused in one line naming the reason and --device cpu.
         why = _cuda_refusal()
         if why:
-            print(f"medspring study: --device cuda: {why}; run it on the CPU engine with --device cpu",
+            cause = why.split("; use the CPU engine")[0]  # the engine's own hint names the wrong switch here
+            print(f"medspring study: --device cuda: {cause}; run it on the CPU engine with --device cpu",
                   file=sys.stderr)
             return 2
     if a.workers is not None and a.workers < 0:
