@@ -67,12 +67,9 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
           "allocating shared memory for the block kernel");
     split_rows = static_cast<int>(S0.part.size());
     split_heavy = static_cast<int>(S0.heavy_node.size());
-    part.allocate(S0.part.size(), "allocating the spring table");
-    part.upload(S0.part.data(), S0.part.size(), 0, "uploading the spring table");
-    heavy_node.allocate(S0.heavy_node.size(), "allocating the spring table");
-    heavy_node.upload(S0.heavy_node.data(), S0.heavy_node.size(), 0, "uploading the spring table");
-    part_begin.allocate(S0.part_begin.size(), "allocating the spring table");
-    part_begin.upload(S0.part_begin.data(), S0.part_begin.size(), 0, "uploading the spring table");
+    part.assign(S0.part, "allocating the spring table", "uploading the spring table");
+    heavy_node.assign(S0.heavy_node, "allocating the spring table", "uploading the spring table");
+    part_begin.assign(S0.part_begin, "allocating the spring table", "uploading the spring table");
   }
   // The grid kernel: heavy rows split over the lanes of one warp where the model has nodes of more than
   // kHeavyDegree springs (make_grid_split_table); otherwise one row per node, HeavyLast.
@@ -82,14 +79,10 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     if (!G0.heavy_node.empty()) {
       grid_rows = G0.rows();
       parts = G0.parts();
-      part.allocate(G0.part.size(), "allocating the spring table");
-      part.upload(G0.part.data(), G0.part.size(), 0, "uploading the spring table");
-      lead.allocate(G0.lead.size(), "allocating the spring table");
-      lead.upload(G0.lead.data(), G0.lead.size(), 0, "uploading the spring table");
-      heavy_node.allocate(G0.heavy_node.size(), "allocating the spring table");
-      heavy_node.upload(G0.heavy_node.data(), G0.heavy_node.size(), 0, "uploading the spring table");
-      part_begin.allocate(G0.part_begin.size(), "allocating the spring table");
-      part_begin.upload(G0.part_begin.data(), G0.part_begin.size(), 0, "uploading the spring table");
+      part.assign(G0.part, "allocating the spring table", "uploading the spring table");
+      lead.assign(G0.lead, "allocating the spring table", "uploading the spring table");
+      heavy_node.assign(G0.heavy_node, "allocating the spring table", "uploading the spring table");
+      part_begin.assign(G0.part_begin, "allocating the spring table", "uploading the spring table");
       grid_parts.allocate(3 * static_cast<std::size_t>(parts) * uB, "allocating the split rows' sums");
     }
   }
@@ -103,13 +96,10 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
       per_block ? std::move(S0.table) : (grid_split ? std::move(G0.table) : table_of(m0));
   entries = T0.entries();
   if (!T0.row_node.empty()) {
-    row_node.allocate(T0.row_node.size(), "allocating the spring table");
-    row_node.upload(T0.row_node.data(), T0.row_node.size(), 0, "uploading the spring table");
+    row_node.assign(T0.row_node, "allocating the spring table", "uploading the spring table");
   }
-  slice_begin.allocate(T0.slice_begin.size(), "allocating the spring table");
-  slice_begin.upload(T0.slice_begin.data(), T0.slice_begin.size(), 0, "uploading the spring table");
-  slice_width.allocate(T0.slice_width.size(), "allocating the spring table");
-  slice_width.upload(T0.slice_width.data(), T0.slice_width.size(), 0, "uploading the spring table");
+  slice_begin.assign(T0.slice_begin, "allocating the spring table", "uploading the spring table");
+  slice_width.assign(T0.slice_width, "allocating the spring table", "uploading the spring table");
   other.allocate(entries, "allocating the spring table");
   other.upload(T0.other.data(), entries, 0, "uploading the spring table");
   for (DeviceArray<R>* a : {&L0, &k, &kp, &ik}) a->allocate(entries * uB, "allocating the spring table");

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <vector>
 
 namespace medspring::gpu::detail {
 
@@ -32,6 +33,11 @@ struct DeviceArray {
   }
   void upload(const T* h, std::size_t count, std::size_t offset, const char* what) {
     check(cudaMemcpy(p + offset, h, count * sizeof(T), cudaMemcpyHostToDevice), what);
+  }
+  /// Allocates h.size() elements and copies h into them.
+  void assign(const std::vector<T>& h, const char* allocating, const char* uploading) {
+    allocate(h.size(), allocating);
+    upload(h.data(), h.size(), 0, uploading);
   }
 };
 
