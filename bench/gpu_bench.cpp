@@ -18,6 +18,7 @@
 #ifdef MEDSPRING_HAS_CUDA
 #include "medspring/gpu/engine.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
+#include "medspring/models/model_package.hpp"
 #endif
 
 namespace medspring::bench {
@@ -60,11 +61,14 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
       o.torch = false;
     } else if (a == "--out") {
       o.out = value(i);
+    } else if (a == "--kidney") {
+      o.kidney = value(i);
     } else if (a == "--device") {
       o.device = static_cast<int>(number(value(i), "--device"));
     } else {
-      throw InvalidInput(cat("bench --gpu: unknown argument '", a,
-                             "' (expected --sizes, --batch, --cpu-max, --no-torch, --out, --device)"));
+      throw InvalidInput(
+          cat("bench --gpu: unknown argument '", a,
+              "' (expected --sizes, --batch, --kidney, --cpu-max, --no-torch, --out, --device)"));
     }
   }
   return o;
@@ -334,8 +338,14 @@ int run_gpu_bench(const GpuBenchOptions& o) {
   }
   js << "\n  ]";
   if (o.batch > 0) {
-    const HybridKidney kidney = hybrid_kidney_phantom();
-    const Model& km = kidney.model();
+    // The real kidney from a model package (medspring export of the bundled kidney scene) when given,
+    // otherwise the procedural phantom of the same size.
+    const HybridKidney phantom = hybrid_kidney_phantom();
+    BodyPtr real;
+    if (!o.kidney.empty()) real = make_body(read_model_package(o.kidney));
+    const Model& km = real ? real->model() : phantom.model();
+    const std::string kidney_name =
+        real ? "real kidney " + fs::path(o.kidney).filename().string() : "kidney phantom";
     std::vector<const Model*> models(static_cast<std::size_t>(o.batch), &km);
     js << ",\n  \"batch\": [";
     bool bfirst = true;
@@ -368,11 +378,12 @@ int run_gpu_bench(const GpuBenchOptions& o) {
         std::sort(frame_us.begin(), frame_us.end());
         const double frame_med = frame_us[frame_us.size() / 2];
         std::printf(
-            "batch: %d hybrid kidneys (%d nodes each) %s, %s kernel: %.2f µs per substep, %.3g "
+            "batch: %d %s (%d nodes each) %s, %s kernel: %.2f µs per substep, %.3g "
             "model-substeps/s; step() %.1f µs per frame\n",
-            o.batch, static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(), kname, substep_us, rate,
-            frame_med);
-        js << (bfirst ? "\n" : ",\n") << "    {\"models\": " << o.batch
+            o.batch, kidney_name.c_str(), static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(), kname,
+            substep_us, rate, frame_med);
+        js << (bfirst ? "\n" : ",\n") << "    {\"models\": " << o.batch << ", \"model\": \""
+           << json_escape(kidney_name) << "\""
            << ", \"nodes_per_model\": " << km.num_nodes() << ", \"precision\": \"" << gpu::to_string(p)
            << "\", \"kernel\": \"" << kname << "\", \"substep_us\": " << substep_us
            << ", \"model_substeps_per_s\": " << rate << ", \"step_frame_us\": " << frame_med << "}";

@@ -59,6 +59,19 @@ stage() {
   cp -r /usr/include/eigen3 "$dir/eigen3"
   cp -r /usr/src/googletest "$dir/googletest"
   mkdir -p "$dir/json-include" && cp -r /usr/include/nlohmann "$dir/json-include/nlohmann"
+  # The real kidney as a model package (the GPU machine has no data folder): the hybrid kidney of the
+  # bundled scene, built here with the CLI when it and the data are present.
+  local cli=${MEDSPRING_CLI:-$root/build/apps/medspring}
+  if [ -x "$cli" ]; then
+    rm -rf "$dir/kidney-export"
+    if "$cli" export --quiet --out "$dir/kidney-export" "$root/scenes/kidney_0.2N_nonlinear.json" > /dev/null &&
+      mv "$dir/kidney-export/kidney_0.2N_nonlinear.msm" "$dir/kidney.msm"; then
+      echo "gpu-check: staged the real kidney's model package in $dir/kidney.msm"
+    else
+      echo "gpu-check: no real kidney package (export failed: data folder? see MEDSPRING_DATA)"
+    fi
+    rm -rf "$dir/kidney-export"
+  fi
   echo "gpu-check: staged Eigen, GoogleTest and nlohmann_json in $dir ($(du -sh "$dir" | cut -f1))"
 }
 
@@ -82,15 +95,27 @@ run_stage() {
   tail -5 "$out/logs/$name.log" || true
 }
 
+# want STAGE: whether GPU_CHECK_STAGES (comma-separated; default every stage but python) selects STAGE.
+want() { [[ ",${GPU_CHECK_STAGES:-bench,gpu_tests,gpu_scene_tests,cpu_kernel_tests,hybrid_gather_tests}," == *",$1,"* ]]; }
+
 full() {
   local deps=${1:-$root/shared/gpu-deps}
-  local build=$out/build prefix=$out/deps skip="fem;paper"
+  # The build and the copied dependencies go to GPU_CHECK_WORK (default $out): on the device machine put
+  # them outside the folder whose files come back.
+  local work=${GPU_CHECK_WORK:-$out}
+  local build=$work/build prefix=$work/deps skip="fem;paper"
   budget=${GPU_CHECK_BUDGET_S:-480}
   start=$SECONDS
-  mkdir -p "$out/logs" "$out/xml"
+  mkdir -p "$out/logs" "$out/xml" "$work"
   : > "$out/stages.tsv"
-  local args=(-DMEDSPRING_WITH_VTK=OFF -DMEDSPRING_WITH_CGAL=OFF -DMEDSPRING_BUILD_PYTHON=OFF
+  local python_on=OFF
+  want python && python_on=ON
+  local args=(-DMEDSPRING_WITH_VTK=OFF -DMEDSPRING_WITH_CGAL=OFF "-DMEDSPRING_BUILD_PYTHON=$python_on"
     -DMEDSPRING_BUILD_BENCH=OFF -DMEDSPRING_CUDA=ON -DCMAKE_CUDA_COMPILER="$nvcc")
+  if [ $python_on = ON ]; then
+    # The machine's own python3 (the one with PyTorch / CuPy) and its pip-installed pybind11.
+    args+=(-DPython3_EXECUTABLE="$(command -v python3)" -Dpybind11_DIR="$(python3 -m pybind11 --cmakedir)")
+  fi
   # GPU_CHECK_USE_DEPS=1 uses DEPS even where the system has Eigen/GoogleTest (to try this path anywhere).
   if [ -n "${GPU_CHECK_USE_DEPS:-}" ] || { [ ! -d /usr/include/eigen3 ] && [ ! -d /usr/local/include/eigen3 ]; }; then
     [ -d "$deps/eigen3" ] || { echo "gpu-check: no Eigen here and none in $deps (run 'stage' where Eigen is)" >&2; exit 2; }
@@ -136,25 +161,43 @@ EOF
     args+=(-DGTest_DIR="$(dirname "$(find "$prefix/gtest" -name GTestConfig.cmake | head -1)")")
   fi
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${args[@]}" > "$out/configure.log"
-  grep -E "MedSpring: CUDA|Eigen|GTest" "$out/configure.log" || true
+  grep -E "MedSpring: CUDA|Eigen|GTest|Python package" "$out/configure.log" || true
   [ -z "${GPU_CHECK_CONFIGURE_ONLY:-}" ] || return 0
   nvidia-smi --query-gpu=name,memory.total,driver_version,clocks.max.sm --format=csv > "$out/nvidia-smi.csv" 2>&1 || true
-  local targets=(gpu_tests physics_tests hybrid_gather_tests medspring_gpu_bench)
-  grep -q "gpu_scene_tests" "$build/build.ninja" 2>/dev/null && targets+=(gpu_scene_tests)
+  local targets=()
+  want bench && targets+=(medspring_gpu_bench)
+  want gpu_tests && targets+=(gpu_tests)
+  want gpu_scene_tests && grep -q "gpu_scene_tests" "$build/build.ninja" 2>/dev/null && targets+=(gpu_scene_tests)
+  want cpu_kernel_tests && targets+=(physics_tests)
+  want hybrid_gather_tests && targets+=(hybrid_gather_tests)
+  want python && targets+=(medspring_python)
   run_stage build 300 cmake --build "$build" --target "${targets[@]}"
+  # The real kidney (staged by `stage` as a model package) for the GPU tests and the batch case.
+  local kidney_args=()
+  if [ -f "$deps/kidney.msm" ]; then
+    export MEDSPRING_GPU_KIDNEY="$deps/kidney.msm"
+    kidney_args=(--kidney "$deps/kidney.msm")
+  fi
   # (1) the issue's table: tube sizes, precisions, bandwidth, PyTorch and CPU, the kidney batch.
   # shellcheck disable=SC2086
-  run_stage bench 200 "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" ${GPU_BENCH_ARGS:---batch 8448}
-  # (2) GPU against CPU, the study's batch path, the haptic loops (figures recorded in the XML).
-  run_stage gpu_tests 180 "$build/tests/gpu/gpu_tests" --gtest_output="xml:$out/xml/gpu_tests.xml"
-  if [ -x "$build/tests/gpu/gpu_scene_tests" ]; then
+  want bench && run_stage bench 200 "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" \
+    ${GPU_BENCH_ARGS:---batch 8448} "${kidney_args[@]}"
+  # (2) GPU against CPU, the study's batch path, the haptic loops (figures recorded in the XML and log).
+  # shellcheck disable=SC2086
+  want gpu_tests && run_stage gpu_tests 180 "$build/tests/gpu/gpu_tests" ${GPU_TESTS_ARGS:-} \
+    --gtest_output="xml:$out/xml/gpu_tests.xml"
+  if want gpu_scene_tests && [ -x "$build/tests/gpu/gpu_scene_tests" ]; then
     run_stage gpu_scene_tests 90 "$build/tests/gpu/gpu_scene_tests" --gtest_output="xml:$out/xml/gpu_scene_tests.xml"
   fi
   # (3) the CPU-side twins of the kernels (block kernel, its split rows, the grid kernel's split rows).
-  run_stage cpu_kernel_tests 60 "$build/tests/physics/physics_tests" --gtest_filter='HdKernels*:SpringTable*' \
-    --gtest_output="xml:$out/xml/physics_tests.xml"
-  run_stage hybrid_gather_tests 60 "$build/tests/models/hybrid_gather_tests" \
+  want cpu_kernel_tests && run_stage cpu_kernel_tests 60 "$build/tests/physics/physics_tests" \
+    --gtest_filter='HdKernels*:SpringTable*' --gtest_output="xml:$out/xml/physics_tests.xml"
+  want hybrid_gather_tests && run_stage hybrid_gather_tests 60 "$build/tests/models/hybrid_gather_tests" \
     --gtest_output="xml:$out/xml/hybrid_gather_tests.xml"
+  # (4) optional (GPU_CHECK_STAGES=...,python): medspring.gpu from Python, (B, N, 3) arrays and DLPack
+  # hand-over to CuPy / PyTorch (python/tests/test_gpu.py), with the machine's python3.
+  want python && run_stage python 120 env PYTHONPATH="$build/python" python3 -m pytest -q -rs \
+    "$root/python/tests/test_gpu.py" --junitxml="$out/xml/python_gpu.xml"
   python3 "$root/scripts/gpu_summary.py" "$out" > "$out/logs/summary.log" 2>&1 ||
     echo "gpu-check: summary failed (see $out/logs/summary.log)"
   head -40 "$out/summary.md" 2>/dev/null || true
