@@ -203,9 +203,10 @@ EOF
   want hybrid_gather_tests && run_stage hybrid_gather_tests 60 "$build/tests/models/hybrid_gather_tests" \
     --gtest_output="xml:$out/xml/hybrid_gather_tests.xml"
   # (4) optional (GPU_CHECK_STAGES=...,python): medspring.gpu from Python, (B, N, 3) arrays and DLPack
-  # hand-over to CuPy / PyTorch (python/tests/test_gpu.py), with the machine's python3.
+  # hand-over to CuPy / PyTorch (python/tests/test_gpu.py) and the study on the GPU (test_study_device.py),
+  # with the machine's python3.
   want python && run_stage python 120 env PYTHONPATH="$build/python" python3 -m pytest -q -rs \
-    "$root/python/tests/test_gpu.py" --junitxml="$out/xml/python_gpu.xml"
+    "$root/python/tests/test_gpu.py" "$root/python/tests/test_study_device.py" --junitxml="$out/xml/python_gpu.xml"
   python3 "$root/scripts/gpu_summary.py" "$out" > "$out/logs/summary.log" 2>&1 ||
     echo "gpu-check: summary failed (see $out/logs/summary.log)"
   head -40 "$out/summary.md" 2>/dev/null || true

@@ -141,6 +141,13 @@ inline py::array copy_of(const Mat3& R) {
 /// Lets a Python str stand for a value of the bound enum E wherever E is expected: the text is parsed by
 /// `parse` when given, else matched against the member names ignoring case and underscores
 /// ("symplectic_euler" == SymplecticEuler). Unknown text raises InvalidInput listing the names.
+/// The Python type of the bound enum E. Through an instance: pybind11 3's enum caster is not a
+/// type_caster_generic, so py::type::of<E>() does not compile there (the GPU machine's pybind11 3.1).
+template <class E>
+py::object enum_type() {
+  return py::type::of(py::cast(E{}));
+}
+
 template <class E>
 void enum_accepts_strings(py::enum_<E>& cls, E (*parse)(const std::string&) = nullptr) {
   cls.def(py::init([parse](const std::string& text) -> E {
@@ -152,14 +159,14 @@ void enum_accepts_strings(py::enum_<E>& cls, E (*parse)(const std::string&) = nu
                   out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
               return out;
             };
-            const py::dict members = py::type::of<E>().attr("__members__");
+            const py::dict members = enum_type<E>().attr("__members__");
             std::string names;
             for (auto item : members) {
               const std::string name = py::str(item.first).cast<std::string>();
               if (norm(name) == norm(text)) return item.second.cast<E>();
               names += (names.empty() ? "" : ", ") + name;
             }
-            throw InvalidInput(cat(py::str(py::type::of<E>().attr("__name__")).cast<std::string>(),
+            throw InvalidInput(cat(py::str(enum_type<E>().attr("__name__")).cast<std::string>(),
                                    ": unknown value '", text, "' (expected one of ", names, ")"));
           }),
           py::arg("name"),
@@ -171,12 +178,12 @@ void enum_accepts_strings(py::enum_<E>& cls, E (*parse)(const std::string&) = nu
 /// names when unknown; a wrong type raises TypeError).
 template <class E>
 E enum_arg(py::handle obj, const char* name) {
-  if (py::isinstance<py::str>(obj)) return py::type::of<E>()(obj).template cast<E>();
+  if (py::isinstance<py::str>(obj)) return enum_type<E>()(obj).template cast<E>();
   try {
     return obj.cast<E>();
   } catch (const py::cast_error&) {
     throw py::type_error(cat(name, ": expected a ",
-                             py::str(py::type::of<E>().attr("__name__")).cast<std::string>(),
+                             py::str(enum_type<E>().attr("__name__")).cast<std::string>(),
                              " or its name; got ", describe_object(obj)));
   }
 }

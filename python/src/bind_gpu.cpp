@@ -1,6 +1,7 @@
 // The CUDA backend (gpu::Engine, docs/gpu.md) from Python: medspring._medspring._gpu, re-exported as
 // medspring.gpu (python/medspring/gpu.py, which also answers in a build without CUDA). Batches as
 // (B, N, 3) NumPy arrays; the device state handed zero-copy through DLPack (__dlpack__) to CuPy/PyTorch.
+#include <algorithm>
 #include <memory>
 #include <optional>
 
@@ -206,7 +207,22 @@ void bind_gpu(py::module_& parent) {
                              })
       .def_property_readonly(
           "time", [](const PyEngine& p) { return p.e->time(); }, "ms")
-      .def_property_readonly("substeps", [](const PyEngine& p) { return p.e->substeps(); })
+      .def_property_readonly(
+          "origin",
+          [](PyEngine& p) {
+            const gpu::Engine::DeviceState d = p.e->device_state();
+            py::array_t<double> o({static_cast<py::ssize_t>(d.batch), py::ssize_t{3}});
+            std::copy(d.origin, d.origin + 3 * d.batch, o.mutable_data());
+            return o;
+          },
+          "(B, 3): the device positions handed over by DLPack are x - origin (0 in fp64; the rest shape's "
+          "centre in fp32).")
+      .def_property_readonly(
+          "substeps", [](const PyEngine& p) { return p.e->substeps(); },
+          "The batch's substeps: per frame the most any model took.")
+      .def(
+          "model_substeps", [](const PyEngine& p, int b) { return p.e->substeps(b); }, "b"_a,
+          "Model b's substeps (each model takes its own, as its CPU run).")
       .def(
           "set_loads",
           [](PyEngine& p, int b, const std::vector<PointLoad>& loads) { p.e->set_loads(b, loads); }, "b"_a,
@@ -244,7 +260,7 @@ void bind_gpu(py::module_& parent) {
               s.v = V ? MatX3(Eigen::Map<const MatX3>(V->data() + static_cast<std::size_t>(b) * 3 * n, n, 3))
                       : MatX3(MatX3::Zero(n, 3));
               s.t = p.e->time();
-              s.stiffening = p.e->stiffening();
+              s.stiffening = p.e->stiffening(b);
               p.e->upload(b, s);
             }
           },

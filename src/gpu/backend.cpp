@@ -102,10 +102,43 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   slice_width.assign(T0.slice_width, "allocating the spring table", "uploading the spring table");
   other.allocate(entries, "allocating the spring table");
   other.upload(T0.other.data(), entries, 0, "uploading the spring table");
-  for (DeviceArray<R>* a : {&L0, &k, &kp, &ik}) a->allocate(entries * uB, "allocating the spring table");
-  for (DeviceArray<R>* a : {&mass, &damping, &kr}) a->allocate(un * uB, "allocating the node arrays");
-  x0.allocate(3 * un * uB, "allocating the node arrays");
-  fixed.allocate(un * uB, "allocating the node arrays");
+  // Parameters shared by the batch: where every model's spring parameters (node arrays) equal model 0's
+  // -- a batch of one model, or of copies of it with their own loads (the kidney batch of a dataset) --
+  // they are stored once (stride 0) and read from L2 by every model, instead of B copies read from
+  // device memory in every substep. The state and the load slots are always per model.
+  auto node_arrays_of = [&](const Model& m, std::size_t ub) {
+    NodeArrayData<R> N = make_node_arrays<R>(m);
+    // fp32: positions relative to the rest shape's centre (origin), so that rounding scales with the
+    // organ's size, not with its distance from the scanner's origin (the real kidney lies 250-356 mm
+    // from it: an fp32 ulp of 3e-5 mm there). The physics is translation-invariant; fp64: origin 0.
+    if constexpr (std::is_same_v<R, float>) {
+      const Vec3 c = 0.5 * (m.x0.colwise().minCoeff() + m.x0.colwise().maxCoeff()).transpose();
+      for (int d = 0; d < 3; ++d) origin[3 * ub + static_cast<std::size_t>(d)] = c[d];
+      for (std::size_t q = 0; q < 3 * un; ++q)
+        N.x0[q] = static_cast<R>(m.x0.data()[q] - c[static_cast<Index>(q % 3)]);
+    }
+    return N;
+  };
+  origin.assign(3 * uB, 0.0);
+  const NodeArrayData<R> N0 = node_arrays_of(m0, 0);
+  bool nodes_shared = true, table_shared = true;
+  for (int b = 1; b < B; ++b) {
+    const Model& m = *ms[static_cast<std::size_t>(b)];
+    require_same_topology(m0, m, b);
+    if (&m == &m0 || !(nodes_shared || table_shared)) continue;
+    const SpringTableArrays<R> T = table_of(m);
+    table_shared = table_shared && T.L0 == T0.L0 && T.k == T0.k && T.kp == T0.kp && T.ik == T0.ik;
+    const NodeArrayData<R> N = node_arrays_of(m, static_cast<std::size_t>(b));
+    nodes_shared = nodes_shared && N.x0 == N0.x0 && N.mass == N0.mass && N.damping == N0.damping &&
+                   N.kr == N0.kr && N.fixed == N0.fixed;
+  }
+  param_models[0] = nodes_shared ? 1 : B;
+  param_models[1] = table_shared ? 1 : B;
+  const auto uBn = static_cast<std::size_t>(param_models[0]), uBt = static_cast<std::size_t>(param_models[1]);
+  for (DeviceArray<R>* a : {&L0, &k, &kp, &ik}) a->allocate(entries * uBt, "allocating the spring table");
+  for (DeviceArray<R>* a : {&mass, &damping, &kr}) a->allocate(un * uBn, "allocating the node arrays");
+  x0.allocate(3 * un * uBn, "allocating the node arrays");
+  fixed.allocate(un * uBn, "allocating the node arrays");
   load_slot.allocate(un * uB, "allocating the node arrays");
   for (int p = 0; p < 2; ++p) {
     xb[p].allocate(3 * un * uB, "allocating the state");
@@ -114,25 +147,31 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   std::vector<R> zero(3 * un, R(0));
   for (int b = 0; b < B; ++b) {
     const Model& m = *ms[static_cast<std::size_t>(b)];
-    if (b > 0) require_same_topology(m0, m, b);
     soft = soft || m.has_soft_springs;
-    const bool same = b > 0 && &m == &m0;  // a batch of one model: its arrays once
-    const SpringTableArrays<R> T = b == 0 || same ? SpringTableArrays<R>{} : table_of(m);
-    const SpringTableArrays<R>& Tb = b == 0 || same ? T0 : T;
+    const bool same = b == 0 || &m == &m0;
     const auto ub = static_cast<std::size_t>(b);
-    L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
-    k.upload(Tb.k.data(), entries, ub * entries, "uploading the spring table");
-    kp.upload(Tb.kp.data(), entries, ub * entries, "uploading the spring table");
-    ik.upload(Tb.ik.data(), entries, ub * entries, "uploading the spring table");
-    const NodeArrayData<R> N = make_node_arrays<R>(m);
-    x0.upload(N.x0.data(), 3 * un, ub * 3 * un, "uploading the node arrays");
-    mass.upload(N.mass.data(), un, ub * un, "uploading the node arrays");
-    damping.upload(N.damping.data(), un, ub * un, "uploading the node arrays");
-    kr.upload(N.kr.data(), un, ub * un, "uploading the node arrays");
-    fixed.upload(N.fixed.data(), un, ub * un, "uploading the node arrays");
-    load_slot.upload(N.load_slot.data(), un, ub * un, "uploading the node arrays");
+    if (ub < uBt) {
+      const SpringTableArrays<R> T = same ? SpringTableArrays<R>{} : table_of(m);
+      const SpringTableArrays<R>& Tb = same ? T0 : T;
+      L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
+      k.upload(Tb.k.data(), entries, ub * entries, "uploading the spring table");
+      kp.upload(Tb.kp.data(), entries, ub * entries, "uploading the spring table");
+      ik.upload(Tb.ik.data(), entries, ub * entries, "uploading the spring table");
+    }
+    const NodeArrayData<R> N = same ? NodeArrayData<R>{} : node_arrays_of(m, ub);
+    const NodeArrayData<R>& Nb = same ? N0 : N;
+    if (same)
+      std::copy(origin.begin(), origin.begin() + 3, origin.begin() + 3 * static_cast<std::ptrdiff_t>(ub));
+    if (ub < uBn) {
+      x0.upload(Nb.x0.data(), 3 * un, ub * 3 * un, "uploading the node arrays");
+      mass.upload(Nb.mass.data(), un, ub * un, "uploading the node arrays");
+      damping.upload(Nb.damping.data(), un, ub * un, "uploading the node arrays");
+      kr.upload(Nb.kr.data(), un, ub * un, "uploading the node arrays");
+      fixed.upload(Nb.fixed.data(), un, ub * un, "uploading the node arrays");
+    }
+    load_slot.upload(Nb.load_slot.data(), un, ub * un, "uploading the node arrays");
     for (int p = 0; p < 2; ++p) {
-      xb[p].upload(N.x0.data(), 3 * un, ub * 3 * un, "uploading the state");
+      xb[p].upload(Nb.x0.data(), 3 * un, ub * 3 * un, "uploading the state");
       vb[p].upload(zero.data(), 3 * un, ub * 3 * un, "uploading the state");
     }
   }
@@ -145,6 +184,12 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   scalars_dev.allocate(1, "allocating the frame scalars");
   ensure_capacity(std::max<long>(8, 1));
   seen.assign(uB, 0);
+  stiffening.assign(uB, 1.0);
+  model_substeps.assign(uB, 0);
+  h_host.allocate(uB, "allocating pinned memory");
+  count_host.allocate(uB, "allocating pinned memory");
+  h_dev.allocate(uB, "allocating the per-model steps");
+  count_dev.allocate(uB, "allocating the per-model substep counts");
 }
 
 template <class R>
@@ -179,8 +224,9 @@ void Backend<R>::ensure_capacity(long subs) {
   capacity = std::max(subs, 2 * capacity);
   rows_host.allocate(row_count(capacity), "allocating pinned memory for the load table");
   rows_dev.allocate(row_count(capacity), "allocating the load table");
-  stiff_dev.allocate(static_cast<std::size_t>(capacity), "allocating the stiffening slots");
-  stiff_host.allocate(static_cast<std::size_t>(capacity), "allocating pinned memory");
+  const auto slots_needed = static_cast<std::size_t>(capacity) * static_cast<std::size_t>(B);
+  stiff_dev.allocate(slots_needed, "allocating the stiffening slots");
+  stiff_host.allocate(slots_needed, "allocating pinned memory");
 }
 
 template <class R>
@@ -215,14 +261,13 @@ void Backend<R>::upload(int b, const State& st) {
   check(cudaStreamSynchronize(stream), "finishing the work in flight");
   std::vector<R> h(3 * static_cast<std::size_t>(n));
   const auto off = static_cast<std::size_t>(b) * h.size();
-  for (std::size_t q = 0; q < h.size(); ++q) h[q] = static_cast<R>(st.x.data()[q]);
+  const double* o = origin.data() + 3 * static_cast<std::size_t>(b);
+  for (std::size_t q = 0; q < h.size(); ++q) h[q] = static_cast<R>(st.x.data()[q] - o[q % 3]);
   xb[cur].upload(h.data(), h.size(), off, "uploading the state");
   for (std::size_t q = 0; q < h.size(); ++q) h[q] = static_cast<R>(st.v.data()[q]);
   vb[cur].upload(h.data(), h.size(), off, "uploading the state");
-  if (b == 0) {
-    t = st.t;
-    stiffening = st.stiffening;
-  }
+  if (b == 0) t = st.t;
+  stiffening[static_cast<std::size_t>(b)] = st.stiffening;
 }
 
 template <class R>
@@ -235,7 +280,9 @@ MatX3 Backend<R>::fetch(int b, bool velocities) {
                    cudaMemcpyDeviceToHost),
         "copying the state back");
   MatX3 out(n, 3);
-  for (std::size_t q = 0; q < h.size(); ++q) out.data()[q] = static_cast<double>(h[q]);
+  const double* o = origin.data() + 3 * static_cast<std::size_t>(b);
+  for (std::size_t q = 0; q < h.size(); ++q)
+    out.data()[q] = static_cast<double>(h[q]) + (velocities ? 0.0 : o[q % 3]);
   return out;
 }
 
@@ -276,7 +323,8 @@ bool Backend<R>::poll_positions(int b, MatX3& out) {
   if (best < 0) return false;
   out.resize(n, 3);
   const R* src = snapshot[best].p + static_cast<std::size_t>(b) * 3 * static_cast<std::size_t>(n);
-  for (Index q = 0; q < 3 * n; ++q) out.data()[q] = static_cast<double>(src[q]);
+  const double* o = origin.data() + 3 * static_cast<std::size_t>(b);
+  for (Index q = 0; q < 3 * n; ++q) out.data()[q] = static_cast<double>(src[q]) + o[q % 3];
   seen[static_cast<std::size_t>(b)] = snap_seq[best];
   return true;
 }
@@ -309,6 +357,7 @@ void Backend<R>::request_node(int b, Index node) {
         "reading back the node");
   check(cudaEventRecord(node_copied[w], copy_stream), "ordering the node readback");
   node_requested[w] = true;
+  node_model[w] = b;
   node_seq[w] = next_seq++;
   node_next = 1 - w;
 }
@@ -325,7 +374,9 @@ bool Backend<R>::poll_node(Vec3& out) {
   }
   if (best < 0) return false;
   const R* p = node_host.p + 3 * best;
-  out = Vec3(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
+  const double* o = origin.data() + 3 * static_cast<std::size_t>(node_model[best]);
+  out = Vec3(static_cast<double>(p[0]) + o[0], static_cast<double>(p[1]) + o[1],
+             static_cast<double>(p[2]) + o[2]);
   node_seen = node_seq[best];
   return true;
 }
@@ -340,6 +391,7 @@ Engine::DeviceState Backend<R>::device_state() {
   d.nodes = n;
   d.precision = precision;
   d.device = device.index;
+  d.origin = origin.data();
   return d;
 }
 

@@ -27,8 +27,10 @@ struct Engine::Impl {
   StepSettings settings;
   Options options;
   Options::Kernel kernel = Options::Kernel::Grid;
-  double t = 0, stiffening = 1.0;
-  std::uint64_t frames = 0, substeps = 0;
+  double t = 0;
+  std::vector<double> stiffening;             // per model: max kappa/k at its last stiffening evaluation
+  std::uint64_t frames = 0, substeps = 0;     // substeps: the batch's (per frame the most any model took)
+  std::vector<std::uint64_t> model_substeps;  // per model, as its CPU run counts them
   Warnings warnings;
 
   virtual void set_loads(int b, const std::vector<PointLoad>& loads) = 0;
@@ -56,7 +58,9 @@ struct Backend final : Engine::Impl {
   int block_threads = 0;   // its block size
   cudaStream_t stream = nullptr, copy_stream = nullptr;
 
-  // Model arrays (node arrays and spring parameters per model, topology shared).
+  // Model arrays (node arrays and spring parameters per model, topology shared). param_models: how many
+  // copies of the node parameters and of the spring parameters are stored (1: shared by the batch).
+  int param_models[2]{1, 1};
   DeviceArray<R> x0, mass, damping, kr, L0, k, kp, ik;
   DeviceArray<unsigned char> fixed;
   DeviceArray<int> load_slot, row_node, slice_begin, slice_width, other;
@@ -68,6 +72,8 @@ struct Backend final : Engine::Impl {
   DeviceArray<int> lead;
   DeviceArray<R> grid_parts;
   int grid_rows = 0;
+  // Positions on the device are x - origin (model b's at 3 b): fp32, the rest shape's centre; fp64, 0.
+  std::vector<double> origin;
   // State: ping-pong buffers, `cur` holds the current positions and velocities.
   DeviceArray<R> xb[2], vb[2];
   int cur = 0;
@@ -79,13 +85,21 @@ struct Backend final : Engine::Impl {
   PinnedArray<R> rows_host;
   DeviceArray<R> rows_dev;
   std::vector<double> row_scratch;
+  // Each model's substeps and step in the current batch of substeps (SubstepArgs::count_model, h_model),
+  // and the host's per-model frame loop state.
+  PinnedArray<R> h_host;
+  PinnedArray<int> count_host;
+  DeviceArray<R> h_dev;
+  DeviceArray<int> count_dev;
+  std::vector<long> left_m, frame_m;
+  std::vector<double> h_m, tt_m;
   // Frame scalars.
   detail::FrameScalars scalars_init{INT_MAX, 0};
   PinnedArray<detail::FrameScalars> scalars_host_init, scalars_host;
   DeviceArray<detail::FrameScalars> scalars_dev;
   DeviceArray<unsigned long long> stiff_dev;
   PinnedArray<unsigned long long> stiff_host;
-  // Graphs per (substeps, parity of cur).
+  // Graphs per (2 x substeps + whether every model takes them all, parity of cur).
   std::map<std::pair<long, int>, cudaGraphExec_t> graphs;
   // Asynchronous readback: device staging + pinned host snapshots, double-buffered.
   DeviceArray<R> staging[2];
@@ -101,6 +115,7 @@ struct Backend final : Engine::Impl {
   cudaEvent_t node_staged[2]{}, node_copied[2]{};
   std::uint64_t node_seq[2]{0, 0}, node_seen = 0;
   bool node_requested[2]{false, false};
+  int node_model[2]{0, 0};
   int node_next = 0;
 
   Backend(const std::vector<const Model*>& ms, const StepSettings& s, const Options& o,
@@ -112,9 +127,10 @@ struct Backend final : Engine::Impl {
   void set_loads(int b, const std::vector<PointLoad>& L) override;
   void upload(int b, const State& st) override;
   detail::SubstepArgs<R> args(int parity, long kk, R h, bool stiff);
-  // Enqueues a batch of `left` substeps of h from the current buffers (no host work, capturable).
-  void enqueue(long left, double h, int rollbacks);
-  void run_batch(long left, double h, int rollbacks);
+  // Enqueues a batch of `launches` substeps from the current buffers, model b taking count_host[b] of
+  // them with step h_host[b] (no host work, capturable); uniform: every model takes all of them.
+  void enqueue(long launches, bool uniform, int rollbacks);
+  void run_batch(long launches, bool uniform, int rollbacks);
   // The block kernel's arguments for `count` substeps from buffer `parity` (into the other buffer).
   detail::BlockArgs<R> block_args(int parity, int count, R h, int stiff_mode, bool guard);
   StepStatus step() override;

@@ -3,6 +3,8 @@
 // frame.cpp; the kernels: kernels.cu.
 #include "medspring/gpu/engine.hpp"
 
+#include <algorithm>
+
 #include "backend.hpp"
 #include "medspring/core/check.hpp"
 
@@ -92,7 +94,19 @@ double Engine::time() const {
   return impl_->t;
 }
 double Engine::stiffening() const {
-  return impl_->stiffening;
+  return *std::max_element(impl_->stiffening.begin(), impl_->stiffening.end());
+}
+
+double Engine::stiffening(int b) const {
+  require(b >= 0 && b < batch(), "gpu::Engine::stiffening: model ", b, " out of range (batch of ", batch(),
+          ")");
+  return impl_->stiffening[static_cast<std::size_t>(b)];
+}
+
+std::uint64_t Engine::substeps(int b) const {
+  require(b >= 0 && b < batch(), "gpu::Engine::substeps: model ", b, " out of range (batch of ", batch(),
+          ")");
+  return impl_->model_substeps[static_cast<std::size_t>(b)];
 }
 std::uint64_t Engine::frames() const {
   return impl_->frames;

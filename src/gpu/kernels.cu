@@ -28,7 +28,7 @@ __device__ inline void model_arrays(const SubstepArgs<R>& A, int b, hd::NodeArra
   N.damping += ns;
   N.kr += ns;
   N.fixed += ns;
-  N.load_slot += ns;
+  N.load_slot += A.slot_stride * b;
   T = A.table;
   const long long es = A.entry_stride * b;
   T.L0 += es;
@@ -63,22 +63,34 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
   hd::SpringTable<R> T;
   model_arrays(A, b, N, T);
   const long long off = 3ll * A.nodes.nodes * b;
+  R h = A.h;
+  if (A.count_model) {  // each model its own substeps (uniform per block: blockIdx.y is the model)
+    if (A.substep >= A.count_model[b]) {  // model b has taken its substeps: carry its state over
+      for (int q = r; q < A.nodes.nodes; q += gridDim.x * blockDim.x)
+        for (int c = 0; c < 3; ++c) {
+          A.xo[off + 3ll * q + c] = A.x[off + 3ll * q + c];
+          A.vo[off + 3ll * q + c] = A.v[off + 3ll * q + c];
+        }
+      return;
+    }
+    h = A.h_model[b];
+  }
   const R* loads = A.loads + 3ll * A.load_rows * b;
   if (split) {
     // Phase 1: whole rows advance their node, chunk rows write their sums; a split node's chunks are in
     // the lead's warp (blockDim is a multiple of 32), so the warp's barrier orders them before phase 2.
     R* parts = A.parts + A.parts_stride * b;
     if (r < rows)
-      code = hd::grid_split_gather<Soft, Stiff>(N, T, A.split, r, A.h, A.vmax2, loads, A.x + off, A.v + off,
+      code = hd::grid_split_gather<Soft, Stiff>(N, T, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off,
                                                 A.xo + off, A.vo + off, parts, stiff);
     __syncwarp();
     if (r < rows) {
-      const int c = hd::grid_split_finish(N, A.split, r, A.h, A.vmax2, loads, A.x + off, A.v + off,
-                                          A.xo + off, A.vo + off, parts);
+      const int c = hd::grid_split_finish(N, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
+                                          A.vo + off, parts);
       code = c > code ? c : code;
     }
   } else if (r < rows) {
-    code = hd::node_substep<Soft, Stiff>(N, T, r, A.h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
+    code = hd::node_substep<Soft, Stiff>(N, T, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
                                          A.vo + off, stiff);
   }
   if (code != hd::kNodeOk && A.guard) {
@@ -87,7 +99,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
   }
   if constexpr (Stiff) {
     __shared__ double warp_max[32];
-    block_max_into(static_cast<double>(stiff), warp_max, A.stiff_bits);
+    block_max_into(static_cast<double>(stiff), warp_max, A.stiff_bits + b);
   }
 }
 
@@ -110,20 +122,26 @@ __global__ void __launch_bounds__(kBlockThreads, 2) block_frame_kernel(BlockArgs
     vs[q] = A.s.v[off + q];
   }
   __syncthreads();
-  for (int kk = 0; kk < A.count; ++kk) {
+  // Model b's own substeps (s.count_model) or the launch's; A.count caps them (the re-run after a failure).
+  const int own = A.s.count_model ? A.s.count_model[b] : A.count;
+  const int count = own < A.count ? own : A.count;
+  const R h = A.s.count_model ? A.s.h_model[b] : A.s.h;
+  for (int kk = 0; kk < count; ++kk) {
     const R* loads = A.s.loads + A.load_substep_stride * kk + 3ll * A.s.load_rows * b;
-    const bool stiff_now = A.stiff_mode == 2 || (A.stiff_mode == 1 && kk == A.count - 1);
+    const bool stiff_now = A.stiff_mode == 2 || (A.stiff_mode == 1 && kk == own - 1);
     R stiff = R(1);
-    int code = stiff_now ? hd::split_phase1<Soft, true>(N, T, A.split, t, threads, A.s.h, A.s.vmax2, loads,
-                                                        xa, vs, xb, parts, stiff)
-                         : hd::split_phase1<Soft, false>(N, T, A.split, t, threads, A.s.h, A.s.vmax2, loads,
-                                                         xa, vs, xb, parts, stiff);
+    int code = stiff_now ? hd::split_phase1<Soft, true>(N, T, A.split, t, threads, h, A.s.vmax2, loads, xa,
+                                                        vs, xb, parts, stiff)
+                         : hd::split_phase1<Soft, false>(N, T, A.split, t, threads, h, A.s.vmax2, loads, xa,
+                                                         vs, xb, parts, stiff);
     if (A.split.heavy > 0) {  // the split nodes, once their chunks' sums are in
       __syncthreads();
-      const int c = hd::split_phase2(N, A.split, t, threads, A.s.h, A.s.vmax2, loads, xa, vs, xb, parts);
+      const int c = hd::split_phase2(N, A.split, t, threads, h, A.s.vmax2, loads, xa, vs, xb, parts);
       code = c > code ? c : code;
     }
-    if (stiff_now) block_max_into(static_cast<double>(stiff), warp_max, A.s.stiff_bits + kk);
+    if (stiff_now)
+      block_max_into(static_cast<double>(stiff), warp_max,
+                     A.s.stiff_bits + static_cast<long long>(kk) * A.s.batch + b);
     // One barrier: the substep's writes are visible to the next, and the block agrees on the guard.
     const bool guard = A.s.guard;
     if (__syncthreads_or(guard && code != hd::kNodeOk)) {

@@ -21,9 +21,10 @@ struct FrameScalars {
 /// pointer + b * stride of their kind (strides 0 share one array).
 template <class R>
 struct SubstepArgs {
-  hd::NodeArrays<R> nodes;   // model 0; node arrays of model b at + b * node_stride (x0: 3x)
+  hd::NodeArrays<R> nodes;   // model 0; node arrays of model b at + b * node_stride (x0: 3x), its load
+                             // slots at + b * slot_stride
   hd::SpringTable<R> table;  // model 0; parameter arrays of model b at + b * entry_stride
-  long long node_stride = 0, entry_stride = 0;
+  long long node_stride = 0, slot_stride = 0, entry_stride = 0;
   int batch = 1;
   const R* loads = nullptr;  // this substep's load rows: model b at + b * 3 * load_rows
   int load_rows = 0;
@@ -32,11 +33,16 @@ struct SubstepArgs {
   R* xo = nullptr;  // (B x 3n) written
   R* vo = nullptr;
   R h = 0, vmax2 = 0;
+  // Each model its own substeps, as its CPU run takes them: model b runs substep `substep` iff substep <
+  // count_model[b], with step h_model[b]; past its count it carries its state over to the written
+  // buffers (so every model's buffer parity stays the batch's). nullptr: every model runs, with h.
+  const R* h_model = nullptr;
+  const int* count_model = nullptr;
   int substep = 0;                           // index within the batch of substeps
   bool soft = false;                         // some spring is soft (clamped law)
   bool stiff = false;                        // evaluate the stiffening into stiff_bits
   bool guard = true;                         // flag |v| > v_max / non-finite into scalars
-  unsigned long long* stiff_bits = nullptr;  // double bit pattern, atomicMax (values >= 0)
+  unsigned long long* stiff_bits = nullptr;  // this substep's slots, model b at + b: double bits, atomicMax
   FrameScalars* scalars = nullptr;
   // The grid kernel's heavy rows split (hd::GridSplit, make_grid_split_table); split.rows == 0: one row
   // per node (RowOrder::HeavyLast). parts: the chunks' force sums, model b at + b * parts_stride.
@@ -56,10 +62,12 @@ cudaError_t launch_substep(const SubstepArgs<R>& args, int block, cudaStream_t s
 /// substeps before the failure with the guard off (they give the same result, bit for bit).
 template <class R>
 struct BlockArgs {
-  SubstepArgs<R> s;                   // as the grid kernel; s.loads: substep 0's table; s.stiff_bits: slot 0
+  SubstepArgs<R> s;  // as the grid kernel; s.loads: substep 0's table; s.stiff_bits: slots of
+                     // substep 0 (substep kk, model b at + kk * batch + b)
   long long load_substep_stride = 0;  // elements between consecutive substeps' load tables
-  int count = 1;                      // substeps
-  int stiff_mode = 1;                 // stiffening into stiff_bits[kk]: 0 never, 1 last substep, 2 every one
+  int count = 1;                      // substeps (with s.count_model: at most; model b runs its own count)
+  int stiff_mode = 1;                 // stiffening of substep kk into its slot: 0 never, 1 the model's last
+                                      // substep, 2 every one
   int threads = 256;                  // block size (<= kBlockThreads, a multiple of 32)
   hd::SplitRows split;                // the table's rows: whole nodes and chunks of heavy ones
   int parts = 0;                      // partial-force slots (split.part_begin[split.heavy])

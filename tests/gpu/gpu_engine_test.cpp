@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -261,25 +262,74 @@ TEST(GpuEngine, BatchOfKidneysEachFollowsItsOwnCpuRun) {
   const Model& m = kidney.model();
   const int B = 3;
   StepSettings s;
-  gpu::Engine e({&m, &m, &m}, s);
+  gpu::Options grid;
+  grid.kernel = gpu::Options::Kernel::Grid;
+  gpu::Engine e({&m, &m, &m}, s, grid);
   std::vector<State> cpu(B, make_state(m, s));
   std::vector<std::vector<PointLoad>> loads;
   for (int b = 0; b < B; ++b) {
     loads.push_back(press(50 + 100 * b, Vec3(0, 0.1 * b, -0.2 - 0.2 * b)));
     e.set_loads(b, loads.back());
   }
+  int mixed = 0;  // frames in which the models' CPU runs took different substep counts
   for (int f = 0; f < 500; ++f) {
-    int subs = -1;
+    int lo = INT_MAX, hi = 0;
     for (int b = 0; b < B; ++b) {
-      const StepStatus st = step(m, cpu[static_cast<std::size_t>(b)], s, &loads[static_cast<std::size_t>(b)]);
-      if (subs < 0) subs = st.substeps;
-      ASSERT_EQ(st.substeps, subs) << "frame " << f
-                                   << ": the CPU runs took different substeps; the batch takes "
-                                   << "the largest, so the comparison would not apply";
+      const int subs =
+          step(m, cpu[static_cast<std::size_t>(b)], s, &loads[static_cast<std::size_t>(b)]).substeps;
+      lo = std::min(lo, subs);
+      hi = std::max(hi, subs);
     }
-    EXPECT_EQ(e.step().substeps, subs);
+    mixed += lo != hi;
+    EXPECT_EQ(e.step().substeps, hi) << "frame " << f;  // the batch's launches: the most any model took
   }
-  for (int b = 0; b < B; ++b) EXPECT_LE(rel(e.positions(b), cpu[static_cast<std::size_t>(b)].x), 1e-12) << b;
+  RecordProperty("frames_with_different_substep_counts", std::to_string(mixed));
+  EXPECT_GT(mixed, 0)
+      << "the loads no longer make the models take different substeps: the test lost its point";
+  for (int b = 0; b < B; ++b) {
+    EXPECT_EQ(e.substeps(b), cpu[static_cast<std::size_t>(b)].substeps) << b;
+    EXPECT_LE(rel(e.positions(b), cpu[static_cast<std::size_t>(b)].x), 1e-12) << b;
+    EXPECT_LE(rel(e.velocities(b), cpu[static_cast<std::size_t>(b)].v), 1e-12) << b;
+  }
+}
+
+// Parameters stored once when the batch's models share them (copies of one model with their own loads,
+// equal models built twice) and per model otherwise (a stiffer copy): each model follows its own CPU run
+// either way, on both kernels.
+TEST(GpuEngine, SharedAndPerModelParametersGiveEachModelsCpuRun) {
+  REQUIRE_GPU();
+  const HybridKidney a = hybrid_kidney_phantom(), twin = hybrid_kidney_phantom();
+  Model stiff = a.model();
+  for (double& k : stiff.springs.k) k *= 1.5;
+  finalize(stiff);
+  const std::vector<std::vector<const Model*>> batches{
+      {&a.model(), &a.model(), &twin.model()},  // shared: the same model and an equal one
+      {&a.model(), &stiff, &twin.model()}};     // per model: one model is stiffer
+  StepSettings s;
+  for (const auto kernel : {gpu::Options::Kernel::Grid, gpu::Options::Kernel::PerBlock})
+    for (const auto& models : batches) {
+      SCOPED_TRACE(std::string(kernel == gpu::Options::Kernel::Grid ? "grid" : "block") +
+                   (models[1] == &stiff ? ", per-model parameters" : ", shared parameters"));
+      gpu::Options o;
+      o.kernel = kernel;
+      gpu::Engine e(models, s, o);
+      std::vector<State> cpu;
+      std::vector<std::vector<PointLoad>> loads;
+      for (std::size_t b = 0; b < models.size(); ++b) {
+        cpu.push_back(make_state(*models[b], s));
+        loads.push_back(press(60 + 90 * static_cast<Index>(b), Vec3(0.1, 0, -0.4)));
+        e.set_loads(static_cast<int>(b), loads.back());
+      }
+      for (int f = 0; f < 400; ++f) {
+        for (std::size_t b = 0; b < models.size(); ++b) step(*models[b], cpu[b], s, &loads[b]);
+        e.step();
+      }
+      for (std::size_t b = 0; b < models.size(); ++b) {
+        EXPECT_EQ(e.substeps(static_cast<int>(b)), cpu[b].substeps) << b;
+        EXPECT_LE(rel(e.positions(static_cast<int>(b)), cpu[b].x), 1e-12) << b;
+        EXPECT_LE(rel(e.velocities(static_cast<int>(b)), cpu[b].v), 1e-12) << b;
+      }
+    }
 }
 
 // One block per model (shared-memory state, a frame per launch) against the CPU and the grid kernel.
@@ -301,17 +351,25 @@ TEST(GpuEngine, OneBlockPerModelBatchOfKidneysEachFollowsItsOwnCpuRun) {
     e.set_loads(b, loads.back());
     g.set_loads(b, loads.back());
   }
+  int mixed = 0;  // frames in which the models' CPU runs took different substep counts
   for (int f = 0; f < 2000; ++f) {
-    int subs = -1;
+    int lo = INT_MAX, hi = 0;
     for (int b = 0; b < B; ++b) {
-      const StepStatus st = step(m, cpu[static_cast<std::size_t>(b)], s, &loads[static_cast<std::size_t>(b)]);
-      if (subs < 0) subs = st.substeps;
-      ASSERT_EQ(st.substeps, subs) << "frame " << f;
+      const int subs =
+          step(m, cpu[static_cast<std::size_t>(b)], s, &loads[static_cast<std::size_t>(b)]).substeps;
+      lo = std::min(lo, subs);
+      hi = std::max(hi, subs);
     }
-    EXPECT_EQ(e.step().substeps, subs);
+    mixed += lo != hi;
+    EXPECT_EQ(e.step().substeps, hi) << "frame " << f;
     g.step();
   }
+  RecordProperty("frames_with_different_substep_counts", std::to_string(mixed));
+  EXPECT_GT(mixed, 0)
+      << "the loads no longer make the models take different substeps: the test lost its point";
   for (int b = 0; b < B; ++b) {
+    EXPECT_EQ(e.substeps(b), cpu[static_cast<std::size_t>(b)].substeps) << b;
+    EXPECT_EQ(g.substeps(b), cpu[static_cast<std::size_t>(b)].substeps) << b;
     EXPECT_LE(rel(e.positions(b), cpu[static_cast<std::size_t>(b)].x), 1e-12) << b;
     EXPECT_LE(rel(e.velocities(b), cpu[static_cast<std::size_t>(b)].v), 1e-12) << b;
     EXPECT_LE(rel(e.positions(b), g.positions(b)), 1e-12) << b;  // split rows: chunk sums
@@ -337,6 +395,39 @@ TEST(GpuEngine, OneBlockPerModelGuardRollsBackLikeTheCpu) {
   EXPECT_GT(st.warnings.rollbacks, 0u);
   EXPECT_EQ(e.warnings().rollbacks, st.warnings.rollbacks);
   EXPECT_LE(rel(e.positions(0), st.x), 1e-9);
+}
+
+// A batch in which one model trips the guard and the other does not: the failing model rolls back as its
+// CPU run does (both kernels); the batch rolls back with it, so the other model takes smaller substeps for
+// the rest of those frames than its CPU run -- it stays within integration error of it (docs/gpu.md).
+TEST(GpuEngine, BatchRollbackFollowsTheFailingModelsCpuRun) {
+  REQUIRE_GPU();
+  const HybridKidney kidney = hybrid_kidney_phantom();
+  const Model& m = kidney.model();
+  const std::vector<std::vector<PointLoad>> loads{press(223, Vec3(0, 0, -2000.0), 1e9),
+                                                  press(100, Vec3(0, 0, -0.3))};
+  StepSettings s;
+  for (const auto kernel : {gpu::Options::Kernel::Grid, gpu::Options::Kernel::PerBlock}) {
+    SCOPED_TRACE(kernel == gpu::Options::Kernel::Grid ? "grid" : "one block per model");
+    std::vector<State> cpu(2, make_state(m, s));
+    gpu::Options o;
+    o.kernel = kernel;
+    gpu::Engine e({&m, &m}, s, o);
+    for (int b = 0; b < 2; ++b) e.set_loads(b, loads[static_cast<std::size_t>(b)]);
+    for (int f = 0; f < 30; ++f) {
+      const StepStatus a = step(m, cpu[0], s, &loads[0]);
+      step(m, cpu[1], s, &loads[1]);
+      const StepStatus g = e.step();
+      ASSERT_EQ(static_cast<int>(a.code), static_cast<int>(g.code)) << "frame " << f;
+    }
+    EXPECT_GT(cpu[0].warnings.rollbacks, 0u);
+    EXPECT_EQ(e.warnings().rollbacks, cpu[0].warnings.rollbacks);
+    EXPECT_LE(rel(e.positions(0), cpu[0].x), 1e-9);
+    const double other = rel(e.positions(1), cpu[1].x);
+    RecordProperty(kernel == gpu::Options::Kernel::Grid ? "grid_other_model_rel" : "block_other_model_rel",
+                   std::to_string(other));
+    EXPECT_LE(other, 1e-4);
+  }
 }
 
 TEST(GpuEngine, HapticNodeReadDeliversTheContactNode) {

@@ -76,8 +76,11 @@ Options::Kernel kernel_for(const Options& options, int batch, Index nodes, const
 
 /// B spring networks of the same topology (same nodes and spring ends; masses, damping, return springs,
 /// stiffnesses, rest positions and loads may differ per model) stepped together, one launch per
-/// substep. Every model takes the substeps the stiffest one needs (equal to each model's own count in
-/// the usual case: then each trajectory is the one the CPU engine computes, to rounding). A model with
+/// substep. Every model takes its own substeps, as the CPU engine's step() takes them for it (the count
+/// from its own stiffening and stable step, its loads at its own substep times), so each trajectory is
+/// the one the CPU engine computes, to rounding; a model with fewer substeps than the batch's most idles
+/// through the rest of the frame's launches. One exception: a guard trip in any model rolls back the
+/// whole batch (every model halves its step for the rest of that frame). A model with
 /// bending terms, or models of different topology, are refused (GpuError). The models must outlive the
 /// engine (it keeps pointers for the stable-step rule).
 class Engine {
@@ -96,7 +99,7 @@ class Engine {
 
   /// Loads of model b, held until changed; evaluated at the start of every substep as step() does.
   void set_loads(int b, const std::vector<PointLoad>& loads);
-  /// Positions and velocities of model b from a CPU state (time and stiffening taken from model 0's).
+  /// Positions, velocities and stiffening of model b from a CPU state (the time taken from model 0's).
   void upload(int b, const State& state);
 
   /// One frame of settings.dt for every model: the CPU engine's substep rule (from the stiffening of the
@@ -131,13 +134,19 @@ class Engine {
     Index nodes = 0;
     Precision precision = Precision::Double;
     int device = 0;
+    /// The device positions are x - origin, model b's origin at origin[3 b .. 3 b + 2] (host memory, valid
+    /// with the engine): 0 in fp64; in fp32 the centre of model b's rest shape, so that rounding scales
+    /// with the model's size rather than its distance from the coordinate origin. Velocities are as is.
+    const double* origin = nullptr;
   };
   DeviceState device_state();
 
-  double time() const;        // ms
-  double stiffening() const;  // max kappa/k of the batch at the last stiffening evaluation
+  double time() const;             // ms
+  double stiffening() const;       // max kappa/k over the batch at the models' last evaluations
+  double stiffening(int b) const;  // model b's
   std::uint64_t frames() const;
-  std::uint64_t substeps() const;
+  std::uint64_t substeps() const;       // the batch's launches: per frame the most substeps any model took
+  std::uint64_t substeps(int b) const;  // model b's substeps (its CPU run's State::substeps)
   const Warnings& warnings() const;
   /// Device bytes of the model and state arrays (the payload of one substep is about this much).
   std::size_t device_bytes() const;

@@ -22,8 +22,8 @@ enum class Readback { Async, Sync };
 
 /// The runs of one group on one Engine (B models, fp64 by default). Refuses (GpuError, before any device
 /// work) a model kind, local overlay or tools the GPU path lacks; the Engine refuses models of different
-/// topology, bending terms, no device. substeps() and warnings() are the batch's: every model takes the
-/// substeps of the stiffest one (each model's own count in the usual case).
+/// topology, bending terms, no device. substeps(b) is model b's own (each model takes its own substeps,
+/// as its CPU run); warnings() are the batch's.
 class SceneBatchStepper final : public BatchStepper {
  public:
   SceneBatchStepper(const std::vector<const BuiltScene*>& group, const Options& options,
@@ -49,7 +49,7 @@ class SceneBatchStepper final : public BatchStepper {
     }
   }
   double time(int) const override { return e_.time(); }
-  std::uint64_t substeps(int) const override { return e_.substeps(); }
+  std::uint64_t substeps(int b) const override { return e_.substeps(b); }
   std::uint64_t warnings(int) const override { return e_.warnings().total(); }
   const Engine& engine() const { return e_; }
 
