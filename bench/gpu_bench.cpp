@@ -346,49 +346,51 @@ int run_gpu_bench(const GpuBenchOptions& o) {
     const Model& km = real ? real->model() : phantom.model();
     const std::string kidney_name =
         real ? "real kidney " + fs::path(o.kidney).filename().string() : "kidney phantom";
-    std::vector<const Model*> models(static_cast<std::size_t>(o.batch), &km);
     js << ",\n  \"batch\": [";
     bool bfirst = true;
-    for (const gpu::Precision p : {gpu::Precision::Double, gpu::Precision::Float})
-      for (const gpu::Options::Kernel kern : {gpu::Options::Kernel::Grid, gpu::Options::Kernel::PerBlock}) {
-        gpu::Options go;
-        go.precision = p;
-        go.device = o.device;
-        go.kernel = kern;
-        const char* kname = kern == gpu::Options::Kernel::PerBlock ? "block" : "grid";
-        gpu::Engine e(models, s, go);
-        for (int b = 0; b < o.batch; ++b) {
-          PointLoad L;
-          L.node = b % km.num_nodes();
-          L.force = Vec3(0, 0, -0.2 - 0.6 * (b % 7) / 7.0);
-          L.t_ramp = 10;
-          e.set_loads(b, {L});
+    // One kidney (the latency of a single organ: the haptic case) and the whole batch (the throughput).
+    for (const int batch : {1, o.batch})
+      for (const gpu::Precision p : {gpu::Precision::Double, gpu::Precision::Float})
+        for (const gpu::Options::Kernel kern : {gpu::Options::Kernel::Grid, gpu::Options::Kernel::PerBlock}) {
+          const std::vector<const Model*> models(static_cast<std::size_t>(batch), &km);
+          gpu::Options go;
+          go.precision = p;
+          go.device = o.device;
+          go.kernel = kern;
+          const char* kname = kern == gpu::Options::Kernel::PerBlock ? "block" : "grid";
+          gpu::Engine e(models, s, go);
+          for (int b = 0; b < batch; ++b) {
+            PointLoad L;
+            L.node = b % km.num_nodes();
+            L.force = Vec3(0, 0, -0.2 - 0.6 * (b % 7) / 7.0);
+            L.t_ramp = 10;
+            e.set_loads(b, {L});
+          }
+          for (int f = 0; f < 10; ++f) e.step();
+          const double substep_us = e.time_substeps(100, 10);
+          const double rate = batch / (substep_us * 1e-6);
+          // Whole frames through step() (the host's load table, the upload, the per-frame readback): median.
+          std::vector<double> frame_us;
+          for (int f = 0; f < 21; ++f) {
+            const auto t0 = std::chrono::steady_clock::now();
+            e.step();
+            frame_us.push_back(
+                std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+          }
+          std::sort(frame_us.begin(), frame_us.end());
+          const double frame_med = frame_us[frame_us.size() / 2];
+          std::printf(
+              "batch: %d %s (%d nodes each) %s, %s kernel: %.2f µs per substep, %.3g "
+              "model-substeps/s; step() %.1f µs per frame\n",
+              batch, kidney_name.c_str(), static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(), kname,
+              substep_us, rate, frame_med);
+          js << (bfirst ? "\n" : ",\n") << "    {\"models\": " << batch << ", \"model\": \""
+             << json_escape(kidney_name) << "\""
+             << ", \"nodes_per_model\": " << km.num_nodes() << ", \"precision\": \"" << gpu::to_string(p)
+             << "\", \"kernel\": \"" << kname << "\", \"substep_us\": " << substep_us
+             << ", \"model_substeps_per_s\": " << rate << ", \"step_frame_us\": " << frame_med << "}";
+          bfirst = false;
         }
-        for (int f = 0; f < 10; ++f) e.step();
-        const double substep_us = e.time_substeps(100, 10);
-        const double rate = o.batch / (substep_us * 1e-6);
-        // Whole frames through step() (the host's load table, the upload, the per-frame readback): median.
-        std::vector<double> frame_us;
-        for (int f = 0; f < 21; ++f) {
-          const auto t0 = std::chrono::steady_clock::now();
-          e.step();
-          frame_us.push_back(
-              std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-        }
-        std::sort(frame_us.begin(), frame_us.end());
-        const double frame_med = frame_us[frame_us.size() / 2];
-        std::printf(
-            "batch: %d %s (%d nodes each) %s, %s kernel: %.2f µs per substep, %.3g "
-            "model-substeps/s; step() %.1f µs per frame\n",
-            o.batch, kidney_name.c_str(), static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(), kname,
-            substep_us, rate, frame_med);
-        js << (bfirst ? "\n" : ",\n") << "    {\"models\": " << o.batch << ", \"model\": \""
-           << json_escape(kidney_name) << "\""
-           << ", \"nodes_per_model\": " << km.num_nodes() << ", \"precision\": \"" << gpu::to_string(p)
-           << "\", \"kernel\": \"" << kname << "\", \"substep_us\": " << substep_us
-           << ", \"model_substeps_per_s\": " << rate << ", \"step_frame_us\": " << frame_med << "}";
-        bfirst = false;
-      }
     js << "\n  ]";
   }
   js << "\n}\n";
