@@ -122,12 +122,12 @@ Options::Kernel kernel_for(const Options& options, int batch, Index nodes, const
                          ") allows ", device.shared_per_block, " per block: use the grid kernel (Auto)"));
     return Options::Kernel::PerBlock;
   }
-  // Measured on an H200 (docs/gpu.md, 2026-11-26): 8,448 real kidneys (500 nodes) take 404 µs per
-  // substep on the grid kernel and 857 µs on one block per model in fp64 (242 / 280 µs in fp32): a batch
-  // that fills the card runs the grid kernel. One block per model is kept for batches smaller than the
-  // multiprocessors of small models, where running a frame's substeps in one launch saves launches.
-  return fits && batch < device.multiprocessors && nodes <= 1024 ? Options::Kernel::PerBlock
-                                                                 : Options::Kernel::Grid;
+  // Auto is the grid kernel. Measured on an H200 (docs/gpu.md, 2026-11-26), the real kidney (500 nodes):
+  // 8,448 models, 404 µs per substep on the grid kernel and 857 µs on one block per model in fp64
+  // (242 / 280 µs in fp32); one model, a 35.7 µs frame on the grid kernel and 59.0 µs on one block (fp32
+  // 33.8 / 50.2 µs). One block per model stays available on request (Options::Kernel::PerBlock).
+  (void)batch;
+  return Options::Kernel::Grid;
 }
 
 double measured_copy_bandwidth(std::size_t bytes, int repeats, int device) {
