@@ -1,14 +1,14 @@
 // The accuracy summary of `medspring paper`'s report (accuracy_summary.hpp).
 #include "accuracy_summary.hpp"
 
-#include <unistd.h>
-
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <map>
 #include <sstream>
 #include <system_error>
+
+#include "medspring/core/binary.hpp"
 
 namespace medspring::cli {
 
@@ -32,19 +32,12 @@ bool keep_latest_accuracy(const json& accuracy) {
   const fs::path target = latest_accuracy_path();
   std::error_code ec;
   fs::create_directories(target.parent_path(), ec);
-  const fs::path tmp = target.string() + ".tmp" + std::to_string(getpid());
-  {
-    std::ofstream f(tmp);
-    if (!f) return false;
-    f << accuracy.dump(1) << '\n';
-    if (!f) {
-      fs::remove(tmp, ec);
-      return false;
-    }
+  try {
+    write_file_atomically(target, accuracy.dump(1) + "\n", "accuracy summary");
+  } catch (const IoError&) {
+    return false;
   }
-  fs::rename(tmp, target, ec);
-  if (ec) fs::remove(tmp, ec);
-  return !ec;
+  return true;
 }
 
 namespace {

@@ -1,7 +1,8 @@
 // `medspring study`: parameter studies on Dask distributed (docs/studies.md). The work is done by the
 // Python package medspring.study (Dask, Zarr, pandas, tqdm, matplotlib); this command runs it with the
 // Python interpreter the package was built for and PYTHONPATH set to the build's (or the install's)
-// python folder, passing the arguments on unchanged.
+// python folder, passing the arguments on unchanged. Its switches are the runner's, declared once in
+// scene/study_switches.hpp for both this command and `python3 -m medspring.study`.
 #include <unistd.h>
 
 #include <cerrno>
@@ -11,8 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "command_options.hpp"
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/scene/study_switches.hpp"
 #include "scene_support.hpp"
 
 #ifndef MEDSPRING_PYTHON_BUILD_DIR
@@ -49,20 +52,65 @@ fs::path python_dir() {
       "); build the target medspring_python or set MEDSPRING_PYTHONPATH"));
 }
 
+// "medspring study STUDY --out DIR [--scheduler ADDR | --workers N] [--resume] ...", wrapped.
+std::string study_usage(const StudyRunnerCli& d) {
+  std::vector<std::string> parts;
+  std::string open_group;
+  for (const StudySwitch& s : d.switches) {
+    if (s.hidden) continue;
+    std::string word = "--" + s.name + (s.type == SwitchType::Flag ? "" : " " + s.value);
+    if (!s.group.empty() && s.group == open_group) {
+      parts.back().pop_back();  // "]"
+      parts.back() += " | " + word + "]";
+      continue;
+    }
+    open_group = s.group;
+    parts.push_back(s.required ? word : "[" + word + "]");
+  }
+  std::string usage = "medspring study " + d.positional, line = usage;
+  const std::string indent(22, ' ');
+  for (const std::string& p : parts) {
+    if (line.size() + 1 + p.size() > 100) {
+      usage += "\n" + indent + p;
+      line = indent + p;
+    } else {
+      usage += " " + p;
+      line += " " + p;
+    }
+  }
+  return usage;
+}
+
 }  // namespace
 
+CommandSpec study_command() {
+  const StudyRunnerCli& d = study_runner_cli();
+  CommandSpec c{.name = "study",
+                .summary = d.summary,
+                .usage = study_usage(d),
+                .about = d.about +
+                         "\nRuns the Python package medspring.study (python3 -m medspring.study "
+                         "takes the same arguments).",
+                .positional = d.positional,
+                .run = cmd_study};
+  for (const StudySwitch& s : d.switches)
+    if (!s.hidden)
+      c.options.push_back({.name = s.name, .value = s.value, .unit = s.unit, .def = s.def, .help = s.help});
+  return c;
+}
+
 int cmd_study(const Args& args) {
-  args.require_known(
-      {"out", "scheduler", "workers", "resume", "yes", "quiet", "no-report", "scaling", "device", "set"});
   std::vector<std::string> argv = {MEDSPRING_PYTHON_EXECUTABLE, "-m", "medspring.study"};
   for (const auto& p : args.positional()) argv.push_back(p);
-  for (const char* key : {"out", "scheduler", "workers", "scaling", "device", "set"})
-    if (auto v = args.get(key)) {
-      argv.push_back(std::string("--") + key);
+  for (const StudySwitch& s : study_runner_cli().switches) {  // passed on as given; Python checks them
+    if (s.hidden) continue;
+    if (s.type == SwitchType::Flag) {
+      if (args.flag(s.name)) argv.push_back("--" + s.name);
+    } else if (auto v = args.get(s.name)) {
+      argv.push_back("--" + s.name);
       argv.push_back(*v);
     }
-  for (const char* flag : {"resume", "yes", "quiet", "no-report"})
-    if (args.flag(flag)) argv.push_back(std::string("--") + flag);
+  }
   const fs::path dir = python_dir();
   std::string path = dir.string();
   if (const char* old = std::getenv("PYTHONPATH"); old != nullptr && *old != 0)

@@ -64,5 +64,7 @@ inline const OptionSpec kMask{
 
 /// `medspring build` and its kinds (commands_build.cpp).
 CommandSpec build_command();
+/// `medspring study`, from the runner's declared switches (cmd_study.cpp, scene/study_switches.hpp).
+CommandSpec study_command();
 
 }  // namespace medspring::cli

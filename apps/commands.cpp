@@ -209,47 +209,7 @@ const std::vector<CommandSpec>& commands() {
                    {.name = "quiet", .help = "no request log on stderr"}},
        .run = cmd_view},
       build_command(),  // commands_build.cpp
-      {.name = "study",
-       .summary = "parameter studies on Dask: many runs of a scene -> Zarr, CSV, study.md",
-       .usage = "medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N]\n"
-                "                      [--resume] [--yes] [--quiet] [--no-report] [--scaling RUNS]\n"
-                "                      [--set P=V[,P=V]]",
-       .about =
-           "Runs a parameter study (docs/studies.md) on Dask distributed: a base scene, varied parameters\n"
-           "(grids, lists, seeded random or Latin-hypercube samples), every run a task on the engine in a\n"
-           "worker process; results stream into DIR/results.zarr and DIR/summary.csv, the report is\n"
-           "DIR/study.md. Runs the Python package medspring.study (python3 -m medspring.study takes the\n"
-           "same arguments).",
-       .positional = "STUDY",
-       .options = {out_dir("the study's folder"),
-                   {.name = "scheduler",
-                    .value = "ADDR",
-                    .def = "a local cluster of every core",
-                    .help = "a running dask-scheduler (tcp://HOST:PORT)"},
-                   {.name = "workers",
-                    .value = "N",
-                    .help = "local worker processes (0: in this process, without Dask)"},
-                   {.name = "resume",
-                    .help = "complete the study already in DIR (redoes only the missing runs)"},
-                   {.name = "yes", .help = "run a study with more runs than its max_runs (default 100000)"},
-                   kQuiet,
-                   {.name = "no-report", .help = "do not write study.md"},
-                   {.name = "scaling",
-                    .value = "RUNS",
-                    .help = "also time RUNS runs on 1..N local workers for the report"},
-                   {.name = "device",
-                    .value = "cpu|cuda|cpu-batch|auto",
-                    .def = "cpu",
-                    .help =
-                        "where the runs step: cuda = each task's runs one batch on the GPU engine "
-                        "(docs/gpu.md; an error without a GPU), cpu-batch = the same batch path on the CPU, "
-                        "auto = cuda where a GPU is usable, else cpu (said on stderr)"},
-                   {.name = "set",
-                    .value = "P=V[,P=V]",
-                    .def = "the study file's",
-                    .help = "override a declared study setting: samples.count, samples.method, seed, "
-                            "batch, max_runs (docs/parameters.md)"}},
-       .run = cmd_study},
+      study_command(),  // cmd_study.cpp; the switches declared in scene/study_switches.hpp
       {.name = "run",
        .summary = "run a scene file (docs/scenes.md): ParaView series, traces, summary",
        .usage =

@@ -176,26 +176,10 @@ StagedOutput::~StagedOutput() {
 
 void StagedOutput::commit() {
   check_output_folder(target_, force_);
-  std::error_code ec;
-  if (fs::exists(target_, ec)) {
-    const fs::path old = target_.parent_path() / cat(".", target_.filename().string(), ".old-", getpid());
-    fs::remove_all(old, ec);
-    fs::rename(target_, old, ec);
-    if (ec)
-      throw IoError(cat("--out ", target_.string(), ": cannot move the old folder aside: ", ec.message()));
-    fs::rename(stage_, target_, ec);
-    if (ec) {
-      std::error_code ec2;
-      fs::rename(old, target_, ec2);
-      throw IoError(
-          cat("--out ", target_.string(), ": cannot move the new folder into place: ", ec.message()));
-    }
-    fs::remove_all(old, ec);
-  } else {
-    fs::rename(stage_, target_, ec);
-    if (ec)
-      throw IoError(
-          cat("--out ", target_.string(), ": cannot move the new folder into place: ", ec.message()));
+  try {
+    move_folder_into_place(stage_, target_, static_cast<long>(getpid()));
+  } catch (const IoError& e) {
+    throw IoError(cat("--out ", e.what()));
   }
   committed_ = true;
 }

@@ -24,7 +24,9 @@
 #include "medspring/scene/file_loader.hpp"
 #include "medspring/scene/runner.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/study_schema.hpp"
 #include "medspring/scene/study_settings.hpp"
+#include "medspring/scene/study_switches.hpp"
 #ifdef MEDSPRING_PYTHON_WITH_FEM
 #include "medspring/fem/volumetric.hpp"
 #endif
@@ -338,6 +340,46 @@ void bind_scene(py::module_& m) {
         "to the caller. Raises InvalidInput 'ORIGIN: samples.count: must be ...'.");
   m.def("study_settings_json", &study_settings_json, py::arg("settings"),
         "A StudySettings as the JSON object a study file holds (text).");
+  m.def(
+      "study_file_schema",
+      [] {
+        py::list keys, metrics;
+        for (const StudyKey& k : study_file_keys())
+          keys.append(py::dict(py::arg("path") = k.path, py::arg("type") = std::string(to_string(k.type)),
+                               py::arg("unit") = k.unit, py::arg("default") = k.def, py::arg("doc") = k.doc,
+                               py::arg("lo") = k.lo, py::arg("lo_open") = k.lo_open,
+                               py::arg("range") = k.range(), py::arg("words") = k.words,
+                               py::arg("required") = k.required, py::arg("one_of") = k.one_of,
+                               py::arg("non_empty") = k.non_empty, py::arg("open") = k.open));
+        for (const StudyMetric& x : study_metrics())
+          metrics.append(py::dict(py::arg("name") = x.name, py::arg("unit") = x.unit, py::arg("doc") = x.doc,
+                                  py::arg("by_default") = x.by_default));
+        return py::dict(py::arg("keys") = keys, py::arg("metrics") = metrics);
+      },
+      "The lists and objects of a study file as declared once in C++ (scene/study_schema.hpp): keys, each "
+      "a dict (path such as 'vary[].grid.num', type, unit, default, doc, lo, lo_open, range, words, "
+      "required, one_of, non_empty, open), and metrics (name, unit, doc, by_default). medspring.study "
+      "checks study files against it; docs/parameters.md is generated from it.");
+  m.def(
+      "study_runner_cli",
+      [] {
+        const StudyRunnerCli& d = study_runner_cli();
+        py::list switches;
+        for (const StudySwitch& w : d.switches)
+          switches.append(py::dict(py::arg("name") = w.name, py::arg("type") = std::string(to_string(w.type)),
+                                   py::arg("value") = w.value, py::arg("unit") = w.unit,
+                                   py::arg("default") = w.def, py::arg("help") = w.help,
+                                   py::arg("group") = w.group, py::arg("min") = w.min,
+                                   py::arg("required") = w.required, py::arg("hidden") = w.hidden));
+        return py::dict(py::arg("summary") = d.summary, py::arg("about") = d.about,
+                        py::arg("positional") = d.positional, py::arg("positional_help") = d.positional_help,
+                        py::arg("switches") = switches);
+      },
+      "The study runner's command line as declared once in C++ (scene/study_switches.hpp): summary, about, "
+      "positional, positional_help and switches, each a dict (name, type: flag|integer|text|choice, value, "
+      "unit, default, help, group, min, required, hidden). `medspring study` and `python3 -m "
+      "medspring.study` "
+      "are both built from it.");
 
   py::class_<SceneRunner>(m, "SceneRunner",
                           "Builds and runs scenes, keeping every model it built (keyed by the scene's "

@@ -29,7 +29,6 @@ void write_output_folder(const fs::path& folder_in, bool overwrite,
   const fs::path parent = target.parent_path();
   const long pid = static_cast<long>(::getpid());
   const fs::path tmp = temp_folder_for(target, pid);
-  const fs::path old = parent / cat(".", target.filename().string(), ".old-", pid);
 
   // the first missing ancestor, removed again if anything fails
   fs::path created;
@@ -48,18 +47,7 @@ void write_output_folder(const fs::path& folder_in, bool overwrite,
     fs::remove_all(tmp);
     fs::create_directory(tmp);
     write(tmp);
-    if (fs::exists(target)) {
-      fs::rename(target, old);
-      try {
-        fs::rename(tmp, target);
-      } catch (...) {
-        fs::rename(old, target, ec);
-        throw;
-      }
-      fs::remove_all(old, ec);
-    } else {
-      fs::rename(tmp, target);
-    }
+    move_folder_into_place(tmp, target, pid);
   } catch (const fs::filesystem_error& e) {
     cleanup();
     throw IoError(cat(target.string(), ": cannot write the output folder: ", e.code().message()));

@@ -147,22 +147,17 @@ bool load_cache(const fs::path& file, Index n, FemResult& r) {
 void store_cache(const fs::path& file, const FemResult& r) {
   std::error_code ec;
   fs::create_directories(file.parent_path(), ec);
-  const fs::path tmp = file.string() + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    const std::int64_t rows = r.u.rows();
-    out.write(kCacheMagic, 8);
-    out.write(reinterpret_cast<const char*>(&rows), sizeof rows);
-    out.write(reinterpret_cast<const char*>(&r.solve_seconds), sizeof r.solve_seconds);
-    out.write(reinterpret_cast<const char*>(r.u.data()),
-              static_cast<std::streamsize>(sizeof(double) * r.u.size()));
-    if (!out) {
-      fs::remove(tmp, ec);
-      return;  // a cache that cannot be written is no error: the result is still returned
-    }
+  const std::int64_t rows = r.u.rows();
+  std::string bytes(kCacheMagic, 8);
+  bytes.append(reinterpret_cast<const char*>(&rows), sizeof rows);
+  bytes.append(reinterpret_cast<const char*>(&r.solve_seconds), sizeof r.solve_seconds);
+  bytes.append(reinterpret_cast<const char*>(r.u.data()),
+               sizeof(double) * static_cast<std::size_t>(r.u.size()));
+  try {
+    write_file_atomically(file, bytes, "FEM cache");
+  } catch (const IoError&) {
+    // a cache that cannot be written is no error: the result is still returned
   }
-  fs::rename(tmp, file, ec);
-  if (ec) fs::remove(tmp, ec);
 }
 
 }  // namespace

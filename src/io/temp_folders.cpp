@@ -52,4 +52,25 @@ std::vector<StaleTempFolder> remove_stale_temp_folders(const fs::path& target) {
   return removed;
 }
 
+void move_folder_into_place(const fs::path& stage, const fs::path& target_in, long pid) {
+  const fs::path target = normalized(target_in);
+  std::error_code ec;
+  if (!fs::exists(target, ec)) {
+    fs::rename(stage, target, ec);
+    if (ec) throw IoError(cat(target.string(), ": cannot move the new folder into place: ", ec.message()));
+    return;
+  }
+  const fs::path old = target.parent_path() / cat(".", target.filename().string(), ".old-", pid);
+  fs::remove_all(old, ec);
+  fs::rename(target, old, ec);
+  if (ec) throw IoError(cat(target.string(), ": cannot move the old folder aside: ", ec.message()));
+  fs::rename(stage, target, ec);
+  if (ec) {
+    std::error_code ec2;
+    fs::rename(old, target, ec2);
+    throw IoError(cat(target.string(), ": cannot move the new folder into place: ", ec.message()));
+  }
+  fs::remove_all(old, ec);
+}
+
 }  // namespace medspring

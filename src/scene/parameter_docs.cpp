@@ -9,11 +9,44 @@
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/spring_law.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/study_schema.hpp"
 #include "medspring/scene/study_settings.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "medspring/tools/contact.hpp"
 
 namespace medspring {
+
+namespace {
+
+// The declared keys of a study file's lists and objects as table rows (scene/study_schema.hpp).
+std::vector<ParamRow> study_key_rows() {
+  std::vector<ParamRow> rows;
+  for (const StudyKey& k : study_file_keys()) {
+    std::string range = k.range();
+    if (k.type == StudyKeyType::Word)
+      range = k.words.size() > 3 ? "a metric of the next table" : [&] {
+        std::string w;
+        for (const auto& x : k.words) w += (w.empty() ? "" : ", ") + x;
+        return w;
+      }();
+    if (k.type == StudyKeyType::Range || k.type == StudyKeyType::IntegerRange)
+      range = cat("low < high", range.empty() ? "" : cat("; each ", range));
+    if (k.non_empty) range = "non-empty";
+    if (!k.one_of.empty()) range += cat(range.empty() ? "" : "; ", "one ", k.one_of, " per entry");
+    rows.push_back(
+        {k.path, std::string(to_string(k.type)), k.unit, k.required ? "required" : k.def, range, k.doc});
+  }
+  return rows;
+}
+
+std::vector<ParamRow> study_metric_rows() {
+  std::vector<ParamRow> rows;
+  for (const StudyMetric& m : study_metrics())
+    rows.push_back({m.name, "number", m.unit, m.by_default ? "reported" : "by name", "", m.doc});
+  return rows;
+}
+
+}  // namespace
 
 std::vector<ParamSet> parameter_sets() {
   return {
@@ -35,6 +68,13 @@ std::vector<ParamSet> parameter_sets() {
        "the top-level keys of a study file ([studies.md](studies.md)); `medspring study STUDY --set "
        "NAME=VALUE`",
        "include/medspring/scene/study_settings.hpp", param_rows<StudySettings>()},
+      {"Study file", "study_file_keys()",
+       "the lists and objects of a study file ([studies.md](studies.md)): `vary[]` is each entry of the "
+       "list `vary`, `vary[].grid.num` the key `num` of its object `grid`",
+       "include/medspring/scene/study_schema.hpp", study_key_rows()},
+      {"Study metrics", "study_metrics()",
+       "`outputs.metrics` of a study file; the columns of summary.csv ([studies.md](studies.md))",
+       "include/medspring/scene/study_schema.hpp", study_metric_rows()},
       {"FEM calibration case", "FemCaseSettings",
        "`medspring calibrate --E-kPa --nu --radius`; the keyword arguments of `medspring.fem_reference` "
        "and the keys of a case of `medspring.study.fem` ([studies.md](studies.md))",
@@ -55,9 +95,7 @@ std::string parameter_tables_markdown() {
       "for the key `method`). A nested name `duffing.eta` is the key `eta` of the object `duffing`. Numbers "
       "and names can also be set on the command line: `medspring run SCENE --set integrator.dt=0.25`.\n\n"
       "Declared so far: the sets below. Still read by hand ([scenes.md](scenes.md), [tools.md](tools.md)): "
-      "the volumetric model's parameters, each tool's shape and path, loads, `record`, and the lists and "
-      "objects of a study file: its varied quantities, base scene, `set` and `outputs` "
-      "([studies.md](studies.md)).\n";
+      "the volumetric model's parameters, each tool's shape and path, loads and `record`.\n";
   for (ParamSet p : parameter_sets()) {
     for (ParamRow& r : p.rows) {  // a '|' would end the table cell
       std::string doc;

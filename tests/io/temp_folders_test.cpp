@@ -7,7 +7,10 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <iterator>
+#include <string>
 
+#include "medspring/core/error.hpp"
 #include "test_support.hpp"
 
 namespace medspring {
@@ -64,6 +67,44 @@ TEST(TempFolders, OnlyFoldersOfDeadProcessesAreRemoved) {
   EXPECT_TRUE(fs::is_regular_file(temp_folder_for(out, dead + 1000000)));
   EXPECT_TRUE(remove_stale_temp_folders(out).empty());
   EXPECT_TRUE(remove_stale_temp_folders(dir / "missing" / "out").empty());  // no parent: no error
+}
+
+std::string read(const fs::path& f) {
+  std::ifstream in(f);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST(TempFolders, MoveIntoPlaceReplacesTheOldFolderWhole) {
+  const fs::path dir = testing::temp_dir("move-into-place");
+  const fs::path out = dir / "out";
+  const long me = static_cast<long>(::getpid());
+  for (const char* text : {"first", "second"}) {  // into an empty place, then over the first
+    const fs::path stage = temp_folder_for(out, me);
+    fs::create_directories(stage);
+    std::ofstream(stage / "a.txt") << text;
+    if (std::string(text) == "first") std::ofstream(stage / "only_first.txt") << "x";
+    move_folder_into_place(stage, out, me);
+    EXPECT_FALSE(fs::exists(stage));
+    EXPECT_EQ(read(out / "a.txt"), text);
+  }
+  EXPECT_FALSE(fs::exists(out / "only_first.txt"));                                    // replaced, not merged
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}), 1);  // no .old- left
+}
+
+TEST(TempFolders, MoveIntoPlaceThatFailsPutsTheOldFolderBack) {
+  const fs::path dir = testing::temp_dir("move-into-place-fails");
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  std::ofstream(out / "a.txt") << "old";
+  try {
+    move_folder_into_place(dir / ".out.tmp-missing", out, 7);  // no stage: the rename fails
+    FAIL() << "no error";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("out: cannot move the new folder into place"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(read(out / "a.txt"), "old");
+  EXPECT_FALSE(fs::exists(dir / ".out.old-7"));
 }
 
 }  // namespace

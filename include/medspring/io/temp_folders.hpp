@@ -30,4 +30,12 @@ struct StaleTempFolder {
 /// Removal errors are ignored (the folder is then not reported); a missing parent is no error.
 std::vector<StaleTempFolder> remove_stale_temp_folders(const std::filesystem::path& target);
 
+/// Moves the complete folder `stage` to `target` (a sibling), replacing a folder already there: the old
+/// one is renamed aside (".<name>.old-<pid>"), the new one moved in, then the old one removed; when
+/// moving the new one in fails the old one is put back. Throws IoError "TARGET: cannot move the old
+/// folder aside: ..." or "TARGET: cannot move the new folder into place: ...". The one folder swap of
+/// every staged output (builders/output_folder.hpp, the CLI's StagedOutput).
+void move_folder_into_place(const std::filesystem::path& stage, const std::filesystem::path& target,
+                            long pid);
+
 }  // namespace medspring

@@ -1,6 +1,7 @@
-"""`medspring study STUDY --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--resume] [--yes]
-[--set N=V] [--device cpu|cuda|cpu-batch|auto]`:
-runs a parameter study (docs/studies.md). Errors are one line on stderr with exit code 2."""
+"""`medspring study STUDY --out DIR [--scheduler ADDR | --workers N] [--resume] [--yes] ...`: runs a
+parameter study (docs/studies.md). The switches are declared once, in C++ (scene/study_switches.hpp),
+and read here through medspring.study_runner_cli(); `python3 -m medspring.study --help` lists them.
+Errors are one line on stderr with exit code 2."""
 
 from __future__ import annotations
 
@@ -24,35 +25,66 @@ def _cuda_refusal() -> str:
     return ""
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument mistake is one line naming the switch, exit status 2 (as `medspring study`'s own)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: {message}\n")
+
+
+def _integer(name: str, least: int):
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer (got '{text}')") from None
+        if v < least:
+            raise argparse.ArgumentTypeError(f"must be >= {least} (got {v})")
+        return v
+
+    parse.__name__ = name  # argparse names the type in some messages
+    return parse
+
+
+def parser() -> argparse.ArgumentParser:
+    """The runner's argparse parser, built from the switches declared once in C++
+    (scene/study_switches.hpp, medspring.study_runner_cli()); `medspring study` is built from the same
+    list. A switch's value is the attribute of its name with '-' as '_' (--no-report: a.no_report)."""
+    from .. import study_runner_cli
+
+    d = study_runner_cli()
+    p = _Parser(prog="medspring study", description=d["about"].replace("\n", " "))
+    p.add_argument(d["positional"].lower(), metavar=d["positional"], help=d["positional_help"])
+    groups = {}
+    for s in d["switches"]:
+        where = p
+        if s["group"]:
+            if s["group"] not in groups:
+                groups[s["group"]] = p.add_mutually_exclusive_group()
+            where = groups[s["group"]]
+        shown = s["help"] + (f" [{s['unit']}]" if s["unit"] else "") + (
+            f" (default: {s['default']})" if s["default"] else "")
+        kw = {"dest": s["name"].replace("-", "_"), "help": argparse.SUPPRESS if s["hidden"] else shown}
+        if s["type"] == "flag":
+            kw["action"] = "store_true"
+        else:
+            kw["metavar"] = s["value"]
+            kw["default"] = None
+            if s["required"]:
+                kw["required"] = True
+            if s["type"] == "integer":
+                kw["type"] = _integer(s["name"], s["min"])
+                if s["default"].lstrip("-").isdigit():
+                    kw["default"] = int(s["default"])
+            elif s["type"] == "choice":
+                kw["choices"] = s["value"].split("|")
+                kw["default"] = s["default"] or None
+        where.add_argument("--" + s["name"], **kw)
+    return p
+
+
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(
-        prog="medspring study",
-        description="Run a parameter study on Dask distributed: every run a task on the C++ engine, results "
-        "streamed to DIR/results.zarr and DIR/summary.csv, a report in DIR/study.md.",
-    )
-    p.add_argument("study", help="study file (JSON, docs/studies.md)")
-    p.add_argument("--out", required=True, help="output folder (new, empty, or this study's with --resume)")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--scheduler", help="address of a running dask-scheduler, tcp://HOST:PORT")
-    where.add_argument(
-        "--workers", type=int, help="local worker processes (default: every core; 0: in this process, no Dask)"
-    )
-    p.add_argument("--resume", action="store_true", help="complete the study already in --out (only missing runs)")
-    p.add_argument("--yes", action="store_true", help="run a study with more runs than its max_runs")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--no-report", action="store_true", help="do not write study.md")
-    p.add_argument("--scaling", type=int, metavar="RUNS", default=0,
-                   help="also time RUNS runs on 1..N local workers (N = --workers or every core) for the report")
-    p.add_argument("--max-batches", type=int, default=None, help=argparse.SUPPRESS)
-    p.add_argument("--set", dest="settings", metavar="NAME=VALUE[,NAME=VALUE]", default=None,
-                   help="override the study file's declared settings: samples.count, samples.method, seed, "
-                   "batch, max_runs (docs/parameters.md)")
-    p.add_argument("--device", choices=["cpu", "cuda", "cpu-batch", "auto"], default="cpu",
-                   help="where the runs step: cpu (default: each run a scene run), cuda (each task's runs one "
-                   "batch on the GPU engine; in this process unless --workers/--scheduler), cpu-batch (the "
-                   "same batch path on the CPU engine, the reference of cuda) or auto (cuda where a GPU is "
-                   "usable, else cpu, saying which and why); docs/gpu.md")
-    a = p.parse_args(argv)
+    a = parser().parse_args(argv)
     if a.device == "auto":  # the only fallback, asked for: said in one line
         why = _cuda_refusal()
         a.device = "cpu" if why else "cuda"
@@ -67,9 +99,6 @@ def main(argv=None) -> int:
             print(f"medspring study: --device cuda: {cause}; run it on the CPU engine with --device cpu",
                   file=sys.stderr)
             return 2
-    if a.workers is not None and a.workers < 0:
-        print("medspring study: --workers: must be >= 0", file=sys.stderr)
-        return 2
     workers = a.workers
     if a.device == "cuda" and workers is None and a.scheduler is None:
         workers = 0  # one process drives the card: each task's runs are one batch on it
@@ -81,7 +110,7 @@ def main(argv=None) -> int:
     from .store import Store
 
     try:
-        st = load_study(a.study, settings=a.settings)
+        st = load_study(a.study, settings=a.set)
         df = run(st, out=a.out, scheduler=a.scheduler, workers=workers, resume=a.resume, yes=a.yes,
                  progress=not a.quiet, report=not a.no_report, max_batches=a.max_batches, device=a.device)
         if a.scaling > 0:

@@ -26,26 +26,29 @@ from .. import _medspring
 from .._medspring import InvalidInput, IoError, StudySettings, study_settings_from_json
 from ..scenes import apply_overrides, parse_path, scene_document, without_key_times
 
-METRICS = (
-    "contact_peak_mm",
-    "contact_hold_mm",
-    "max_disp_peak_mm",
-    "atom_hold_mm",
-    "local_hold_mm",
-    "return_ms",
-    "final_max_disp_mm",
-    "warnings",
-    "substeps",
-    "median_update_us",
-)
+# The lists and objects of a study file and the metrics are declared once, in C++
+# (scene/study_schema.hpp): check_keys walks a study file against that declaration; docs/parameters.md
+# ("Study file", "Study metrics") is generated from it. samples, seed, batch and max_runs are declared in
+# scene/study_settings.hpp (StudySettings): their checks, defaults, docs and `medspring study --set`.
+_SCHEMA = _medspring.study_file_schema()
+SCHEMA_KEYS = {k["path"]: k for k in _SCHEMA["keys"]}
+METRICS = tuple(m["name"] for m in _SCHEMA["metrics"] if m["by_default"])
 # Metrics of the first tool of a scene with "tools" (docs/tools.md); asked for by name, not by default.
-TOOL_METRICS = ("tool_peak_force_N", "tool_final_force_N", "tool_peak_penetration_mm")
+TOOL_METRICS = tuple(m["name"] for m in _SCHEMA["metrics"] if not m["by_default"])
+SETTINGS_KEYS = tuple(spec["key"] for spec in StudySettings._params)
 
-STUDY_KEYS = ("name", "description", "scene", "set", "vary", "samples", "seed", "outputs", "batch", "max_runs")
-# samples, seed, batch and max_runs are declared once, in C++ (scene/study_settings.hpp, StudySettings):
-# their checks, defaults, docs (docs/parameters.md) and `medspring study --set` come from there.
-SAMPLED_KINDS = ("uniform", "log_uniform", "integers", "choice", "surface_node", "surface_point", "unit_vector")
+
+def _declared_children(path: str) -> list:
+    """The declared keys of the object at schema path `path` ("" the file, "vary[]", "vary[].grid")."""
+    prefix = path + "." if path else ""
+    return [p[len(prefix):] for p in SCHEMA_KEYS
+            if p.startswith(prefix) and p != path and not any(c in p[len(prefix):] for c in ".[")]
+
+
+STUDY_KEYS = tuple(_declared_children("")) + SETTINGS_KEYS
 LISTED_KINDS = ("values", "grid")
+SAMPLED_KINDS = tuple(k for k in _declared_children("vary[]") if SCHEMA_KEYS["vary[]." + k]["one_of"]
+                      and k not in LISTED_KINDS)
 DEFAULT_MAX_RUNS = StudySettings().max_runs
 
 
@@ -57,18 +60,6 @@ class _Where:
         raise InvalidInput(f"{self.origin}: {path}: {message}")
 
 
-def _keys(w: _Where, obj: Any, path: str, allowed: tuple, required: tuple = ()) -> dict:
-    if not isinstance(obj, dict):
-        w.fail(path, f"expected an object; got {json.dumps(obj)[:60]}")
-    for k in obj:
-        if k not in allowed:
-            w.fail(f"{path}.{k}" if path else k, f"unknown key (expected one of {', '.join(allowed)})")
-    for k in required:
-        if k not in obj:
-            w.fail(path or "study", f"missing key '{k}'")
-    return obj
-
-
 def _number(w: _Where, v: Any, path: str, integer: bool = False) -> float:
     ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
     if integer:
@@ -76,6 +67,76 @@ def _number(w: _Where, v: Any, path: str, integer: bool = False) -> float:
     if not ok:
         w.fail(path, f"expected a finite {'integer' if integer else 'number'}; got {json.dumps(v)}")
     return int(v) if integer else float(v)
+
+
+def _below(bound: dict, v: float) -> bool:
+    return v <= bound["lo"] if bound["lo_open"] else v < bound["lo"]
+
+
+def check_keys(w: "_Where", value: Any, path: str = "", at: str = "", extra: tuple = ()) -> None:
+    """Checks `value` against the declared key `path` of a study file (scene/study_schema.hpp; "" the
+    file itself, whose keys `extra` are checked elsewhere): type, lower bound, allowed words, unknown and
+    missing keys, exactly one of a group, then every declared child. Errors name the JSON path `at`."""
+    k = SCHEMA_KEYS.get(path, {"type": "object", "open": False, "non_empty": False})
+    t = k["type"]
+    if t == "object":
+        if not isinstance(value, dict):
+            w.fail(at or "study", f"expected an object; got {json.dumps(value)[:60]}")
+        if k["open"]:
+            return
+        names = _declared_children(path)
+        for key in value:
+            if key not in names and key not in extra:
+                w.fail(f"{at}.{key}" if at else key, f"unknown key (expected one of {', '.join(names + list(extra))})")
+        for n in names:
+            if SCHEMA_KEYS[_join(path, n)]["required"] and n not in value:
+                w.fail(at or "study", f"missing key '{n}'")
+        for group in dict.fromkeys(SCHEMA_KEYS[_join(path, n)]["one_of"] for n in names):
+            members = [n for n in names if group and SCHEMA_KEYS[_join(path, n)]["one_of"] == group]
+            if members and sum(n in value for n in members) != 1:
+                w.fail(at, f"give exactly one of {', '.join(members)} (got {sum(n in value for n in members)})")
+        for key, v in value.items():
+            if key in names:
+                check_keys(w, v, _join(path, key), f"{at}.{key}" if at else key)
+    elif t == "list":
+        if not isinstance(value, list):
+            w.fail(at, f"expected a list; got {json.dumps(value)[:60]}")
+        if k["non_empty"] and not value:
+            w.fail(at, "is empty: at least one element is needed")
+        if path + "[]" in SCHEMA_KEYS:
+            for i, e in enumerate(value):
+                check_keys(w, e, path + "[]", f"{at}[{i}]")
+    elif t in ("number", "integer"):
+        v = _number(w, value, at, integer=t == "integer")
+        if _below(k, v):
+            w.fail(at, f"must be {k['range']} (got {v})")
+    elif t in ("range", "integer range"):
+        if not (isinstance(value, list) and len(value) == 2):
+            w.fail(at, f"expected [low, high]; got {json.dumps(value)[:60]}")
+        low, high = (_number(w, x, f"{at}[{i}]", integer=t == "integer range") for i, x in enumerate(value))
+        for i, x in enumerate((low, high)):
+            if _below(k, x):
+                w.fail(f"{at}[{i}]", f"must be {k['range']} (got {x})")
+        if not high > low:
+            w.fail(at, f"needs low < high (got {low}, {high})")
+    elif t == "bool":
+        if not isinstance(value, bool):
+            w.fail(at, f"expected true or false; got {json.dumps(value)[:60]}")
+    elif t == "text":
+        if not isinstance(value, str) or not value:
+            w.fail(at, f"expected non-empty text; got {json.dumps(value)[:60]}")
+    elif t == "word":
+        if not isinstance(value, str) or value not in k["words"]:
+            choices = " or ".join(json.dumps(x) for x in k["words"]) if len(k["words"]) <= 3 else (
+                "one of " + ", ".join(k["words"]))
+            w.fail(at, f"expected {choices}; got {json.dumps(value)[:60]}")
+    elif t == "text or object":
+        if not isinstance(value, (str, dict)):
+            w.fail(at, f"expected a file name or an object; got {json.dumps(value)[:60]}")
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
 
 
 @dataclass
@@ -254,14 +315,10 @@ class Study:
         return apply_overrides(self.scene, self.params(i))
 
 
-def _parse_vary(w: _Where, k: int, e: Any) -> Vary:
+def _parse_vary(w: _Where, k: int, e: dict) -> Vary:
+    """One entry of `vary`, already checked against its declaration (check_keys)."""
     where = f"vary[{k}]"
-    allowed = ("path",) + LISTED_KINDS + SAMPLED_KINDS + ("log",)
-    _keys(w, e, where, allowed, ("path",))
-    kinds = [x for x in LISTED_KINDS + SAMPLED_KINDS if x in e]
-    if len(kinds) != 1:
-        w.fail(where, f"give exactly one of {', '.join(LISTED_KINDS + SAMPLED_KINDS)} (got {len(kinds)})")
-    kind = kinds[0]
+    kind = next(x for x in LISTED_KINDS + SAMPLED_KINDS if x in e)
     path = e["path"]
     try:
         parse_path(path)
@@ -270,18 +327,10 @@ def _parse_vary(w: _Where, k: int, e: Any) -> Vary:
     v = Vary(path=path, kind=kind, where=where)
     spec = e[kind]
     at = f"{where}.{kind}"
-    if kind == "values":
-        if not isinstance(spec, list):
-            w.fail(at, "expected a list of values")
-        if not spec:
-            w.fail(at, "is empty: a study needs at least one value")
+    if kind in ("values", "choice"):
         v.values = list(spec)
     elif kind == "grid":
-        _keys(w, spec, at, ("from", "to", "num", "log"), ("from", "to", "num"))
-        a, b = _number(w, spec["from"], f"{at}.from"), _number(w, spec["to"], f"{at}.to")
-        n = _number(w, spec["num"], f"{at}.num", integer=True)
-        if n < 1:
-            w.fail(f"{at}.num", f"must be >= 1 (got {n}): an empty grid has no runs")
+        a, b, n = float(spec["from"]), float(spec["to"]), int(spec["num"])
         if spec.get("log", False):
             if a <= 0 or b <= 0:
                 w.fail(at, "a log grid needs from > 0 and to > 0")
@@ -289,21 +338,8 @@ def _parse_vary(w: _Where, k: int, e: Any) -> Vary:
         else:
             v.values = [float(x) for x in np.linspace(a, b, n)]
     elif kind in ("uniform", "log_uniform", "integers"):
-        if not (isinstance(spec, list) and len(spec) == 2):
-            w.fail(at, "expected [low, high]")
-        v.low = _number(w, spec[0], f"{at}[0]", integer=kind == "integers")
-        v.high = _number(w, spec[1], f"{at}[1]", integer=kind == "integers")
-        if not v.high > v.low:
-            w.fail(at, f"needs low < high (got {v.low}, {v.high})")
-        if kind == "log_uniform" and v.low <= 0:
-            w.fail(at, "log_uniform needs low > 0")
-    elif kind == "choice":
-        if not isinstance(spec, list) or not spec:
-            w.fail(at, "expected a non-empty list of options")
-        v.values = list(spec)
-    elif kind in ("surface_node", "surface_point", "unit_vector"):
-        if spec != "random":
-            w.fail(at, 'expected "random"')
+        cast = int if kind == "integers" else float
+        v.low, v.high = cast(spec[0]), cast(spec[1])
     return v
 
 
@@ -365,7 +401,7 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None, settings: 
     else:
         raise InvalidInput(f"study: expected a file name, JSON text or a dict; got a {type(study).__name__}")
     w = _Where(origin)
-    _keys(w, doc, "", STUDY_KEYS, ("scene",))
+    check_keys(w, doc, extra=SETTINGS_KEYS)  # every declared key of scene/study_schema.hpp
 
     # The base scene: a file (relative to the study) or an inline object.
     sc = doc["scene"]
@@ -384,8 +420,6 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None, settings: 
 
     scene = without_key_times(scene)  # a study records fields at outputs.fields.times only
     fixed = doc.get("set", {})
-    if not isinstance(fixed, dict):
-        w.fail("set", "expected an object {parameter path: value}")
     for path, value in fixed.items():
         try:
             scene = apply_overrides(scene, [(path, value)])
@@ -398,8 +432,6 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None, settings: 
             w.fail("set", str(e))
 
     vary_doc = doc.get("vary", [])
-    if not isinstance(vary_doc, list):
-        w.fail("vary", "expected a list")
     vary = [_parse_vary(w, k, e) for k, e in enumerate(vary_doc)]
     paths = [v.path for v in vary]
     for k, p in enumerate(paths):
@@ -407,8 +439,7 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None, settings: 
             w.fail(f"vary[{k}].path", f"'{p}' is varied twice")
 
     # The declared keys (samples, seed, batch, max_runs): read and checked by their declaration.
-    keys = [spec["key"] for spec in StudySettings._params]
-    declared = study_settings_from_json(json.dumps({k: doc[k] for k in keys if k in doc}), origin)
+    declared = study_settings_from_json(json.dumps({k: doc[k] for k in SETTINGS_KEYS if k in doc}), origin)
     declared, overridden = _apply_settings(declared, settings, origin)
     samples = doc.get("samples", {})
     count_given = "count" in samples or "samples.count" in overridden
@@ -422,35 +453,18 @@ def load_study(study: Any, base_dir: str | os.PathLike | None = None, settings: 
     seed = declared.seed
 
     outputs = doc.get("outputs", {})
-    _keys(w, outputs, "outputs", ("metrics", "fields"))
     metrics = outputs.get("metrics", list(METRICS))
-    if not isinstance(metrics, list) or not metrics:
-        w.fail("outputs.metrics", "expected a non-empty list of metric names")
-    for k, mname in enumerate(metrics):
-        if mname not in METRICS + TOOL_METRICS:
-            w.fail(
-                f"outputs.metrics[{k}]",
-                f"unknown metric {json.dumps(mname)} (expected one of {', '.join(METRICS + TOOL_METRICS)})",
-            )
     fields = outputs.get("fields", None)
     field_times: list = []
     field_dtype = "float64"
     if fields is not None:
-        _keys(w, fields, "outputs.fields", ("times", "dtype"), ("times",))
-        if not isinstance(fields["times"], list) or not fields["times"]:
-            w.fail("outputs.fields.times", "expected a non-empty list of times (ms)")
         for k, t in enumerate(fields["times"]):
-            t = _number(w, t, f"outputs.fields.times[{k}]")
-            if not 0 <= t <= scene["duration"]:
+            if not t <= scene["duration"]:
                 w.fail(f"outputs.fields.times[{k}]", f"{t} ms is outside the scene's [0, {scene['duration']}] ms")
-            field_times.append(t)
+            field_times.append(float(t))
         field_dtype = fields.get("dtype", "float64")
-        if field_dtype not in ("float64", "float32"):
-            w.fail("outputs.fields.dtype", f"expected 'float64' or 'float32'; got {json.dumps(field_dtype)}")
     batch, max_runs = declared.batch, declared.max_runs
     name = doc.get("name", Path(origin).stem if origin != "study" else "study")
-    if not isinstance(name, str) or not name:
-        w.fail("name", "expected non-empty text")
 
     listed = [v for v in vary if not v.sampled]
     st = Study(
