@@ -320,9 +320,12 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   SmrmTreeSettings ts;
   ts.vessel = st.smrm;
   const CenterlineTree ct = merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min));
+  // the watertight surface marched to the wall is the default here (docs/vessels.md: the plain tubes are
+  // open, a radius short of the input's caps, and circles); no_blend keeps the tubes
+  const bool blend = !st.no_blend;
   std::shared_ptr<SmrmTree> tree =
-      st.blend ? blended(ct, ts, st.blend_spacing, s) : std::make_shared<SmrmTree>(ct, ts);
-  if (st.blend)
+      blend ? blended(ct, ts, st.blend_spacing, s) : std::make_shared<SmrmTree>(ct, ts);
+  if (blend)
     if (auto marched = marched_tree(ct, ts, *tree, organ.surface, s)) tree = std::move(marched);
   VesselBuild out = finish_tree(std::move(tree), s, t0);
   VesselSummary& r = out.summary;
@@ -436,6 +439,10 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   const bool has_line = !st.centerline.empty();
   const bool has_organ = !st.source.mesh.empty() || !st.source.mask.empty();
   require(has_line != has_organ, "vessel: give exactly one of a centerline, a mesh and a segmentation");
+  require(!(st.blend && st.no_blend), "vessel: give at most one of blend and no_blend");
+  require(!st.no_blend || (has_organ && st.all_branches),
+          "vessel: no_blend applies to a tree from a mesh or a segmentation (its default is the watertight "
+          "surface)");
   require(!st.blend || st.all_branches,
           "vessel: a blended (watertight) surface applies to a tree (all branches)");
   require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");

@@ -174,7 +174,7 @@ TEST(VesselTreeSkeleton, RealAortaSegmentationIsOneBranch) {
   st.all_branches = true;
   for (const bool blend : {false, true}) {
     SCOPED_TRACE(blend ? "blend" : "tubes");
-    st.blend = blend;
+    st.no_blend = !blend;  // a mask tree's default is the watertight surface marched to the wall
     const VesselBuild v = build_vessel(st);
     const VesselSummary& s = v.summary;
     EXPECT_EQ(s.branches, 1);
@@ -186,6 +186,7 @@ TEST(VesselTreeSkeleton, RealAortaSegmentationIsOneBranch) {
               << s.surface_nodes << " nodes, Hausdorff " << s.hausdorff_mm << " mm, mean "
               << s.mean_distance_mm << " mm; nodes away from the ends to the input: max " << d.maxCoeff()
               << " mm, mean " << d.mean() << " mm\n";
+    EXPECT_EQ(s.blended, blend);
     if (blend) {  // marched to the wall: the target (within 2 mm of the input away from the cut
                   // ends) holds but for 3 nodes at a bulge of the descending aorta's bend (the wall up to
                   // 24 mm from the skeleton's axis, radius 11 mm) where the marched rings would cross and
