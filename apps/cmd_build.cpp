@@ -261,7 +261,8 @@ nlohmann::json vessel_json(const VesselSummary& s) {
 /// (a tree: --branches all [--blend [--blend-spacing MM]] for one watertight surface)
 int build_vessel_cmd(const Args& args) {
   args.require_known({"json", "force", "centerline", "branch", "branches", "mesh", "segmentation", "mask",
-                      "label", "unit", "atoms", "spokes", "k-b", "wall-e", "out", "blend", "blend-spacing"});
+                      "label", "unit", "atoms", "spokes", "k-b", "wall-e", "out", "blend", "blend-spacing",
+                      "no-blend"});
   VesselBuildSettings st;
   const auto line = args.get("centerline"), mesh = args.get("mesh");
   auto seg = args.get("segmentation");
@@ -299,6 +300,13 @@ int build_vessel_cmd(const Args& args) {
     require(*b == "all", "option --branches: '", *b, "' is not 'all' (one branch: --branch N)");
     require(!args.get("branch"), "give at most one of --branch and --branches");
     st.all_branches = true;
+  }
+  if (args.flag("no-blend")) {  // a tree from a mesh or a mask: the open tubes instead of its default
+    require(!args.flag("blend") && !args.get("blend-spacing"), "give at most one of --blend and --no-blend");
+    require(st.all_branches && (!st.source.mask.empty() || !st.source.mesh.empty()),
+            "option --no-blend: applies to a tree from --mesh or --segmentation (--branches all); a "
+            "centerline tree has the tubes by default");
+    st.no_blend = true;
   }
   if (args.flag("blend") || args.get("blend-spacing")) {  // the watertight junction surface (a tree)
     require(st.all_branches, "option --blend: applies to a tree (--branches all)");

@@ -54,13 +54,14 @@ CommandSpec build_command() {
             .options = {kMask, kLabel, kMesh, kUnit, kAtoms40, kPath, kBuildOut, kBuildJson, kForce}},
            {.name = "vessel",
             .summary = "the SMRM vessel (§5, docs/vessels.md): atoms, spokes, the rebuilt surface",
-            .usage = "medspring build vessel --centerline FILE --unit mm|cm|m [--branch N]\n"
-                     "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE "
-                     "[--label "
-                     "N]\n"
-                     "                              [--branches all [--blend [--blend-spacing MM]]]\n"
-                     "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
-                     "                              --out DIR [--json] [--force]",
+            .usage =
+                "medspring build vessel --centerline FILE --unit mm|cm|m [--branch N]\n"
+                "                              | --mesh FILE [--unit mm|cm|m] | --segmentation FILE "
+                "[--label "
+                "N]\n"
+                "                              [--branches all [--blend [--blend-spacing MM] | --no-blend]]\n"
+                "                              [--atoms 40] [--spokes 30] [--k-b K | --wall-e E]\n"
+                "                              --out DIR [--json] [--force]",
             .about = "The SMRM vessel (§5, docs/vessels.md): atoms with radii, spokes, the rebuilt surface "
                      "and its rest\n"
                      "reconstruction error; from a mesh or segmentation the centerline of §3 and spokes "
@@ -88,7 +89,11 @@ CommandSpec build_command() {
                           "the paths meet"},
                  {.name = "blend",
                   .help = "with --branches all: one watertight surface (the union of the closed path tubes, "
-                          "bound to the branch atoms)"},
+                          "bound to the branch atoms; the default of a tree from --mesh or --segmentation, "
+                          "there marched to the input's wall)"},
+                 {.name = "no-blend",
+                  .help = "a tree from --mesh or --segmentation: one open tube per branch (the skeleton's "
+                          "circles) instead of the watertight surface"},
                  {.name = "blend-spacing",
                   .value = "MM",
                   .unit = "mm",

@@ -1,5 +1,7 @@
 // Models layer, vessels: SmrmVessel (§5), vessel trees (issue 17) and the vessel experiment of §7.2.
 // Called from bind_models (bind_models.cpp), after the medial pieces they are built from.
+#include <optional>
+
 #include "bind_common.hpp"
 #include "bind_models.hpp"
 #include "bind_params.hpp"
@@ -252,6 +254,66 @@ void bind_vessels(py::module_& m) {
       "junction. settings.atoms = atoms on the longest root-to-leaf path (the resampling spacing). "
       "blend=True: "
       "one watertight surface, as smrm_tree_from_centerlines.");
+#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
+  m.def(
+      "smrm_tree_from_organ",
+      [](std::optional<std::filesystem::path> mesh, std::optional<std::filesystem::path> segmentation,
+         std::optional<std::int32_t> label, std::optional<LengthUnit> unit, const SmrmSettings& s, bool blend,
+         double blend_spacing) {
+        require(mesh.has_value() != segmentation.has_value(),
+                "smrm_tree_from_organ: give exactly one of mesh and segmentation");
+        require(!label || segmentation, "smrm_tree_from_organ: label applies to a segmentation");
+        VesselBuildSettings st;
+        if (mesh) {
+          st.source.mesh = *mesh;
+          st.source.unit = unit.value_or(LengthUnit::Millimetre);
+        } else {
+          st.source.mask = *segmentation;
+          st.source.label = label;
+        }
+        st.all_branches = true;
+        st.no_blend = !blend;
+        st.blend_spacing = blend_spacing;
+        st.smrm = s;
+        VesselBuild v = [&] {
+          py::gil_scoped_release release;
+          return build_vessel(st);
+        }();
+        const VesselSummary& r = v.summary;
+        py::dict d;
+        d["input"] = r.input;
+        d["input_kind"] = r.input_kind;
+        d["atoms"] = r.atoms;
+        d["branches"] = r.branches;
+        d["junctions"] = r.junctions;
+        d["surface_nodes"] = r.surface_nodes;
+        d["length_mm"] = r.length_mm;
+        d["radius_min_mm"] = r.radius_min_mm;
+        d["radius_max_mm"] = r.radius_max_mm;
+        d["rest_error_mm"] = r.rest_error_mm;
+        d["hausdorff_mm"] = r.hausdorff_mm;
+        d["mean_distance_mm"] = r.mean_distance_mm;
+        d["to_input_max_mm"] = r.to_input_max_mm;
+        d["to_input_mean_mm"] = r.to_input_mean_mm;
+        d["blended"] = r.blended;
+        d["surface_closed"] = r.surface_closed;
+        d["build_seconds"] = r.seconds;
+        d["notes"] = r.notes;
+        d["warnings"] = r.warnings;
+        return py::make_tuple(std::const_pointer_cast<SmrmTree>(v.tree), d, v.input);
+      },
+      py::kw_only(), "mesh"_a = py::none(), "segmentation"_a = py::none(), "label"_a = py::none(),
+      "unit"_a = py::none(), "settings"_a = SmrmSettings{}, "blend"_a = true, "blend_spacing"_a = 0.0,
+      "A vessel tree from a closed surface mesh (unit: of its coordinates, None = mm) or a segmentation "
+      "(label: the "
+      "vessel's, default the only non-zero one), as `medspring build vessel --branches all` "
+      "(docs/vessels.md): the tree skeleton of every endpoint (ends extended to the input's caps), and by "
+      "default the watertight surface marched to the input's wall (blend=False: one open tube per branch, "
+      "the skeleton's circles). Returns (tree, summary, input_surface): summary is a dict (atoms, branches, "
+      "junctions, rest_error_mm, hausdorff_mm, mean_distance_mm, to_input_max_mm, to_input_mean_mm, "
+      "blended, notes, ...); input_surface the mesh the distances are measured to. Raises InvalidInput "
+      "(several components, an absent label, a blob) or IoError naming the file.");
+#endif
   m.def(
       "first_ray_hit",
       [](const SurfaceMesh& mesh, py::handle o, py::handle w, double t_max) {

@@ -144,3 +144,60 @@ def test_scene_with_a_blended_vmr_tree_runs_on_the_watertight_surface():
     lines = ms.read_centerlines(str(line), "cm")
     tree = ms.smrm_tree_from_centerlines(lines, blend=True)
     assert tree.blended and tree.num_surface_nodes == 2083 and tree.num_atoms == 60
+
+
+def y_label_volume(h=0.5):
+    """A Y of capsules (trunk radius 4 mm, branches 3 mm, out of plane), as the C++ test
+    tests/builders/vessel_tree_skeleton_test.cpp: trunk (0,0,0) -> J (30,0,0), J -> B1, J -> B2."""
+    a, j = np.array([0.0, 0.0, 0.0]), np.array([30.0, 0.0, 0.0])
+    b1, b2 = np.array([55.0, 18.0, 4.0]), np.array([53.0, -17.0, -3.0])
+    origin = np.array([-6.0, -24.0, -10.0])
+    dims = [int(np.ceil(68.0 / h)), int(np.ceil(48.0 / h)), int(np.ceil(20.0 / h))]
+    ii, jj, kk = np.meshgrid(*[np.arange(n) for n in dims], indexing="ij")
+    p = origin + h * np.stack([ii, jj, kk], axis=-1)
+
+    def capsule(p, s, e):
+        t = np.clip(((p - s) @ (e - s)) / np.dot(e - s, e - s), 0.0, 1.0)
+        return np.linalg.norm(p - (s + t[..., None] * (e - s)), axis=-1)
+
+    inside = (capsule(p, a, j) <= 4.0) | (capsule(p, j, b1) <= 3.0) | (capsule(p, j, b2) <= 3.0)
+    return ms.LabelVolume(inside.astype(np.int32), spacing=(h, h, h), origin=origin)
+
+
+@pytest.mark.skipif(not (ms._medspring.has_builders and ms._medspring.has_io),
+                    reason="needs the builders layer (CGAL) and the io layer")
+def test_tree_from_a_segmentation_is_the_y_watertight_and_on_the_wall(tmp_path):
+    # smrm_tree_from_organ = `medspring build vessel --segmentation F --branches all` (its default: the
+    # watertight surface marched to the wall, the ends extended to the input's tips)
+    path = tmp_path / "y.mha"
+    ms.write_label_volume(str(path), y_label_volume())
+    settings = ms.SmrmSettings(atoms=16)
+    tree, summary, surface = ms.smrm_tree_from_organ(segmentation=path, settings=settings)
+    assert summary["branches"] == 3 and summary["junctions"] == 1
+    assert tree.blended and summary["blended"] and summary["surface_closed"]
+    assert summary["rest_error_mm"] <= 1e-9
+    assert 0 < summary["hausdorff_mm"] < 1.2  # measured 0.83 mm (the C++ test's figure)
+    assert summary["mean_distance_mm"] < 0.1
+    assert np.asarray(surface.V).shape[1] == 3
+    sim = ms.Simulation(tree)
+    np.testing.assert_allclose(sim.surface, tree.rest_surface, rtol=0, atol=1e-9)
+    # blend=False: one open tube per branch with the skeleton's circles, farther from the wall
+    tubes, plain, _ = ms.smrm_tree_from_organ(segmentation=path, settings=settings, blend=False)
+    assert not tubes.blended and not plain["blended"] and plain["branches"] == 3
+    assert plain["mean_distance_mm"] > summary["mean_distance_mm"]
+    with pytest.raises(ms.InvalidInput, match="exactly one of mesh and segmentation"):
+        ms.smrm_tree_from_organ()
+    with pytest.raises(ms.InvalidInput, match="label applies to a segmentation"):
+        ms.smrm_tree_from_organ(mesh=path, label=1)
+
+
+@pytest.mark.skipif(not (ms._medspring.has_builders and ms._medspring.has_io),
+                    reason="needs the builders layer (CGAL) and the io layer")
+def test_tree_from_the_real_aorta_mask_is_one_branch_near_its_wall():
+    from conftest import data_file
+
+    tree, summary, _ = ms.smrm_tree_from_organ(segmentation=data_file("aorta_totalseg_mask.nii.gz"), label=1)
+    assert summary["branches"] == 1 and summary["junctions"] == 0 and tree.blended
+    assert summary["rest_error_mm"] <= 1e-9
+    assert summary["length_mm"] > 340  # the ends reach the scan's cuts (cut a radius short: 319 mm)
+    assert summary["hausdorff_mm"] < 13.0 and summary["mean_distance_mm"] < 0.5  # measured 11.8 / 0.37 mm

@@ -19,6 +19,7 @@
 #include "medspring/physics/state.hpp"
 #include "medspring/skeleton/centerline_tree.hpp"
 #include "medspring/skeleton/voxelize.hpp"
+#include "vessel_tree_march.hpp"
 
 namespace medspring {
 
@@ -108,84 +109,6 @@ std::shared_ptr<SmrmTree> blended(const CenterlineTree& ct, const SmrmTreeSettin
   return tree;
 }
 
-// --blend from a mesh or a mask: the watertight surface's nodes marched to the input's wall (the §5.6
-// spokes of the single vessel). A node moves along the ray from the closest point of the nearest branch
-// axis through it, to the first hit within 4 local radii; end-cap nodes (a ray within 72.5 degrees of
-// the axis) and misses stay. Null when the marched surface would intersect itself (then the circles
-// stay, with a warning).
-std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeSettings& ts,
-                                       const SmrmTree& tree, const SurfaceMesh& input, VesselSummary& s) {
-  SurfaceMesh m{tree.rest_surface(), tree.faces()};
-  Index moved = 0, missed = 0, caps = 0;
-  for (Index k = 0; k < m.num_vertices(); ++k) {
-    const Vec3 p = m.V.row(k).transpose();
-    double best = std::numeric_limits<double>::infinity();
-    Vec3 a = Vec3::Zero(), t = Vec3::UnitX();
-    double r_loc = 0.0;
-    for (Index b = 0; b < tree.num_branches(); ++b) {
-      const SmrmVessel& v = tree.branch_vessel(b);
-      const MatX3& C = v.rest_atoms();
-      const PolylinePoint q = closest_point_on_polyline(C, p);
-      if (q.distance >= best) continue;
-      const Index i = std::min<Index>(q.segment, static_cast<Index>(C.rows()) - 2);
-      const double lam = q.segment > i ? 1.0 : q.lambda;
-      best = q.distance;
-      const Vec3 c0 = C.row(i).transpose(), c1 = C.row(i + 1).transpose();
-      a = (1.0 - lam) * c0 + lam * c1;
-      t = (c1 - c0).normalized();
-      r_loc = (1.0 - lam) * v.atom_radius()[i] + lam * v.atom_radius()[i + 1];
-    }
-    const Vec3 d = p - a;
-    if (d.norm() < 1e-9 || std::abs(d.normalized().dot(t)) > 0.3) {
-      ++caps;
-      continue;
-    }
-    const Vec3 w = d.normalized();
-    const double hit = first_ray_hit(input, a, w, 4.0 * r_loc);
-    if (std::isfinite(hit)) {
-      m.V.row(k) = (a + hit * w).transpose();
-      ++moved;
-    } else {
-      ++missed;
-    }
-  }
-  // where the marched surface crosses itself (a junction's crotch), the nodes of the crossing faces go
-  // back to the union's surface, a few rounds
-  Index kept = 0, self = 0;
-  try {  // a marched node on another's place leaves a zero-area triangle: refused below, circles kept
-    for (int round = 0; round < 8; ++round) {
-      const std::vector<Index> bad = self_intersecting_faces(m, "marched vessel tree surface");
-      if (bad.empty()) break;
-      for (Index f : bad)
-        for (int c = 0; c < 3; ++c) {
-          const Index v = m.F(f, c);
-          if (m.V.row(v) != tree.rest_surface().row(v)) {
-            m.V.row(v) = tree.rest_surface().row(v);
-            ++kept;
-          }
-        }
-    }
-    self = self_intersections(m, "marched vessel tree surface");
-  } catch (const InvalidInput& e) {
-    s.warnings.push_back(cat("the watertight surface was not marched to the input's wall (", e.what(),
-                             "); it keeps the skeleton's circular cross-sections"));
-    return nullptr;
-  }
-  if (self > 0) {
-    s.warnings.push_back(
-        cat("the watertight surface was not marched to the input's wall: it would intersect "
-            "itself (",
-            self, " triangle pairs); it keeps the skeleton's circular cross-sections"));
-    return nullptr;
-  }
-  moved -= kept;
-  s.notes.push_back(cat("watertight surface marched to the input's wall: ", moved, " nodes moved, ", missed,
-                        " without a hit within 4 radii, ", caps, " on the end caps, ", kept,
-                        " put back where the marched surface crossed itself"));
-  s.surface_volume_mm3 = signed_volume(m.V, m.F);
-  return std::make_shared<SmrmTree>(ct, ts, m);
-}
-
 // A tree from a closed surface mesh or a segmentation (--branches all): the tree skeleton of the mask
 // (the voxelised mesh), merged into branches, and the rebuilt surface's distance to the input.
 VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_clock::time_point t0) {
@@ -222,10 +145,14 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   SmrmTreeSettings ts;
   ts.vessel = st.smrm;
   const CenterlineTree ct = merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min));
+  // the watertight surface marched to the wall is the default here (docs/vessels.md: the plain tubes are
+  // open, a radius short of the input's caps, and circles); no_blend keeps the tubes
+  const bool blend = !st.no_blend;
   std::shared_ptr<SmrmTree> tree =
-      st.blend ? blended(ct, ts, st.blend_spacing, s) : std::make_shared<SmrmTree>(ct, ts);
-  if (st.blend)
-    if (auto marched = marched_tree(ct, ts, *tree, organ.surface, s)) tree = std::move(marched);
+      blend ? blended(ct, ts, st.blend_spacing, s) : std::make_shared<SmrmTree>(ct, ts);
+  if (blend)
+    if (auto marched = builders_detail::marched_tree(ct, ts, *tree, organ.surface, s))
+      tree = std::move(marched);
   VesselBuild out = finish_tree(std::move(tree), s, t0);
   VesselSummary& r = out.summary;
   const SmrmTree& t = *out.tree;
@@ -338,6 +265,10 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   const bool has_line = !st.centerline.empty();
   const bool has_organ = !st.source.mesh.empty() || !st.source.mask.empty();
   require(has_line != has_organ, "vessel: give exactly one of a centerline, a mesh and a segmentation");
+  require(!(st.blend && st.no_blend), "vessel: give at most one of blend and no_blend");
+  require(!st.no_blend || (has_organ && st.all_branches),
+          "vessel: no_blend applies to a tree from a mesh or a segmentation (its default is the watertight "
+          "surface)");
   require(!st.blend || st.all_branches,
           "vessel: a blended (watertight) surface applies to a tree (all branches)");
   require(st.smrm.atoms >= 3, "vessel: atoms must be >= 3 (got ", st.smrm.atoms, ")");

@@ -92,6 +92,18 @@ VecX distances_to_surface(const MatX3& points, const SurfaceMesh& surface) {
   return d;
 }
 
+MatX3 closest_points_on_surface(const MatX3& points, const SurfaceMesh& surface) {
+  require_triangles(surface, "closest_points_on_surface: surface");
+  require_finite_points(points, "closest_points_on_surface: points");
+  const SurfaceQuery q(to_triangles(surface));
+  MatX3 c(points.rows(), 3);
+  for (Index i = 0; i < points.rows(); ++i) {
+    const Point p = q.closest(to_point(points, i));
+    c.row(i) << p.x(), p.y(), p.z();
+  }
+  return c;
+}
+
 double hausdorff_distance(const SurfaceMesh& a, const SurfaceMesh& b,
                           const SurfaceDistanceSettings& settings) {
   return surface_distance(a, b, settings).hausdorff;

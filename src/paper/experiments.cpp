@@ -77,14 +77,13 @@ std::vector<Centerline> phantom_tree_lines() {
 }
 
 std::string tree_scene_json(const std::string& name, const fs::path& file, const std::string& unit,
-                            Index node, Index atom, double force, Index every) {
+                            Index node, Index atom, double force, Index every, bool blend) {
+  json source = {{"file", file.string()}, {"unit", unit}, {"branches", "all"}};
+  if (blend) source["blend"] = true;
   const json j = {
       {"name", name},
       {"description", "vessel tree (issue 17): every branch of the centerline file, shared junction atoms"},
-      {"model",
-       {{"kind", "smrm"},
-        {"source", {{"centerline", {{"file", file.string()}, {"unit", unit}, {"branches", "all"}}}}},
-        {"nonlinear", true}}},
+      {"model", {{"kind", "smrm"}, {"source", {{"centerline", source}}}, {"nonlinear", true}}},
       {"loads", json::array({{{"node", node},
                               {"direction", "inward_normal"},
                               {"magnitude", force},

@@ -45,8 +45,9 @@ const SceneRun& find_run(const std::vector<SceneRun>& runs, const std::string& s
 
 /// The phantom tree (a trunk and a branch, mm) and the tree scene of the study's tree runs.
 std::vector<Centerline> phantom_tree_lines();
+/// blend: the tree's watertight surface ("blend": true; a loader with CGAL), else one tube per branch.
 std::string tree_scene_json(const std::string& name, const fs::path& file, const std::string& unit,
-                            Index node, Index atom, double force, Index every);
+                            Index node, Index atom, double force, Index every, bool blend = false);
 
 /// The whole vessel tree (issue 17): light and strong force on the arch and on a branch. Returns the
 /// tree's facts (tables.json "tree") and appends the runs.

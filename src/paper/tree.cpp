@@ -44,6 +44,36 @@ json run_tree(const StudyOptions& o, StudyHost& host, const std::string& primary
       build_scene(parse_scene(tree_scene_json("probe", file, unit, 0, 0, 0.05, every), root, "tree scene"),
                   host.loader());
   const auto& tree = dynamic_cast<const SmrmTree&>(*probe.body);
+  // The runs use the tree's watertight surface (the union of its path tubes, one closed surface with a
+  // blended junction) where the loader has CGAL; else the tubes (the sites below are on the tubes' rings:
+  // on the watertight surface the nearest node of the same branch)
+  bool blend = true;
+  BodyPtr blended_body;
+  try {
+    blended_body = build_scene(parse_scene(tree_scene_json("probe", file, unit, 0, 0, 0.05, every, true),
+                                           root, "tree scene"),
+                               host.loader())
+                       .body;
+  } catch (const InvalidInput&) {
+    blend = false;
+  }
+  const SmrmTree* run_tree = blend ? dynamic_cast<const SmrmTree*>(blended_body.get()) : &tree;
+  auto run_node = [&](Index tube_node) {
+    if (!blend) return tube_node;
+    const Vec3 p = tree.rest_surface().row(tube_node).transpose();
+    const Index b = tree.node_branch(tube_node);
+    Index best = -1;
+    double bd = 0.0;
+    for (Index k = 0; k < run_tree->num_surface_nodes(); ++k) {
+      if (run_tree->node_branch(k) != b) continue;
+      const double d = (run_tree->rest_surface().row(k).transpose() - p).squaredNorm();
+      if (best < 0 || d < bd) {
+        best = k;
+        bd = d;
+      }
+    }
+    return best;
+  };
   const Index nb = tree.num_branches();
   std::vector<double> path_len(static_cast<std::size_t>(nb), 0.0);
   std::vector<char> has_child(static_cast<std::size_t>(nb), 0);
@@ -89,7 +119,8 @@ json run_tree(const StudyOptions& o, StudyHost& host, const std::string& primary
       {"branches", nb},
       {"junctions", tree.num_junctions()},
       {"atoms", tree.num_atoms()},
-      {"surface_nodes", tree.num_surface_nodes()},
+      {"surface_nodes", run_tree->num_surface_nodes()},
+      {"surface", blend ? "watertight (blended junctions)" : "one tube per branch"},
       {"rest_max_rho_kappa", rest_check.max_rho_kappa},
       {"rest_rho_kappa_violations", rest_check.violations},
       {"arch",
@@ -101,8 +132,9 @@ json run_tree(const StudyOptions& o, StudyHost& host, const std::string& primary
     std::string key, label;
     Index node;
   };
-  const std::vector<Site> sites = {{"arch", "arch", tree_node(tree, arch_branch, arch_local)},
-                                   {"branch", cat("branch ", side), tree_node(tree, side, side_local)}};
+  const std::vector<Site> sites = {
+      {"arch", "arch", run_node(tree_node(tree, arch_branch, arch_local))},
+      {"branch", cat("branch ", side), run_node(tree_node(tree, side, side_local))}};
   for (const Site& site : sites)
     for (const double f : {0.05, 0.5}) {
       SceneRun r;
@@ -115,16 +147,16 @@ json run_tree(const StudyOptions& o, StudyHost& host, const std::string& primary
              false,
              cat(strength, " ", sig(f), " N on the ", site.label)};
       r.set = primary;
-      r.scene =
-          parse_scene(tree_scene_json(r.e.file, file, unit, site.node, tree.node_atom(site.node), f, every),
-                      root, "tree scene");
+      r.scene = parse_scene(
+          tree_scene_json(r.e.file, file, unit, site.node, run_tree->node_atom(site.node), f, every, blend),
+          root, "tree scene");
       const BuiltScene built = build_scene(r.scene, host.loader());
       r.rel = cat("scenes/", r.set, "/", r.e.file);
       r.dir = root / r.rel;
       r.summary = json::parse(host.run_to_folder(built, r.dir, false));
       record_geometry(r, built);
-      const Index a = tree.node_atom(site.node);
-      const Index b = tree.node_branch(site.node);
+      const Index a = run_tree->node_atom(site.node);
+      const Index b = run_tree->node_branch(site.node);
       const auto& ids = tree.branch_atoms(b);
       const auto it = std::find(ids.begin(), ids.end(), a);
       const std::size_t k = static_cast<std::size_t>(it - ids.begin());

@@ -2,8 +2,11 @@
 // every endpoint, grown as one tree from the root (paths end where they meet it: the junctions).
 #include "medspring/skeleton/centerline_tree.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numbers>
 
 #include "centerline_stages.hpp"
 #include "medspring/core/check.hpp"
@@ -170,6 +173,110 @@ void reroot(std::vector<Index>& parent, Index r) {
     prev = v;
     v = next;
   }
+}
+
+// Ends extended to the input's caps (docs/vessels.md, "Trees from a mesh or a segmentation", step 5): from
+// every end of the cut tree (the root's start, shared by every line; every leaf's end) straight on along
+// the end's direction (the chord over the last max(r, 4 h) of the line) with the end's radius, in steps
+// of h/4, as long as the axis point is inside the object and at least half of 16 points on the ring of
+// kRingFraction x the end radius about it (in the plane normal to the direction) are: a flat cap (a scan's
+// cut) is reached exactly, at an oblique cut the axis stops at the cut's centre, and a rounded tip is
+// reached where a tube of the end radius fits it best (0.76 r beyond the base of a hemisphere: 0.24 r short
+// of the apex, its rim 0.26 r outside). Object = the nearest voxel of the padded working grid (the
+// isosurface at 0.5 on a flat face). At most 4 radii.
+constexpr double kRingFraction = 0.65;
+
+void extend_ends(TreeSkeleton& out, const MaskVolume& mask, const MaskVolume& work, Index pad) {
+  const double step = out.h_min / 4;
+  auto inside = [&](const Vec3& world) {
+    const Vec3 c = mask.to_index(world) + Vec3::Constant(static_cast<double>(pad));
+    const Index i = static_cast<Index>(std::lround(c.x())), j = static_cast<Index>(std::lround(c.y())),
+                k = static_cast<Index>(std::lround(c.z()));
+    if (i < 0 || j < 0 || k < 0 || i >= work.dims[0] || j >= work.dims[1] || k >= work.dims[2]) return false;
+    return work.at(i, j, k) != 0;
+  };
+  // the extension of line c at its start (at_end false) or end: the points to add, tip last
+  auto extension = [&](const Centerline& c, bool at_end, double& length) {
+    length = 0.0;
+    std::vector<Vec3> add;
+    const Index n = c.size();
+    if (n < 2) return add;
+    const Index e = at_end ? n - 1 : 0, dir = at_end ? -1 : 1;
+    const Vec3 q = c.points.row(e).transpose();
+    const double r = c.radii[e];
+    // the end's direction: the principal axis of the line's last max(2 r, 8 h) (at most half the line),
+    // pointing out of the end (a short chord follows the smoothed voxel path's wiggle)
+    const double span = std::max(2.0 * r, 8.0 * out.h_min);
+    const double half = 0.5 * c.length();
+    std::vector<Vec3> pts{q};
+    double sa = 0.0;
+    for (Index k = e; k + dir >= 0 && k + dir < n;) {
+      sa += (c.points.row(k + dir) - c.points.row(k)).norm();
+      k += dir;
+      if (sa > std::min(span, half)) break;
+      pts.push_back(c.points.row(k).transpose());
+    }
+    if (pts.size() < 3) return add;
+    Vec3 mean = Vec3::Zero();
+    for (const Vec3& p : pts) mean += p;
+    mean /= static_cast<double>(pts.size());
+    Mat3 cov = Mat3::Zero();
+    for (const Vec3& p : pts) cov += (p - mean) * (p - mean).transpose();
+    Vec3 t = Eigen::SelfAdjointEigenSolver<Mat3>(cov).eigenvectors().col(2);
+    if (t.dot(q - pts.back()) < 0) t = -t;
+    const Vec3 o = mean + (q - mean).dot(t) * t;  // the extension runs on the fitted axis, from q's foot
+    const Vec3 u = t.unitOrthogonal(), v = t.cross(u);
+    double s_ok = 0.0;
+    for (double sv = step; sv <= 4.0 * r + step; sv += step) {
+      const Vec3 p = o + sv * t;
+      if (!inside(p)) break;
+      int in = 0;
+      for (int a = 0; a < 16; ++a) {
+        const double phi = 2.0 * std::numbers::pi * a / 16.0;
+        in += inside(p + kRingFraction * r * (std::cos(phi) * u + std::sin(phi) * v)) ? 1 : 0;
+      }
+      if (in < 8) break;
+      s_ok = sv;
+    }
+    if (s_ok <= 0) return add;
+    length = s_ok;
+    const Index m = std::max<Index>(1, static_cast<Index>(std::ceil(s_ok / (out.h_min / 2) - 1e-9)));
+    for (Index q2 = 1; q2 <= m; ++q2) add.push_back(o + (s_ok * static_cast<double>(q2) / m) * t);
+    return add;
+  };
+  auto with = [](const Centerline& c, const std::vector<Vec3>& add, double r, bool at_end) {
+    const Index n = c.size(), m = static_cast<Index>(add.size());
+    Centerline x;
+    x.name = c.name;
+    x.points.resize(n + m, 3);
+    x.radii.resize(n + m);
+    const Index off = at_end ? 0 : m;
+    x.points.middleRows(off, n) = c.points;
+    x.radii.segment(off, n) = c.radii;
+    for (Index q = 0; q < m; ++q) {
+      const Index row = at_end ? n + q : m - 1 - q;  // at the start: the tip first
+      x.points.row(row) = add[static_cast<std::size_t>(q)].transpose();
+      x.radii[row] = r;
+    }
+    return x;
+  };
+  double len0 = 0.0;
+  const std::vector<Vec3> root = extension(out.lines.front(), false, len0);
+  const double r0 = out.lines.front().radii[0];
+  double leaf_min = std::numeric_limits<double>::infinity(), leaf_max = 0.0;
+  for (Centerline& c : out.lines) {
+    double len = 0.0;
+    const std::vector<Vec3> tip = extension(c, true, len);
+    const double r_tip = c.radii[c.size() - 1];
+    c = with(with(c, tip, r_tip, true), root, r0, false);
+    leaf_min = std::min(leaf_min, len);
+    leaf_max = std::max(leaf_max, len);
+  }
+  out.extended_root_mm = len0;
+  out.extended_leaf_min_mm = leaf_min;
+  out.extended_leaf_max_mm = leaf_max;
+  out.notes.push_back(cat("ends extended to the input's caps with the end radius: the root by ", len0,
+                          " mm, the leaves by ", leaf_min, "..", leaf_max, " mm"));
 }
 
 }  // namespace
@@ -399,6 +506,7 @@ TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonS
       t.radii = c.radii.segment(r0, e0 - r0 + 1);
       c = std::move(t);
     }
+    if (s.extend_ends) extend_ends(out, mask, work, P);
   }
   out.endpoints = static_cast<Index>(out.lines.size());
   {  // a vessel is longer than it is wide: a skeleton shorter than its own diameter is only a spur

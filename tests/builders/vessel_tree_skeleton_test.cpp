@@ -121,9 +121,10 @@ TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheIn
     EXPECT_TRUE(s.blended && s.surface_closed);
     EXPECT_EQ(s.surface_components, 1);
     ASSERT_TRUE(s.has_distance);
-    // every rebuilt node away from the ends (the flat caps of the tree's path tubes, cut about a radius
-    // short of the input's rounded tips) lies on the input wall; the Hausdorff distance also counts the
-    // ends
+    // every rebuilt node away from the ends lies on the input wall; the Hausdorff distance also counts the
+    // ends, extended to the input's tips (a rounded tip of the mask Y: the flat cap 0.24 r short of its apex;
+    // the mesh Y's flat caps: reached). Measured: mask 0.83 / 0.075 mm, mesh 1.30 / 0.029 mm (before the
+    // ends were extended, cut a radius + a voxel short: 4.09 / 0.16 and 6.08 / 0.40 mm)
     const VecX d = away_from_ends(v);
     std::cout << (from_mask ? "  mask" : "  mesh") << " Y: " << s.branches << " branches, " << s.junctions
               << " junction(s), rest error " << s.rest_error_mm << " mm, Hausdorff " << s.hausdorff_mm
@@ -131,7 +132,8 @@ TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheIn
               << d.maxCoeff() << " mm, mean " << d.mean() << " mm\n";
     EXPECT_LT(d.maxCoeff(), 1.0);
     EXPECT_LT(d.mean(), 0.1);
-    EXPECT_LT(s.hausdorff_mm, 8.0);  // the ends: cut a radius + a voxel short of the input's tips
+    EXPECT_LT(s.hausdorff_mm, from_mask ? 1.2 : 2.0);
+    EXPECT_LT(s.mean_distance_mm, 0.1);
     EXPECT_GT(s.hausdorff_mm, 0.0);
     write_vessel_files(dir, v);  // the package of a tree from a mask
     EXPECT_TRUE(std::filesystem::exists(dir / "vessel.msm"));
@@ -172,7 +174,7 @@ TEST(VesselTreeSkeleton, RealAortaSegmentationIsOneBranch) {
   st.all_branches = true;
   for (const bool blend : {false, true}) {
     SCOPED_TRACE(blend ? "blend" : "tubes");
-    st.blend = blend;
+    st.no_blend = !blend;  // a mask tree's default is the watertight surface marched to the wall
     const VesselBuild v = build_vessel(st);
     const VesselSummary& s = v.summary;
     EXPECT_EQ(s.branches, 1);
@@ -184,19 +186,28 @@ TEST(VesselTreeSkeleton, RealAortaSegmentationIsOneBranch) {
               << s.surface_nodes << " nodes, Hausdorff " << s.hausdorff_mm << " mm, mean "
               << s.mean_distance_mm << " mm; nodes away from the ends to the input: max " << d.maxCoeff()
               << " mm, mean " << d.mean() << " mm\n";
+    EXPECT_EQ(s.blended, blend);
     if (blend) {  // marched to the wall: the target (within 2 mm of the input away from the cut
-                  // ends) holds but for a few nodes at the bend of the descending aorta whose rays from the
-                  // skeleton's axis find no wall (measured: 8 of 1202 nodes, up to 11.2 mm)
+                  // ends) holds but for 3 nodes at a bulge of the descending aorta's bend (the wall up to
+                  // 24 mm from the skeleton's axis, radius 11 mm) where the marched rings would cross and
+                  // the nodes stop part of the way (measured: 3 of 1130, up to 9.2 mm; before the fall-back
+                  // to the nearest wall point, 8 of 1174 up to 11.2 mm)
       EXPECT_TRUE(s.surface_closed);
       EXPECT_EQ(s.self_intersections, 0);
       Index over = 0;
       for (Index k = 0; k < d.size(); ++k) over += d[k] > 2.0;
       std::cout << "  nodes away from the ends farther than 2 mm from the input: " << over << " of "
                 << d.size() << "\n";
-      EXPECT_LT(over, d.size() / 100);
-      EXPECT_LT(d.mean(), 0.2);
-    } else {  // circles of the skeleton's inscribed radius: the aorta's cross-sections are not circles
+      EXPECT_LE(over, 5);
+      EXPECT_LT(d.mean(), 0.05);
+      // the ends reach the scan's cuts (extended): measured 11.8 mm, at the bulge (before: 24.9 mm, the
+      // ends a radius short)
+      EXPECT_LT(s.hausdorff_mm, 13.0);
+      EXPECT_LT(s.mean_distance_mm, 0.5);
+    } else {  // circles of the skeleton's inscribed radius: the aorta's cross-sections are not circles;
+              // open tubes: the input's cut caps are a radius from the end ring (measured 14.3 mm)
       EXPECT_LT(d.mean(), 3.0);
+      EXPECT_LT(s.hausdorff_mm, 16.0);
     }
   }
 }

@@ -82,9 +82,24 @@ TEST(CenterlineTree, YMaskGivesThreeBranchesSharingTheTrunkAndOneJunctionAtTheFo
   EXPECT_EQ(ct.junctions(), 1);
   EXPECT_EQ(ct.branches[1].parent, 0);
   EXPECT_EQ(ct.branches[2].parent, 0);
-  // the root is the widest end (the trunk's, at x = 0, cut about a radius short)
+  // the root is the widest end (the trunk's cap at x = 0); every end reaches its cap (extend_ends: straight
+  // on from the cut a radius short of the tip, with the end radius) within a voxel, on the axis
   const Vec3 root = ct.branches[0].line.points.row(0).transpose();
-  EXPECT_LT(root.x(), 6.0) << root.transpose();
+  std::cout << "  root " << root.transpose() << "\n";
+  EXPECT_NEAR(root.x(), 0.0, h) << root.transpose();
+  EXPECT_LT(root.tail<2>().norm(), h) << root.transpose();
+  for (std::size_t b = 1; b < ct.branches.size(); ++b) {
+    const Centerline& c = ct.branches[b].line;
+    const Vec3 tip = c.points.row(c.size() - 1).transpose();
+    const Vec3 cap = (tip - kB1).norm() < (tip - kB2).norm() ? kB1 : kB2;
+    const double along = (cap - tip).dot((cap - kJ).normalized());
+    std::cout << "  leaf " << b << " end " << along << " mm short of its cap, " << (tip - cap).norm()
+              << " mm from the cap's centre, radius " << c.radii[c.size() - 1] << " mm\n";
+    EXPECT_NEAR(along, 0.0, h);
+    EXPECT_LT((tip - cap).norm(), 1.5 * h);
+  }
+  EXPECT_GT(t.extended_root_mm, 2.0);  // the cut was about a radius (4 mm) short of the tip
+  EXPECT_GT(t.extended_leaf_min_mm, 2.0);
   // the junction: where the two outlets' paths meet, near the fork J
   const Centerline& trunk = ct.branches[0].line;
   const Vec3 junction = trunk.points.row(trunk.size() - 1).transpose();
@@ -123,7 +138,16 @@ TEST(CenterlineTree, StraightTubeIsOneBranchWithoutJunctions) {
     EXPECT_LT(segment_distance(p, a, b), 0.5) << p.transpose();
     EXPECT_NEAR(ct.branches[0].line.radii[k], 3.5, 0.5) << p.transpose();
   }
-  EXPECT_GT(ct.branches[0].line.length(), 41.2 - 2 * 3.5 - 1.0);  // cut about a radius short at each end
+  // both ends straight on to the flat caps (extend_ends), within a voxel
+  const Centerline& c = ct.branches[0].line;
+  const Vec3 e0 = c.points.row(0).transpose(), e1 = c.points.row(c.size() - 1).transpose();
+  const Vec3 ab = (b - a).normalized();
+  const double l0 = std::min((e0 - a).dot(ab), (e1 - a).dot(ab)),
+               l1 = std::max((e0 - a).dot(ab), (e1 - a).dot(ab));
+  std::cout << "  straight tube ends " << l0 << " and " << (b - a).norm() - l1
+            << " mm inside the caps, length " << c.length() << " of " << (b - a).norm() << " mm\n";
+  EXPECT_NEAR(l0, 0.0, 0.5);
+  EXPECT_NEAR(l1, (b - a).norm(), 0.5);
 }
 
 // The TotalSegmentator aorta (../shared/data/README.md: label 1, 1.5 mm voxels, cut by the scan at both

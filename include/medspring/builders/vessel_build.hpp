@@ -35,7 +35,9 @@ struct VesselBuildSettings {
   bool all_branches = false;      // centerline: every polyline, merged into a tree (SmrmTree)
   double merge_tolerance = 0.05;  // mm: points of two polylines closer than this are one
   bool blend = false;             // tree: one watertight surface (union of the closed path tubes, CGAL)
-                                  // instead of one open tube per branch
+                                  // instead of one open tube per branch; always for a mesh / mask tree
+                                  // (there marched to the input's wall) unless no_blend
+  bool no_blend = false;          // mesh / mask tree: one open tube per branch (the skeleton's circles)
   double blend_spacing = 0.0;     // mm between the rings of the path tubes; 0 = the atom spacing
   OrganSource source{};           // a mesh or a segmentation (exactly one source in all)
   SmrmSettings smrm{};            // atoms (40), spokes (30), bending, chain

@@ -29,6 +29,9 @@ SurfaceDistance surface_distance(const SurfaceMesh& a, const SurfaceMesh& b,
 /// Exact distance (mm) from each point (#P x 3) to the nearest point of `surface`'s triangles.
 VecX distances_to_surface(const MatX3& points, const SurfaceMesh& surface);
 
+/// The nearest point of `surface`'s triangles to each point (#P x 3), mm.
+MatX3 closest_points_on_surface(const MatX3& points, const SurfaceMesh& surface);
+
 /// surface_distance(a, b, settings).hausdorff: the symmetric Hausdorff distance, mm.
 double hausdorff_distance(const SurfaceMesh& a, const SurfaceMesh& b,
                           const SurfaceDistanceSettings& settings = {});

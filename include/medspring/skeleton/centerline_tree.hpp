@@ -26,6 +26,7 @@ struct TreeSkeletonSettings {
                                  // the skeleton voxel nearest to it); else a spur: dropped
   Index max_endpoints = 64;      // InvalidInput beyond (a noisy mask)
   double smoothing_sigma = 0.0;  // mm, Gaussian sigma along every branch (junctions fixed); 0 = 2 h_min
+  bool extend_ends = true;       // every end of the cut tree straight on to the input's cap (end radius)
 };
 
 struct TreeSkeleton {
@@ -34,7 +35,9 @@ struct TreeSkeleton {
   Index dropped = 0;              // side paths dropped as bumps
   Index components = 0;           // 26-connected components of the mask (the largest is used)
   Index object_voxels = 0;
-  double h_min = 0.0;  // mm
+  double h_min = 0.0;                                             // mm
+  double extended_root_mm = 0.0;                                  // extend_ends: the root's start, mm
+  double extended_leaf_min_mm = 0.0, extended_leaf_max_mm = 0.0;  // extend_ends: the leaves' ends, mm
   std::vector<std::string> notes;
 };
 
@@ -48,8 +51,10 @@ struct TreeSkeleton {
 /// re-rooted at its widest end (the inlet). Every branch between junctions / ends is resampled
 /// (h_min / 2) and smoothed with its two ends fixed (§3.5); both ends of the tree (the root's start, every
 /// leaf's end) are cut one vessel radius short of the tip (D-8 adapted: the radius is the 75th percentile
-/// of the radii on the end's half of the line), where the voxel path runs off the axis to the tip's wall;
-/// radius = max(DFB - h_min/2, h_min/2) (§3.5.5).
+/// of the radii on the end's half of the line), where the voxel path runs off the axis to the tip's wall,
+/// then (extend_ends) extended straight on to the input's cap with the end radius (docs/vessels.md, step
+/// 5: along the principal axis of the line's last max(2 r, 8 h), while the axis point and half of a ring
+/// of 0.65 r about it are inside); radius = max(DFB - h_min/2, h_min/2) (§3.5.5).
 /// Deterministic. Throws InvalidInput for an invalid volume, an empty mask, more than max_endpoints, and
 /// a skeleton that is only a spur (shorter than its own diameter: a blob, not a vessel).
 TreeSkeleton extract_centerline_tree(const MaskVolume& mask, const TreeSkeletonSettings& settings = {});

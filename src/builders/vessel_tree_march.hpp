@@ -1,0 +1,16 @@
+// The watertight surface of a vessel tree from a mesh or a mask marched to the input's wall (docs/vessels.md,
+// "A tree from a mesh or a mask gets the watertight surface marched to the wall"); internal to the builders.
+#pragma once
+
+#include <memory>
+
+#include "medspring/builders/vessel_build.hpp"
+
+namespace medspring::builders_detail {
+
+/// The tree with `tree`'s watertight surface marched to `input` (notes and warnings into s, and its
+/// volume); null when the marched surface would intersect itself (then the circles stay, with a warning).
+std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeSettings& ts,
+                                       const SmrmTree& tree, const SurfaceMesh& input, VesselSummary& s);
+
+}  // namespace medspring::builders_detail
