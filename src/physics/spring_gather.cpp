@@ -7,6 +7,11 @@
 #include <cstdint>
 #include <cstring>
 
+#if defined(__AVX512VL__) && defined(__GNUC__) && !defined(__clang__)
+#define MEDSPRING_FUSED_SPRING_PASS 1
+#include <immintrin.h>
+#endif
+
 #include "medspring/physics/kernels.hpp"
 #include "spring_kernel.hpp"
 
@@ -141,6 +146,66 @@ inline void block_forces(Index nb, const double* __restrict ex, const double* __
   stiff_bits = sm;
 }
 
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+typedef double v4r __attribute__((vector_size(32)));        // registers (32-byte aligned type)
+typedef std::int64_t v4i __attribute__((vector_size(32)));  // lane masks and bit patterns
+
+// Springs [s0, s1) (s1 - s0 a multiple of 4), four at a time in registers: one masked 32-byte load per
+// end ((x, y, z) and a zero: the masked lane is neither read nor faulted, so the last node's row is
+// safe), a 4 x 4 transpose to (ex, ey, ez), block_forces' arithmetic lane-wise (the same expressions:
+// the same bits), and the slot stores t e as (x, y, z, 0) and its negation. Returns the running maximum
+// of the stiffening bits (see block_forces).
+template <bool Stiff>
+v4i fused_forces(Index s0, Index s1, const Springs& S, const double* __restrict IKp,
+                 const double* __restrict x, v4d* __restrict Fi, v4d* __restrict Fj, v4i sm) {
+  const Index* __restrict I = S.i.data();
+  const Index* __restrict J = S.j.data();
+  const double* __restrict L0p = S.L0.data();
+  const double* __restrict Kp = S.k.data();
+  const double* __restrict KPp = S.kp.data();
+  const v4r one = {1.0, 1.0, 1.0, 1.0}, zero = {0.0, 0.0, 0.0, 0.0};
+  constexpr double kmin2 = hd::kMinSpringLength * hd::kMinSpringLength;
+  const v4r min2 = {kmin2, kmin2, kmin2, kmin2};
+  for (Index s = s0; s < s1; s += 4) {
+    __m256d e[4];
+    for (int k = 0; k < 4; ++k)
+      e[k] = _mm256_sub_pd(_mm256_maskz_loadu_pd(0x7, x + 3 * J[s + k]),
+                           _mm256_maskz_loadu_pd(0x7, x + 3 * I[s + k]));
+    const __m256d t0 = _mm256_unpacklo_pd(e[0], e[1]);  // e0x e1x e0z e1z
+    const __m256d t1 = _mm256_unpackhi_pd(e[0], e[1]);  // e0y e1y 0 0
+    const __m256d t2 = _mm256_unpacklo_pd(e[2], e[3]);
+    const __m256d t3 = _mm256_unpackhi_pd(e[2], e[3]);
+    const v4r ex = _mm256_permute2f128_pd(t0, t2, 0x20);
+    const v4r ey = _mm256_permute2f128_pd(t1, t3, 0x20);
+    const v4r ez = _mm256_permute2f128_pd(t0, t2, 0x31);
+    const v4r L0 = _mm256_loadu_pd(L0p + s), K = _mm256_loadu_pd(Kp + s), KP = _mm256_loadu_pd(KPp + s);
+    const v4r L2 = ex * ex + ey * ey + ez * ez;
+    const v4i ok = L2 >= min2;  // else skipped (§1.3)
+    const v4r L = _mm256_sqrt_pd(ok ? L2 : one);
+    const v4r inv = one / L;
+    const v4r d = L - L0;
+    const v4r kp_d2 = KP * d * d;
+    const v4r phi = d * (K + kp_d2);  // eq. (5)
+    const v4r t = ok ? phi * inv : zero;
+    if constexpr (Stiff) {
+      const v4r IK = _mm256_loadu_pd(IKp + s);
+      const v4r dphi = K + 3.0 * kp_d2;
+      const v4r at = _mm256_andnot_pd(-zero, t);
+      v4r kap = (dphi < at ? at : dphi) * IK;
+      kap = (ok & (kap >= zero)) ? kap : zero;  // NaN and skipped springs do not count
+      const v4i bits = reinterpret_cast<v4i>(kap);
+      sm = sm < bits ? bits : sm;
+    }
+    for (int k = 0; k < 4; ++k) {
+      const v4d f = reinterpret_cast<v4r>(e[k]) * t[k];  // (t ex, t ey, t ez, t 0)
+      Fi[s + k] = f;
+      Fj[s + k] = -f;  // exactly the negated force: f_j -= f of the scatter pass
+    }
+  }
+  return sm;
+}
+#endif
+
 // The spring pass: every slot's force into F ((2 #S + 1) x 4: slot s = spring s at its end i, #S + s at
 // its end j, 2 #S zero). Returns max(1, max kappa/k) with Stiff, else 1.
 template <bool Stiff>
@@ -151,7 +216,13 @@ double slot_forces(const Model& m, const double* __restrict x, double* __restric
   v4d* Fj = Fi + ns;
   std::int64_t sm = 0;  // bits of +0.0
   alignas(64) double ex[kBlock], ey[kBlock], ez[kBlock], tt[kBlock];
-  for (Index s0 = 0; s0 < ns; s0 += kBlock) {
+  Index first = 0;
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+  first = ns - ns % 4;
+  const v4i sv = fused_forces<Stiff>(0, first, S, m.inv_k.data(), x, Fi, Fj, v4i{0, 0, 0, 0});
+  for (int k = 0; k < 4; ++k) sm = sm < sv[k] ? sv[k] : sm;
+#endif
+  for (Index s0 = first; s0 < ns; s0 += kBlock) {
     const Index nb = std::min(kBlock, ns - s0);
     spring_vectors(nb, S.i.data() + s0, S.j.data() + s0, x, ex, ey, ez);
     block_forces<Stiff>(nb, ex, ey, ez, S.L0.data() + s0, S.k.data() + s0, S.kp.data() + s0,
