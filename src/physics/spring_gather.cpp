@@ -53,7 +53,8 @@ void build_spring_gather(Model& m) {
   G.width = W;
   G.nodes = n;
   G.springs = ns;
-  const Index zero = 2 * ns;
+  constexpr Index kSlotBytes = 4 * sizeof(double);  // rows hold byte offsets: no scaling in the node pass
+  const Index zero = 2 * ns * kSlotBytes;
   G.row.assign(un * static_cast<std::size_t>(W), zero);
   // slots of every node in increasing spring index (CSR), then split into the row and the overflow
   std::vector<Index> begin(un + 1, 0);
@@ -68,7 +69,7 @@ void build_spring_gather(Model& m) {
   for (std::size_t a = 0; a < un; ++a) {
     const Index d = degree[a];
     for (Index e = 0; e < d; ++e) {
-      const Index slot = slots[static_cast<std::size_t>(begin[a] + e)];
+      const Index slot = slots[static_cast<std::size_t>(begin[a] + e)] * kSlotBytes;
       if (e < W)
         G.row[a * static_cast<std::size_t>(W) + static_cast<std::size_t>(e)] = slot;
       else
@@ -247,7 +248,8 @@ template <int W, bool Guard>
 int node_pass(const Model& m, State& st, double h, double vmax2) {
   const SpringGather& Gt = m.gather;
   const Index n = m.num_nodes();
-  const v4d* __restrict F4 = reinterpret_cast<const v4d*>(st.spring_force.data());
+  const char* __restrict F4 = reinterpret_cast<const char*>(st.spring_force.data());
+  const auto slot = [F4](Index offset) { return *reinterpret_cast<const v4d*>(F4 + offset); };
   const Index* __restrict row = Gt.row.data();
   const Index* __restrict xb = Gt.extra_begin.data();
   const Index* __restrict xs = Gt.extra.data();
@@ -263,13 +265,41 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
   Index advanced = 0;  // free nodes advanced so far (m.free_nodes is in increasing order)
   for (Index a = 0; a < n; ++a) {
     const Index q = 3 * a;
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+    // load and return spring (§1.4) lane-wise from masked loads: hd::return_force's arithmetic
+    const v4r xa = _mm256_maskz_loadu_pd(0x7, X + q);
+    v4d acc = _mm256_maskz_loadu_pd(0x7, FE + q) - KR[a] * (xa - v4r(_mm256_maskz_loadu_pd(0x7, X0 + q)));
+#else
     double g[3];
     hd::return_force(FE + q, X + q, X0 + q, KR[a], g);  // load and return spring (§1.4)
     v4d acc = {g[0], g[1], g[2], 0.0};                  // lane-wise adds: the same sums as three scalar ones
+#endif
     const Index* r = row + static_cast<std::size_t>(a) * W;
 #pragma GCC unroll 16
-    for (int k = 0; k < W; ++k) acc += F4[r[k]];
-    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += F4[xs[e]];
+    for (int k = 0; k < W; ++k) acc += slot(r[k]);
+    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += slot(xs[e]);
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+    _mm256_mask_storeu_pd(G + q, 0x7, acc);
+    if (fixed[a]) continue;
+    // hd::symplectic_velocity / symplectic_position lane-wise (equal to rounding: FMA contraction)
+    const v4r vn = (Mv[a] * v4r(_mm256_maskz_loadu_pd(0x7, V + q)) + h * acc) * C[a];
+    const double v2 = vn[0] * vn[0] + vn[1] * vn[1] + vn[2] * vn[2];
+    if constexpr (Guard) {
+      if (!hd::velocity_ok(v2, vmax2)) {  // also catches NaN
+        undo_symplectic(m, st, h, m.free_nodes.data(), advanced);
+        return std::isfinite(v2) ? 1 : 2;
+      }
+    }
+    // 16 + 8-byte stores: a masked 32-byte store would block the next node's loads of its rows
+    // (the store's masked lane overlaps them; no store forwarding from masked stores)
+    const v4r xn = xa + h * vn;
+    _mm_storeu_pd(V + q, _mm256_castpd256_pd128(vn));
+    _mm_store_sd(V + q + 2, _mm256_extractf128_pd(vn, 1));
+    _mm_storeu_pd(X + q, _mm256_castpd256_pd128(xn));
+    _mm_store_sd(X + q + 2, _mm256_extractf128_pd(xn, 1));
+    ++advanced;
+  }
+#else
     const double gx = acc[0], gy = acc[1], gz = acc[2];
     g[0] = gx;
     g[1] = gy;
@@ -292,6 +322,7 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
     hd::symplectic_position(h, X + q, vn, X + q);
     ++advanced;
   }
+#endif
   return 0;
 }
 
