@@ -249,7 +249,6 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
   const SpringGather& Gt = m.gather;
   const Index n = m.num_nodes();
   const char* __restrict F4 = reinterpret_cast<const char*>(st.spring_force.data());
-  const auto slot = [F4](Index offset) { return *reinterpret_cast<const v4d*>(F4 + offset); };
   const Index* __restrict row = Gt.row.data();
   const Index* __restrict xb = Gt.extra_begin.data();
   const Index* __restrict xs = Gt.extra.data();
@@ -276,8 +275,8 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
 #endif
     const Index* r = row + static_cast<std::size_t>(a) * W;
 #pragma GCC unroll 16
-    for (int k = 0; k < W; ++k) acc += slot(r[k]);
-    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += slot(xs[e]);
+    for (int k = 0; k < W; ++k) acc += *reinterpret_cast<const v4d*>(F4 + r[k]);
+    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += *reinterpret_cast<const v4d*>(F4 + xs[e]);
 #if defined(MEDSPRING_FUSED_SPRING_PASS)
     _mm256_mask_storeu_pd(G + q, 0x7, acc);
     if (fixed[a]) continue;
