@@ -7,6 +7,11 @@
 #include <cstdint>
 #include <cstring>
 
+#if defined(__AVX512VL__) && defined(__GNUC__) && !defined(__clang__)
+#define MEDSPRING_FUSED_SPRING_PASS 1
+#include <immintrin.h>
+#endif
+
 #include "medspring/physics/kernels.hpp"
 #include "spring_kernel.hpp"
 
@@ -48,7 +53,8 @@ void build_spring_gather(Model& m) {
   G.width = W;
   G.nodes = n;
   G.springs = ns;
-  const Index zero = 2 * ns;
+  constexpr Index kSlotBytes = 4 * sizeof(double);  // rows hold byte offsets: no scaling in the node pass
+  const Index zero = 2 * ns * kSlotBytes;
   G.row.assign(un * static_cast<std::size_t>(W), zero);
   // slots of every node in increasing spring index (CSR), then split into the row and the overflow
   std::vector<Index> begin(un + 1, 0);
@@ -63,7 +69,7 @@ void build_spring_gather(Model& m) {
   for (std::size_t a = 0; a < un; ++a) {
     const Index d = degree[a];
     for (Index e = 0; e < d; ++e) {
-      const Index slot = slots[static_cast<std::size_t>(begin[a] + e)];
+      const Index slot = slots[static_cast<std::size_t>(begin[a] + e)] * kSlotBytes;
       if (e < W)
         G.row[a * static_cast<std::size_t>(W) + static_cast<std::size_t>(e)] = slot;
       else
@@ -141,6 +147,66 @@ inline void block_forces(Index nb, const double* __restrict ex, const double* __
   stiff_bits = sm;
 }
 
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+typedef double v4r __attribute__((vector_size(32)));        // registers (32-byte aligned type)
+typedef std::int64_t v4i __attribute__((vector_size(32)));  // lane masks and bit patterns
+
+// Springs [s0, s1) (s1 - s0 a multiple of 4), four at a time in registers: one masked 32-byte load per
+// end ((x, y, z) and a zero: the masked lane is neither read nor faulted, so the last node's row is
+// safe), a 4 x 4 transpose to (ex, ey, ez), block_forces' arithmetic lane-wise (the same expressions:
+// the same bits), and the slot stores t e as (x, y, z, 0) and its negation. Returns the running maximum
+// of the stiffening bits (see block_forces).
+template <bool Stiff>
+v4i fused_forces(Index s0, Index s1, const Springs& S, const double* __restrict IKp,
+                 const double* __restrict x, v4d* __restrict Fi, v4d* __restrict Fj, v4i sm) {
+  const Index* __restrict I = S.i.data();
+  const Index* __restrict J = S.j.data();
+  const double* __restrict L0p = S.L0.data();
+  const double* __restrict Kp = S.k.data();
+  const double* __restrict KPp = S.kp.data();
+  const v4r one = {1.0, 1.0, 1.0, 1.0}, zero = {0.0, 0.0, 0.0, 0.0};
+  constexpr double kmin2 = hd::kMinSpringLength * hd::kMinSpringLength;
+  const v4r min2 = {kmin2, kmin2, kmin2, kmin2};
+  for (Index s = s0; s < s1; s += 4) {
+    __m256d e[4];
+    for (int k = 0; k < 4; ++k)
+      e[k] = _mm256_sub_pd(_mm256_maskz_loadu_pd(0x7, x + 3 * J[s + k]),
+                           _mm256_maskz_loadu_pd(0x7, x + 3 * I[s + k]));
+    const __m256d t0 = _mm256_unpacklo_pd(e[0], e[1]);  // e0x e1x e0z e1z
+    const __m256d t1 = _mm256_unpackhi_pd(e[0], e[1]);  // e0y e1y 0 0
+    const __m256d t2 = _mm256_unpacklo_pd(e[2], e[3]);
+    const __m256d t3 = _mm256_unpackhi_pd(e[2], e[3]);
+    const v4r ex = _mm256_permute2f128_pd(t0, t2, 0x20);
+    const v4r ey = _mm256_permute2f128_pd(t1, t3, 0x20);
+    const v4r ez = _mm256_permute2f128_pd(t0, t2, 0x31);
+    const v4r L0 = _mm256_loadu_pd(L0p + s), K = _mm256_loadu_pd(Kp + s), KP = _mm256_loadu_pd(KPp + s);
+    const v4r L2 = ex * ex + ey * ey + ez * ez;
+    const v4i ok = L2 >= min2;  // else skipped (§1.3)
+    const v4r L = _mm256_sqrt_pd(ok ? L2 : one);
+    const v4r inv = one / L;
+    const v4r d = L - L0;
+    const v4r kp_d2 = KP * d * d;
+    const v4r phi = d * (K + kp_d2);  // eq. (5)
+    const v4r t = ok ? phi * inv : zero;
+    if constexpr (Stiff) {
+      const v4r IK = _mm256_loadu_pd(IKp + s);
+      const v4r dphi = K + 3.0 * kp_d2;
+      const v4r at = _mm256_andnot_pd(-zero, t);
+      v4r kap = (dphi < at ? at : dphi) * IK;
+      kap = (ok & (kap >= zero)) ? kap : zero;  // NaN and skipped springs do not count
+      const v4i bits = reinterpret_cast<v4i>(kap);
+      sm = sm < bits ? bits : sm;
+    }
+    for (int k = 0; k < 4; ++k) {
+      const v4d f = reinterpret_cast<v4r>(e[k]) * t[k];  // (t ex, t ey, t ez, t 0)
+      Fi[s + k] = f;
+      Fj[s + k] = -f;  // exactly the negated force: f_j -= f of the scatter pass
+    }
+  }
+  return sm;
+}
+#endif
+
 // The spring pass: every slot's force into F ((2 #S + 1) x 4: slot s = spring s at its end i, #S + s at
 // its end j, 2 #S zero). Returns max(1, max kappa/k) with Stiff, else 1.
 template <bool Stiff>
@@ -151,7 +217,13 @@ double slot_forces(const Model& m, const double* __restrict x, double* __restric
   v4d* Fj = Fi + ns;
   std::int64_t sm = 0;  // bits of +0.0
   alignas(64) double ex[kBlock], ey[kBlock], ez[kBlock], tt[kBlock];
-  for (Index s0 = 0; s0 < ns; s0 += kBlock) {
+  Index first = 0;
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+  first = ns - ns % 4;
+  const v4i sv = fused_forces<Stiff>(0, first, S, m.inv_k.data(), x, Fi, Fj, v4i{0, 0, 0, 0});
+  for (int k = 0; k < 4; ++k) sm = sm < sv[k] ? sv[k] : sm;
+#endif
+  for (Index s0 = first; s0 < ns; s0 += kBlock) {
     const Index nb = std::min(kBlock, ns - s0);
     spring_vectors(nb, S.i.data() + s0, S.j.data() + s0, x, ex, ey, ez);
     block_forces<Stiff>(nb, ex, ey, ez, S.L0.data() + s0, S.k.data() + s0, S.kp.data() + s0,
@@ -176,7 +248,7 @@ template <int W, bool Guard>
 int node_pass(const Model& m, State& st, double h, double vmax2) {
   const SpringGather& Gt = m.gather;
   const Index n = m.num_nodes();
-  const v4d* __restrict F4 = reinterpret_cast<const v4d*>(st.spring_force.data());
+  const char* __restrict F4 = reinterpret_cast<const char*>(st.spring_force.data());
   const Index* __restrict row = Gt.row.data();
   const Index* __restrict xb = Gt.extra_begin.data();
   const Index* __restrict xs = Gt.extra.data();
@@ -192,13 +264,41 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
   Index advanced = 0;  // free nodes advanced so far (m.free_nodes is in increasing order)
   for (Index a = 0; a < n; ++a) {
     const Index q = 3 * a;
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+    // load and return spring (§1.4) lane-wise from masked loads: hd::return_force's arithmetic
+    const v4r xa = _mm256_maskz_loadu_pd(0x7, X + q);
+    v4d acc = _mm256_maskz_loadu_pd(0x7, FE + q) - KR[a] * (xa - v4r(_mm256_maskz_loadu_pd(0x7, X0 + q)));
+#else
     double g[3];
     hd::return_force(FE + q, X + q, X0 + q, KR[a], g);  // load and return spring (§1.4)
     v4d acc = {g[0], g[1], g[2], 0.0};                  // lane-wise adds: the same sums as three scalar ones
+#endif
     const Index* r = row + static_cast<std::size_t>(a) * W;
 #pragma GCC unroll 16
-    for (int k = 0; k < W; ++k) acc += F4[r[k]];
-    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += F4[xs[e]];
+    for (int k = 0; k < W; ++k) acc += *reinterpret_cast<const v4d*>(F4 + r[k]);
+    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += *reinterpret_cast<const v4d*>(F4 + xs[e]);
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+    _mm256_mask_storeu_pd(G + q, 0x7, acc);
+    if (fixed[a]) continue;
+    // hd::symplectic_velocity / symplectic_position lane-wise (equal to rounding: FMA contraction)
+    const v4r vn = (Mv[a] * v4r(_mm256_maskz_loadu_pd(0x7, V + q)) + h * acc) * C[a];
+    const double v2 = vn[0] * vn[0] + vn[1] * vn[1] + vn[2] * vn[2];
+    if constexpr (Guard) {
+      if (!hd::velocity_ok(v2, vmax2)) {  // also catches NaN
+        undo_symplectic(m, st, h, m.free_nodes.data(), advanced);
+        return std::isfinite(v2) ? 1 : 2;
+      }
+    }
+    // 16 + 8-byte stores: a masked 32-byte store would block the next node's loads of its rows
+    // (the store's masked lane overlaps them; no store forwarding from masked stores)
+    const v4r xn = xa + h * vn;
+    _mm_storeu_pd(V + q, _mm256_castpd256_pd128(vn));
+    _mm_store_sd(V + q + 2, _mm256_extractf128_pd(vn, 1));
+    _mm_storeu_pd(X + q, _mm256_castpd256_pd128(xn));
+    _mm_store_sd(X + q + 2, _mm256_extractf128_pd(xn, 1));
+    ++advanced;
+  }
+#else
     const double gx = acc[0], gy = acc[1], gz = acc[2];
     g[0] = gx;
     g[1] = gy;
@@ -221,6 +321,7 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
     hd::symplectic_position(h, X + q, vn, X + q);
     ++advanced;
   }
+#endif
   return 0;
 }
 

@@ -78,7 +78,9 @@ TEST(GatherPass, IrregularDegreesUseTheOverflowRows) {
     std::vector<int> seen(static_cast<std::size_t>(2 * m.num_springs()), 0);
     for (Index a = 0; a < m.num_nodes(); ++a) {
       Index last = -1;
-      auto visit = [&](Index slot) {
+      auto visit = [&](Index offset) {
+        const Index slot = offset / static_cast<Index>(4 * sizeof(double));  // rows hold byte offsets
+        EXPECT_EQ(offset, slot * static_cast<Index>(4 * sizeof(double)));
         if (slot == 2 * m.num_springs()) return;  // padding
         ++seen[static_cast<std::size_t>(slot)];
         const Index s = slot < m.num_springs() ? slot : slot - m.num_springs();

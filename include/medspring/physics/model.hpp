@@ -38,6 +38,7 @@ struct BendingTerms {
 /// derived by finalize(). Slot s is spring s seen from its end i, slot #S + s from its end j, slot 2 #S
 /// is zero (padding). Node a's slots, in increasing spring index: the first `width` in
 /// row[a * width ...] (padded with 2 #S), the rest in extra[extra_begin[a] .. extra_begin[a + 1]).
+/// row and extra hold byte offsets of the slots (slot * 32: four doubles per slot), not slot indices.
 /// Empty (width 0) where the gather pass does not apply: more than kSpringGatherMaxSprings springs,
 /// soft springs, bending or volume terms.
 struct SpringGather {
