@@ -317,12 +317,16 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       const auto* vb = dynamic_cast<const VolumetricBody*>(b.get());
       const MeshModuli mm = mesh_moduli(b->model(), vm.surface_nodes, vb->stats().volume_mm3, &vm.F);
       const double mu = vb->stats().mu, K = vb->stats().lambda + 2.0 * mu / 3.0;
-      out["volumetric"]["effective_moduli"][label] = {
-          {"mu_ratio", mm.mu / mu},         {"K_ratio", mm.K / K},
-          {"mu_min_ratio", mm.mu_min / mu}, {"mu_max_ratio", mm.mu_max / mu},
-          {"mu_affine_ratio", mm.mu_affine / mu}, {"K_affine_ratio", mm.K_affine / K},
-          {"mu_traction_ratio", mm.mu_traction / mu}, {"K_traction_ratio", mm.K_traction / K},
-          {"nu_eff", mm.nu()},              {"E_eff_kPa", mm.E() * 1e3}};
+      out["volumetric"]["effective_moduli"][label] = {{"mu_ratio", mm.mu / mu},
+                                                      {"K_ratio", mm.K / K},
+                                                      {"mu_min_ratio", mm.mu_min / mu},
+                                                      {"mu_max_ratio", mm.mu_max / mu},
+                                                      {"mu_affine_ratio", mm.mu_affine / mu},
+                                                      {"K_affine_ratio", mm.K_affine / K},
+                                                      {"mu_traction_ratio", mm.mu_traction / mu},
+                                                      {"K_traction_ratio", mm.K_traction / K},
+                                                      {"nu_eff", mm.nu()},
+                                                      {"E_eff_kPa", mm.E() * 1e3}};
       note(st, cat(o.name, ": volumetric ", label, ": effective mu/mu = ", mm.mu / mu, " (", mm.mu_min / mu,
                    "..", mm.mu_max / mu, ", affine ", mm.mu_affine / mu, "), K/K = ", mm.K / K, " (affine ",
                    mm.K_affine / K, "), nu_eff = ", mm.nu(), ", E_eff = ", mm.E() * 1e3, " kPa"));
@@ -361,15 +365,20 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         VecX r = VecX::Zero(nf);
         for (Index a = 0; a < fs.rows(); ++a)
           for (int d = 0; d < 3; ++d)
-            if (map[static_cast<std::size_t>(3 * a + d)] >= 0) r[map[static_cast<std::size_t>(3 * a + d)]] = fs(a, d);
+            if (map[static_cast<std::size_t>(3 * a + d)] >= 0)
+              r[map[static_cast<std::size_t>(3 * a + d)]] = fs(a, d);
         const VecX u = ldlt.solve(r);
         MatX3 up = MatX3::Zero(vm.surface_nodes, 3);
         for (Index a = 0; a < vm.surface_nodes; ++a)
           for (int d = 0; d < 3; ++d)
-            if (map[static_cast<std::size_t>(3 * a + d)] >= 0) up(a, d) = u[map[static_cast<std::size_t>(3 * a + d)]];
+            if (map[static_cast<std::size_t>(3 * a + d)] >= 0)
+              up(a, d) = u[map[static_cast<std::size_t>(3 * a + d)]];
         const Index contact = sites[static_cast<std::size_t>(c.site_index)];
-        const fem::SurfaceError el = fem::compare(lin[i], c.u_fem, contact), ep = fem::compare(up, c.u_fem, contact);
-        diag.push_back({{"site", c.site_index}, {"force_N", c.force}, {"train", c.train},
+        const fem::SurfaceError el = fem::compare(lin[i], c.u_fem, contact),
+                                ep = fem::compare(up, c.u_fem, contact);
+        diag.push_back({{"site", c.site_index},
+                        {"force_N", c.force},
+                        {"train", c.train},
                         {"springs_linear_contact_pct", 100 * el.rel(el.contact_error)},
                         {"springs_linear_rms_pct", 100 * el.rel(el.rms)},
                         {"springs_linear_contact_ratio", el.contact_model / el.contact_fem},
