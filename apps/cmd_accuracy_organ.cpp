@@ -63,6 +63,7 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.nu = o.nu;
     s.spring_scale = m(0);
     s.volume_scale = m(1);
+    s.moduli_correction = k.corrected;
     if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
     s.fixed = support;
     return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
@@ -147,9 +148,10 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
     std::stringstream ss(*k);
     std::string item;
     while (std::getline(ss, item, ',')) {
-      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing",
+      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing" ||
+                  item == "volumetric-corrected",
               cmd, ": --kinds: unknown kind '", item,
-              "' (expected surface, hybrid, volumetric, volumetric-duffing)");
+              "' (expected surface, hybrid, volumetric, volumetric-duffing, volumetric-corrected)");
       st.kinds.push_back(item);
     }
     require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
@@ -289,16 +291,20 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     kinds.push_back({"hybrid", true, true});
     kinds.push_back({"hybrid", false, true});
   }
+  if (std::find(st.kinds.begin(), st.kinds.end(), "volumetric-corrected") != st.kinds.end())
+    kinds.push_back({"volumetric", false, false, true});  // opt-in, linear: the moduli correction
   if (o.atoms.rows() == 0 &&
       std::erase_if(kinds, [](const Kind& k) { return k.base == "hybrid"; }) > 0)  // no medial skeleton
     out["notes"].push_back(
         "hybrid kind left out: it needs a medial skeleton (a kidney's), this organ has none");
   if (!st.kinds.empty())
-    std::erase_if(
-        kinds, [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
-          const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing" : "");
-          return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
-        });
+    std::erase_if(kinds,
+                  [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
+                    const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing"
+                                                        : k.corrected                         ? "-corrected"
+                                                                                              : "");
+                    return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
+                  });
   o.E_kPa = st.material.E * 1e3;
   o.nu = st.material.nu;
   o.target_nodes = st.volumetric_nodes;

@@ -3,6 +3,8 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "medspring/core/check.hpp"
@@ -139,6 +141,72 @@ Eigen::SparseMatrix<double> p1_stiffness(const MatX3& X, const MatX4i& T, double
   Eigen::SparseMatrix<double> K(3 * n, 3 * n);
   K.setFromTriplets(trip.begin(), trip.end());
   return K;
+}
+
+ModuliCorrection moduli_correction(const VolumetricMesh& mesh, double mu, double lambda) {
+  static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  const Index n = static_cast<Index>(mesh.X.rows());
+  const double kv = std::max(lambda - mu, 0.0), K = lambda + 2.0 * mu / 3.0;
+  // rest stiffness of the rule's springs (Ks) and volume terms (Kv), assembled separately
+  std::vector<Eigen::Triplet<double>> ts, tv;
+  double volume = 0;
+  for (Index t = 0; t < mesh.T.rows(); ++t) {
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = mesh.X.row(mesh.T(t, k)).transpose();
+    const Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
+    const double V = std::abs(e1.dot(e2.cross(e3))) / 6.0;
+    require(V > 0, "moduli_correction: tetrahedron ", t, " is degenerate");
+    volume += V;
+    for (const auto& e : kEdges) {
+      const Vec3 d = p[e[1]] - p[e[0]];
+      const double L2 = d.squaredNorm();
+      const Mat3 B = 2.5 * mu * V / L2 * (d * d.transpose()) / L2;
+      const Index a = mesh.T(t, e[0]), b = mesh.T(t, e[1]);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          ts.emplace_back(3 * a + i, 3 * a + j, B(i, j));
+          ts.emplace_back(3 * b + i, 3 * b + j, B(i, j));
+          ts.emplace_back(3 * a + i, 3 * b + j, -B(i, j));
+          ts.emplace_back(3 * b + i, 3 * a + j, -B(i, j));
+        }
+    }
+    if (kv > 0) {
+      Vec3 g[4];
+      g[1] = e2.cross(e3) / 6.0;
+      g[2] = e3.cross(e1) / 6.0;
+      g[3] = e1.cross(e2) / 6.0;
+      g[0] = -(g[1] + g[2] + g[3]);
+      const double sgn = e1.dot(e2.cross(e3)) > 0 ? 1.0 : -1.0;  // g up to the orientation (gg^T is even)
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+          const Mat3 B = kv / V * (sgn * g[a]) * (sgn * g[b]).transpose();
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) tv.emplace_back(3 * mesh.T(t, a) + i, 3 * mesh.T(t, b) + j, B(i, j));
+        }
+    }
+  }
+  Eigen::SparseMatrix<double> Ks(3 * n, 3 * n), Kv(3 * n, 3 * n);
+  Ks.setFromTriplets(ts.begin(), ts.end());
+  Kv.setFromTriplets(tv.begin(), tv.end());
+  auto measure = [&](double s, double v) {
+    const Eigen::SparseMatrix<double> Kt = s * Ks + v * Kv;
+    const MeshModuli m = mesh_moduli(Kt, mesh.X, mesh.surface_nodes, volume, &mesh.F, "moduli_correction");
+    return std::pair<double, double>{0.5 * (m.mu + m.mu_traction), 0.5 * (m.K + m.K_traction)};
+  };
+  ModuliCorrection c;
+  auto [mu_e, K_e] = measure(1, 1);
+  c.mu_before = mu_e / mu;
+  c.K_before = K_e / K;
+  for (int round = 0; round < 3; ++round) {
+    // bulk: the affine value is s 5 mu / 3 + v kv (springs: lambda_s = mu); the relaxation scales it by r
+    const double r = K_e / (c.spring * 5.0 * mu / 3.0 + c.volume * kv);
+    c.spring *= mu / mu_e;  // shear: the springs (the volume terms add none under affine shear)
+    if (kv > 0) c.volume = std::max(0.0, (K / r - c.spring * 5.0 * mu / 3.0) / kv);
+    std::tie(mu_e, K_e) = measure(c.spring, c.volume);
+  }
+  c.mu_after = mu_e / mu;
+  c.K_after = K_e / K;
+  return c;
 }
 
 }  // namespace medspring

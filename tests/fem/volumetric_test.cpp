@@ -610,3 +610,30 @@ TEST(MeshModuli, TetgenCubeRelaxesLittleBelowTheRule) {
   }
   EXPECT_THROW(mesh_moduli(p1_stiffness(m.X, m.T, 1, 1), m.X, 0, 1.0), InvalidInput);
 }
+
+TEST(MeshModuli, TheOptInCorrectionBringsTheCubesModuliToTheTarget) {
+  const double L = 20;
+  const VolumetricMesh m = fem::volumetric_mesh(box_surface(6, L), {.target_nodes = 900});
+  for (double nu : {0.3, 0.45}) {
+    VolumetricSettings st;
+    st.nu = nu;
+    st.return_k = 0.0;
+    st.fixed = {0, 1, 2, 3};
+    st.moduli_correction = true;
+    const VolumetricBody body(m, st, "cube");
+    const MeshModuli mm = mesh_moduli(body.model(), m.surface_nodes, 0, &m.F);
+    const double mu = body.stats().mu, K = body.stats().lambda + 2 * mu / 3;
+    std::cout << "cube, nu = " << nu << ", corrected: springs x " << body.stats().spring_correction
+              << ", volume terms x " << body.stats().volume_correction << "; mu/mu "
+              << 0.5 * (mm.mu + mm.mu_traction) / mu << ", K/K " << 0.5 * (mm.K + mm.K_traction) / K
+              << " (before " << body.stats().mu_ratio_before << ", " << body.stats().K_ratio_before << ")\n";
+    EXPECT_NEAR(0.5 * (mm.mu + mm.mu_traction) / mu, 1.0, 0.01) << "nu " << nu;
+    EXPECT_NEAR(0.5 * (mm.K + mm.K_traction) / K, 1.0, 0.01) << "nu " << nu;
+    EXPECT_LT(body.stats().mu_ratio_before, 0.99);
+    EXPECT_GT(body.stats().spring_correction, 1.01);
+    // the body keeps the corrected scales and the flag off: rebuilding from settings() is the same model
+    EXPECT_FALSE(body.settings().moduli_correction);
+    const VolumetricBody again(m, body.settings(), "cube");
+    EXPECT_EQ(model_fingerprint(again.model()), model_fingerprint(body.model()));
+  }
+}

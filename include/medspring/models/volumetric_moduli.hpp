@@ -49,4 +49,17 @@ MeshModuli mesh_moduli(const Eigen::SparseMatrix<double>& K, const MatX3& X, Ind
 /// that separates the mesh's own discretisation error from the spring rule's (docs/accuracy.md).
 Eigen::SparseMatrix<double> p1_stiffness(const MatX3& X, const MatX4i& T, double mu, double lambda);
 
+/// Multipliers (springs, volume terms) that bring the measured effective moduli of the mesh to (mu, lambda):
+/// the volumetric rule of docs/volumetric.md (springs k = 5/2 mu V / L^2 per tetrahedron, volume modulus
+/// lambda - mu) is exact for affine deformation only; on an irregular mesh the interior relaxes and the
+/// network comes out a few % softer. The target is the mean of the uniform-strain (upper) and
+/// uniform-traction (lower) estimates of mesh_moduli; three fixed-point rounds (springs from mu, volume terms
+/// from the bulk modulus); with nu < 1/4 (no volume term) only the springs are corrected.
+struct ModuliCorrection {
+  double spring = 1, volume = 1;       // multipliers of the rule's springs and volume terms
+  double mu_before = 0, K_before = 0;  // measured effective moduli / target before the correction
+  double mu_after = 0, K_after = 0;    // and after
+};
+ModuliCorrection moduli_correction(const VolumetricMesh& mesh, double mu, double lambda);
+
 }  // namespace medspring
