@@ -19,26 +19,16 @@
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/models/model_package.hpp"
 #include "medspring/models/volumetric_body.hpp"
-#include "medspring/models/volumetric_moduli.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/static_solve.hpp"
+#include "volumetric_fixtures.hpp"
 
 using namespace medspring;
+using medspring::testing::box_surface;
+using medspring::testing::one_tet;
 
 namespace {
-
-// A single tetrahedron as a closed surface + mesh (all four nodes on the surface).
-VolumetricMesh one_tet(const MatX3& X) {
-  VolumetricMesh m;
-  m.X = X;
-  m.T.resize(1, 4);
-  m.T << 0, 1, 2, 3;
-  m.F.resize(4, 3);
-  m.F << 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2;
-  m.surface_nodes = 4;
-  return m;
-}
 
 MatX3 regular_tet(double l) {
   MatX3 X(4, 3);
@@ -90,50 +80,6 @@ VolumetricMesh cube_mesh(int cells, double L) {
   for (Index f = 0; f < B.rows(); ++f)
     for (int k = 0; k < 3; ++k) m.F(f, k) = newid[static_cast<std::size_t>(B(f, k))];
   m.surface_nodes = ns;
-  return m;
-}
-
-// Closed box surface [0, L]^3 with n x n squares per face (two triangles each), outward, shared vertices.
-SurfaceMesh box_surface(int n, double L) {
-  std::map<std::array<long, 3>, Index> id;
-  std::vector<Vec3> P;
-  std::vector<std::array<Index, 3>> T;
-  auto vid = [&](const Vec3& p) {
-    const std::array<long, 3> key{std::lround(p(0) * 1e6), std::lround(p(1) * 1e6), std::lround(p(2) * 1e6)};
-    auto it = id.find(key);
-    if (it != id.end()) return it->second;
-    P.push_back(p);
-    return id[key] = static_cast<Index>(P.size()) - 1;
-  };
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          Index q[4];
-          for (int c = 0; c < 4; ++c) {
-            Vec3 p;
-            p(axis) = side * L;
-            p(u) = L * (i + (c == 1 || c == 2)) / n;
-            p(v) = L * (j + (c >= 2)) / n;
-            q[c] = vid(p);
-          }
-          // (u, v, axis) right-handed: counter-clockwise in (u, v) points along +axis
-          if (side == 1) {
-            T.push_back({q[0], q[1], q[2]});
-            T.push_back({q[0], q[2], q[3]});
-          } else {
-            T.push_back({q[0], q[2], q[1]});
-            T.push_back({q[0], q[3], q[2]});
-          }
-        }
-    }
-  SurfaceMesh m;
-  m.V.resize(static_cast<Index>(P.size()), 3);
-  for (std::size_t i = 0; i < P.size(); ++i) m.V.row(static_cast<Index>(i)) = P[i].transpose();
-  m.F.resize(static_cast<Index>(T.size()), 3);
-  for (std::size_t f = 0; f < T.size(); ++f)
-    for (int k = 0; k < 3; ++k) m.F(static_cast<Index>(f), k) = T[f][static_cast<std::size_t>(k)];
   return m;
 }
 
@@ -543,97 +489,5 @@ TEST(SupportRule, AFacingBedAndACapHoldAVesselLikeOrganAndALonePointIsRefused) {
     ADD_FAILURE() << "a single support point accepted by the volumetric kind";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("collinear or coincident"), std::string::npos) << e.what();
-  }
-}
-
-// Effective moduli of a mesh (models/volumetric_moduli.hpp, docs/volumetric.md "Effective moduli of the
-// mesh"): exact for the P1 finite element (homogeneous fields are in its space) under both boundary
-// conditions; exact for one tetrahedron of the spring rule (bulk modulus, and the mean over the five
-// deviatoric modes is the isotropic part, i.e. mu); and on a TetGen cube the relaxed network stays close.
-TEST(MeshModuli, P1ElementsGiveTheExactModuliUnderUniformStrainAndUniformTraction) {
-  const double L = 20;
-  const VolumetricMesh m = fem::volumetric_mesh(box_surface(6, L), {.target_nodes = 600});
-  double mu = 0, la = 0;
-  lame_parameters(10, 0.3, mu, la, "test");
-  const MeshModuli mm = mesh_moduli(p1_stiffness(m.X, m.T, mu, la), m.X, m.surface_nodes, L * L * L, &m.F);
-  const double K = la + 2 * mu / 3;
-  EXPECT_NEAR(mm.mu / mu, 1.0, 1e-8);
-  EXPECT_NEAR(mm.mu_min / mu, 1.0, 1e-8);
-  EXPECT_NEAR(mm.mu_max / mu, 1.0, 1e-8);
-  EXPECT_NEAR(mm.K / K, 1.0, 1e-8);
-  EXPECT_NEAR(mm.mu_traction / mu, 1.0, 1e-6);
-  EXPECT_NEAR(mm.K_traction / K, 1.0, 1e-6);
-  EXPECT_NEAR(mm.nu(), 0.3, 1e-8);
-  EXPECT_NEAR(mm.E() * 1e3, 10.0, 1e-7);
-}
-
-TEST(MeshModuli, OneTetrahedronOfTheSpringRuleHasMuAndKExactly) {
-  MatX3 X(4, 3);
-  X << 0, 0, 0, 3, 0.2, 0, 0.5, 2.5, 0.1, 0.7, 0.4, 2.2;  // irregular
-  for (double nu : {0.3, 0.45}) {
-    VolumetricSettings st;
-    st.nu = nu;
-    st.fixed = {0, 1, 2};
-    const VolumetricBody body(one_tet(X), st, "tet");
-    const MeshModuli mm = mesh_moduli(body.model(), 4);  // every node on the boundary: affine
-    const double mu = body.stats().mu, K = body.stats().lambda + 2 * mu / 3;
-    EXPECT_NEAR(mm.mu / mu, 1.0, 1e-9) << "nu " << nu;  // the isotropic part of the springs is mu
-    EXPECT_NEAR(mm.K / K, 1.0, 1e-9) << "nu " << nu;    // bulk exact for every shape
-    EXPECT_LT(mm.mu_min, 0.99 * mu) << "one tetrahedron is anisotropic";
-    EXPECT_GT(mm.mu_max, 1.01 * mu);
-  }
-}
-
-TEST(MeshModuli, TetgenCubeRelaxesLittleBelowTheRule) {
-  const double L = 20;
-  const VolumetricMesh m = fem::volumetric_mesh(box_surface(6, L), {.target_nodes = 900});
-  for (double nu : {0.3, 0.45}) {
-    VolumetricSettings st;
-    st.nu = nu;
-    st.return_k = 0.0;
-    st.fixed = {0, 1, 2, 3};
-    const VolumetricBody body(m, st, "cube");
-    const MeshModuli mm = mesh_moduli(body.model(), m.surface_nodes, 0, &m.F);
-    const double mu = body.stats().mu, K = body.stats().lambda + 2 * mu / 3;
-    std::cout << "cube " << m.X.rows() << " nodes, nu = " << nu << ": mu/mu " << mm.mu_traction / mu << " .. "
-              << mm.mu / mu << ", K/K " << mm.K_traction / K << " .. " << mm.K / K << ", nu_eff " << mm.nu()
-              << "\n";
-    EXPECT_NEAR(mm.volume, L * L * L, 1e-6 * L * L * L);
-    EXPECT_NEAR(mm.mu_affine / mu, 1.0, 0.03);  // the rule holds on average over the mesh's orientations
-    EXPECT_NEAR(mm.K_affine / K, 1.0, 1e-9);    // and exactly for the bulk modulus
-    EXPECT_LE(mm.mu, mm.mu_affine * (1 + 1e-9)) << "relaxation only lowers the energy";
-    EXPECT_LE(mm.mu_traction, mm.mu * (1 + 1e-9)) << "uniform traction is the lower bound";
-    EXPECT_LE(mm.K_traction, mm.K * (1 + 1e-9));
-    EXPECT_GT(mm.mu_traction / mu, 0.85);
-    EXPECT_GT(mm.K_traction / K, 0.85);
-    EXPECT_NEAR(mm.nu(), nu, 0.03);
-  }
-  EXPECT_THROW(mesh_moduli(p1_stiffness(m.X, m.T, 1, 1), m.X, 0, 1.0), InvalidInput);
-}
-
-TEST(MeshModuli, TheOptInCorrectionBringsTheCubesModuliToTheTarget) {
-  const double L = 20;
-  const VolumetricMesh m = fem::volumetric_mesh(box_surface(6, L), {.target_nodes = 900});
-  for (double nu : {0.3, 0.45}) {
-    VolumetricSettings st;
-    st.nu = nu;
-    st.return_k = 0.0;
-    st.fixed = {0, 1, 2, 3};
-    st.moduli_correction = true;
-    const VolumetricBody body(m, st, "cube");
-    const MeshModuli mm = mesh_moduli(body.model(), m.surface_nodes, 0, &m.F);
-    const double mu = body.stats().mu, K = body.stats().lambda + 2 * mu / 3;
-    std::cout << "cube, nu = " << nu << ", corrected: springs x " << body.stats().spring_correction
-              << ", volume terms x " << body.stats().volume_correction << "; mu/mu "
-              << 0.5 * (mm.mu + mm.mu_traction) / mu << ", K/K " << 0.5 * (mm.K + mm.K_traction) / K
-              << " (before " << body.stats().mu_ratio_before << ", " << body.stats().K_ratio_before << ")\n";
-    EXPECT_NEAR(0.5 * (mm.mu + mm.mu_traction) / mu, 1.0, 0.01) << "nu " << nu;
-    EXPECT_NEAR(0.5 * (mm.K + mm.K_traction) / K, 1.0, 0.01) << "nu " << nu;
-    EXPECT_LT(body.stats().mu_ratio_before, 0.99);
-    EXPECT_GT(body.stats().spring_correction, 1.01);
-    // the body keeps the corrected scales and the flag off: rebuilding from settings() is the same model
-    EXPECT_FALSE(body.settings().moduli_correction);
-    const VolumetricBody again(m, body.settings(), "cube");
-    EXPECT_EQ(model_fingerprint(again.model()), model_fingerprint(body.model()));
   }
 }
