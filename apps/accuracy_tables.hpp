@@ -43,8 +43,10 @@ struct Kind {
   std::string base;  // surface | hybrid | volumetric
   bool nonlinear = false;
   bool local = false;
+  bool corrected = false;  // volumetric: the opt-in moduli correction (VolumetricSettings::moduli_correction)
   std::string label() const {
-    return base + (local ? " + local" : "") + (nonlinear ? " (Duffing)" : " (linear)");
+    return base + (local ? " + local" : "") + (nonlinear ? " (Duffing" : " (linear") +
+           (corrected ? ", moduli-corrected)" : ")");
   }
   Index stiffness_families() const { return base == "surface" || base == "volumetric" ? 2 : 4; }
   // + eta of the Duffing springs (D-3: k' = eta k / L0^2; the volumetric kind keeps eta = 1: its

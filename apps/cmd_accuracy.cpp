@@ -243,6 +243,7 @@ int cmd_calibrate(const Args& args) {
   json maps;
   const json r = run_organ(o, st, maps, {{kind, !args.flag("linear"), false}}, false);
   json out = {{"organ", r["organ"]}, {"material", {{"E_kPa", st.material.E * 1e3}, {"nu", st.material.nu}}}};
+  if (r.contains("volumetric")) out["volumetric"] = r["volumetric"];  // mesh, effective moduli
   for (const auto& m : r["models"]) {
     if (!m["calibrated"].get<bool>()) {
       out["default_held_out_mean_rms_pct"] = m["held_out_mean_rms_pct"];

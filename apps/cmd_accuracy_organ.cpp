@@ -1,6 +1,7 @@
 // `medspring accuracy` / `calibrate`: the organ tables (docs/accuracy.md) — FEM cases under matched supports
 // and contact loads, every model kind with default and calibrated stiffnesses, errors on held-out cases.
 #include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -30,6 +31,7 @@
 #include "medspring/models/surface_body.hpp"
 #include "medspring/models/tissue.hpp"
 #include "medspring/models/volumetric_body.hpp"
+#include "medspring/models/volumetric_moduli.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
@@ -61,6 +63,7 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.nu = o.nu;
     s.spring_scale = m(0);
     s.volume_scale = m(1);
+    s.moduli_correction = k.corrected;
     if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
     s.fixed = support;
     return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
@@ -145,9 +148,10 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
     std::stringstream ss(*k);
     std::string item;
     while (std::getline(ss, item, ',')) {
-      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing",
+      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing" ||
+                  item == "volumetric-corrected",
               cmd, ": --kinds: unknown kind '", item,
-              "' (expected surface, hybrid, volumetric, volumetric-duffing)");
+              "' (expected surface, hybrid, volumetric, volumetric-duffing, volumetric-corrected)");
       st.kinds.push_back(item);
     }
     require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
@@ -287,16 +291,20 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     kinds.push_back({"hybrid", true, true});
     kinds.push_back({"hybrid", false, true});
   }
+  if (std::find(st.kinds.begin(), st.kinds.end(), "volumetric-corrected") != st.kinds.end())
+    kinds.push_back({"volumetric", false, false, true});  // opt-in, linear: the moduli correction
   if (o.atoms.rows() == 0 &&
       std::erase_if(kinds, [](const Kind& k) { return k.base == "hybrid"; }) > 0)  // no medial skeleton
     out["notes"].push_back(
         "hybrid kind left out: it needs a medial skeleton (a kidney's), this organ has none");
   if (!st.kinds.empty())
-    std::erase_if(
-        kinds, [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
-          const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing" : "");
-          return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
-        });
+    std::erase_if(kinds,
+                  [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
+                    const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing"
+                                                        : k.corrected                         ? "-corrected"
+                                                                                              : "");
+                    return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
+                  });
   o.E_kPa = st.material.E * 1e3;
   o.nu = st.material.nu;
   o.target_nodes = st.volumetric_nodes;
@@ -306,6 +314,102 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                          {"surface_nodes", vm.surface_nodes},
                          {"tetrahedra", vm.T.rows()},
                          {"target_nodes", st.volumetric_nodes}};
+    // the mesh's effective moduli from E and nu (docs/volumetric.md, "Effective moduli of the mesh")
+    for (const auto& [label, sv] : std::vector<std::pair<std::string, std::pair<double, double>>>{
+             {"springs+volume", {1.0, 1.0}}, {"springs", {1.0, 0.0}}}) {
+      VecX m(2);
+      m << sv.first, sv.second;
+      const BodyPtr b = make_body(o, {"volumetric", false, false}, support, m);
+      const auto* vb = dynamic_cast<const VolumetricBody*>(b.get());
+      const MeshModuli mm = mesh_moduli(b->model(), vm.surface_nodes, vb->stats().volume_mm3, &vm.F);
+      const double mu = vb->stats().mu, K = vb->stats().lambda + 2.0 * mu / 3.0;
+      out["volumetric"]["effective_moduli"][label] = {{"mu_ratio", mm.mu / mu},
+                                                      {"K_ratio", mm.K / K},
+                                                      {"mu_min_ratio", mm.mu_min / mu},
+                                                      {"mu_max_ratio", mm.mu_max / mu},
+                                                      {"mu_affine_ratio", mm.mu_affine / mu},
+                                                      {"K_affine_ratio", mm.K_affine / K},
+                                                      {"mu_traction_ratio", mm.mu_traction / mu},
+                                                      {"K_traction_ratio", mm.K_traction / K},
+                                                      {"nu_eff", mm.nu()},
+                                                      {"E_eff_kPa", mm.E() * 1e3}};
+      note(st, cat(o.name, ": volumetric ", label, ": effective mu/mu = ", mm.mu / mu, " (", mm.mu_min / mu,
+                   "..", mm.mu_max / mu, ", affine ", mm.mu_affine / mu, "), K/K = ", mm.K / K, " (affine ",
+                   mm.K_affine / K, "), nu_eff = ", mm.nu(), ", E_eff = ", mm.E() * 1e3, " kPa"));
+    }
+    // Where the error sits (docs/accuracy.md): the small-strain (linear) response of the springs from E and
+    // nu and of the P1 finite element on the same tetrahedra, against the FEM, per case
+    try {
+      VecX ones = VecX::Ones(2);
+      const BodyPtr b = make_body(o, {"volumetric", false, false}, support, ones);
+      const auto* vb = dynamic_cast<const VolumetricBody*>(b.get());
+      std::vector<fem::ContactLoad> loads;
+      for (const auto& c : cases) loads.push_back(c.load);
+      const std::vector<MatX3> lin = fem::spring_displacement_linear(*b, loads);
+      const Eigen::SparseMatrix<double> K = p1_stiffness(vm.X, vm.T, vb->stats().mu, vb->stats().lambda);
+      const Model& m = b->model();
+      const Index n = m.num_nodes();
+      std::vector<Index> map(static_cast<std::size_t>(3 * n), -1);
+      Index nf = 0;
+      for (Index a : m.free_nodes)
+        for (int d = 0; d < 3; ++d) map[static_cast<std::size_t>(3 * a + d)] = nf++;
+      std::vector<Eigen::Triplet<double>> T;
+      for (int c = 0; c < K.outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator e(K, c); e; ++e) {
+          const Index r = map[static_cast<std::size_t>(e.row())], q = map[static_cast<std::size_t>(e.col())];
+          if (r >= 0 && q >= 0) T.emplace_back(r, q, e.value());
+        }
+      Eigen::SparseMatrix<double> Kff(nf, nf);
+      Kff.setFromTriplets(T.begin(), T.end());
+      const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Kff);
+      json diag = json::array();
+      double sums[4] = {0, 0, 0, 0}, nh = 0;
+      for (std::size_t i = 0; i < cases.size(); ++i) {
+        const auto& c = cases[i];
+        const MatX3 fs = fem::disk_load_linear(vm.X.topRows(vm.surface_nodes), vm.F, c.load.centre,
+                                               c.load.radius, c.load.force);
+        VecX r = VecX::Zero(nf);
+        for (Index a = 0; a < fs.rows(); ++a)
+          for (int d = 0; d < 3; ++d)
+            if (map[static_cast<std::size_t>(3 * a + d)] >= 0)
+              r[map[static_cast<std::size_t>(3 * a + d)]] = fs(a, d);
+        const VecX u = ldlt.solve(r);
+        MatX3 up = MatX3::Zero(vm.surface_nodes, 3);
+        for (Index a = 0; a < vm.surface_nodes; ++a)
+          for (int d = 0; d < 3; ++d)
+            if (map[static_cast<std::size_t>(3 * a + d)] >= 0)
+              up(a, d) = u[map[static_cast<std::size_t>(3 * a + d)]];
+        const Index contact = sites[static_cast<std::size_t>(c.site_index)];
+        const fem::SurfaceError el = fem::compare(lin[i], c.u_fem, contact),
+                                ep = fem::compare(up, c.u_fem, contact);
+        diag.push_back({{"site", c.site_index},
+                        {"force_N", c.force},
+                        {"train", c.train},
+                        {"springs_linear_contact_pct", 100 * el.rel(el.contact_error)},
+                        {"springs_linear_rms_pct", 100 * el.rel(el.rms)},
+                        {"springs_linear_contact_ratio", el.contact_model / el.contact_fem},
+                        {"p1_contact_pct", 100 * ep.rel(ep.contact_error)},
+                        {"p1_rms_pct", 100 * ep.rel(ep.rms)},
+                        {"p1_contact_ratio", ep.contact_model / ep.contact_fem}});
+        if (!c.train) {
+          sums[0] += 100 * el.rel(el.contact_error), sums[1] += 100 * el.rel(el.rms);
+          sums[2] += 100 * ep.rel(ep.contact_error), sums[3] += 100 * ep.rel(ep.rms);
+          nh += 1;
+        }
+      }
+      out["volumetric"]["small_strain"] = {
+          {"cases", diag},
+          {"held_out_mean_springs_linear_contact_pct", (nh > 0 ? sums[0] / nh : 0.0)},
+          {"held_out_mean_springs_linear_rms_pct", (nh > 0 ? sums[1] / nh : 0.0)},
+          {"held_out_mean_p1_contact_pct", (nh > 0 ? sums[2] / nh : 0.0)},
+          {"held_out_mean_p1_rms_pct", (nh > 0 ? sums[3] / nh : 0.0)}};
+      note(st,
+           cat(o.name, ": small strain, held out: springs (E, nu) contact ", (nh > 0 ? sums[0] / nh : 0.0),
+               " %, RMS ", (nh > 0 ? sums[1] / nh : 0.0), " %; P1 FE on the same tetrahedra contact ",
+               (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ", (nh > 0 ? sums[3] / nh : 0.0), " %"));
+    } catch (const Error& e) {  // a diagnosis, never the reason a run fails
+      out["volumetric"]["small_strain"] = {{"error", e.what()}};
+    }
   }
   // The displacement of kind k with its families scaled by m (+ local: the last multiplier scales k_loc).
   auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {

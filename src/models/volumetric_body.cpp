@@ -8,6 +8,7 @@
 #include <set>
 
 #include "medspring/core/check.hpp"
+#include "medspring/models/volumetric_moduli.hpp"
 
 namespace medspring {
 
@@ -150,12 +151,23 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
 
   // stiffness rule (header): springs k = 5/2 mu V / L^2 per tetrahedron, volume modulus lambda - mu
   const double kv = std::max(lambda - mu, 0.0);
+  if (s.moduli_correction) {  // opt-in: the measured effective moduli (volumetric_moduli.hpp)
+    const ModuliCorrection c = moduli_correction(mesh, mu, lambda);
+    settings_.spring_scale *= c.spring;
+    settings_.volume_scale *= c.volume;
+    settings_.moduli_correction = false;
+    stats_.spring_correction = c.spring;
+    stats_.volume_correction = c.volume;
+    stats_.mu_ratio_before = c.mu_before;
+    stats_.K_ratio_before = c.K_before;
+  }
+  const double spring_scale = settings_.spring_scale, volume_scale = settings_.volume_scale;
   if (lambda < mu)
     warnings_.push_back(
         cat(w, ": nu = ", s.nu, " < 1/4: the volume term is off and the springs alone give nu near 1/4"));
   stats_.mu = mu;
   stats_.lambda = lambda;
-  stats_.kv = kv * s.volume_scale;
+  stats_.kv = kv * volume_scale;
   std::map<std::pair<Index, Index>, double> edge_k;
   std::vector<double> mass(static_cast<std::size_t>(n), 0.0);
   for (Index t = 0; t < nt; ++t) {
@@ -163,7 +175,7 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
     for (const auto& e : kEdges) {
       const Index a = T(t, e[0]), b = T(t, e[1]);
       const double L2 = (mesh.X.row(a) - mesh.X.row(b)).squaredNorm();
-      edge_k[std::minmax(a, b)] += 2.5 * mu * V / L2 * s.spring_scale;
+      edge_k[std::minmax(a, b)] += 2.5 * mu * V / L2 * spring_scale;
     }
     for (int k = 0; k < 4; ++k) mass[static_cast<std::size_t>(T(t, k))] += 0.25 * s.density * V;
   }
@@ -191,7 +203,7 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
       row[a] += k * (pinned[b] ? 1.0 : 2.0);
       row[b] += k * (pinned[a] ? 1.0 : 2.0);
     }
-    const double kvs = kv * s.volume_scale;
+    const double kvs = kv * volume_scale;
     if (kvs > 0)
       for (Index t = 0; t < nt; ++t) {
         const Vec3 x0 = mesh.X.row(T(t, 0)).transpose(), e1 = mesh.X.row(T(t, 1)).transpose() - x0,
@@ -232,8 +244,8 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
     b.add_spring(e.first, e.second, k, s.duffing);
     if (e.first < ns && e.second < ns) surf_k.push_back(k);
   }
-  if (kv * s.volume_scale > 0)
-    for (Index t = 0; t < nt; ++t) b.add_volume(T(t, 0), T(t, 1), T(t, 2), T(t, 3), kv * s.volume_scale);
+  if (kv * volume_scale > 0)
+    for (Index t = 0; t < nt; ++t) b.add_volume(T(t, 0), T(t, 1), T(t, 2), T(t, 3), kv * volume_scale);
   model_ = b.build();
   if (!surf_k.empty()) {
     std::nth_element(surf_k.begin(), surf_k.begin() + static_cast<long>(surf_k.size() / 2), surf_k.end());

@@ -22,22 +22,13 @@
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/static_solve.hpp"
+#include "volumetric_fixtures.hpp"
 
 using namespace medspring;
+using medspring::testing::box_surface;
+using medspring::testing::one_tet;
 
 namespace {
-
-// A single tetrahedron as a closed surface + mesh (all four nodes on the surface).
-VolumetricMesh one_tet(const MatX3& X) {
-  VolumetricMesh m;
-  m.X = X;
-  m.T.resize(1, 4);
-  m.T << 0, 1, 2, 3;
-  m.F.resize(4, 3);
-  m.F << 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2;
-  m.surface_nodes = 4;
-  return m;
-}
 
 MatX3 regular_tet(double l) {
   MatX3 X(4, 3);
@@ -89,50 +80,6 @@ VolumetricMesh cube_mesh(int cells, double L) {
   for (Index f = 0; f < B.rows(); ++f)
     for (int k = 0; k < 3; ++k) m.F(f, k) = newid[static_cast<std::size_t>(B(f, k))];
   m.surface_nodes = ns;
-  return m;
-}
-
-// Closed box surface [0, L]^3 with n x n squares per face (two triangles each), outward, shared vertices.
-SurfaceMesh box_surface(int n, double L) {
-  std::map<std::array<long, 3>, Index> id;
-  std::vector<Vec3> P;
-  std::vector<std::array<Index, 3>> T;
-  auto vid = [&](const Vec3& p) {
-    const std::array<long, 3> key{std::lround(p(0) * 1e6), std::lround(p(1) * 1e6), std::lround(p(2) * 1e6)};
-    auto it = id.find(key);
-    if (it != id.end()) return it->second;
-    P.push_back(p);
-    return id[key] = static_cast<Index>(P.size()) - 1;
-  };
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          Index q[4];
-          for (int c = 0; c < 4; ++c) {
-            Vec3 p;
-            p(axis) = side * L;
-            p(u) = L * (i + (c == 1 || c == 2)) / n;
-            p(v) = L * (j + (c >= 2)) / n;
-            q[c] = vid(p);
-          }
-          // (u, v, axis) right-handed: counter-clockwise in (u, v) points along +axis
-          if (side == 1) {
-            T.push_back({q[0], q[1], q[2]});
-            T.push_back({q[0], q[2], q[3]});
-          } else {
-            T.push_back({q[0], q[2], q[1]});
-            T.push_back({q[0], q[3], q[2]});
-          }
-        }
-    }
-  SurfaceMesh m;
-  m.V.resize(static_cast<Index>(P.size()), 3);
-  for (std::size_t i = 0; i < P.size(); ++i) m.V.row(static_cast<Index>(i)) = P[i].transpose();
-  m.F.resize(static_cast<Index>(T.size()), 3);
-  for (std::size_t f = 0; f < T.size(); ++f)
-    for (int k = 0; k < 3; ++k) m.F(static_cast<Index>(f), k) = T[f][static_cast<std::size_t>(k)];
   return m;
 }
 

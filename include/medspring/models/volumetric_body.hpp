@@ -50,6 +50,10 @@ struct VolumetricSettings {
   std::optional<double> return_k;  // N/mm per surface node; default: 0 with supports, else 0.02
   double spring_scale = 1.0;       // calibration multipliers of the spring and volume families
   double volume_scale = 1.0;
+  // Opt-in (off by default): measure the mesh's effective moduli (models/volumetric_moduli.hpp) and multiply
+  // spring_scale and volume_scale so that they match (mu, lambda). The body then stores the corrected scales
+  // and this flag off (settings()), so a model package rebuilds the same model. ~1 s per 2,000 nodes.
+  bool moduli_correction = false;
   DuffingSettings duffing{DuffingMode::Linear};  // Duffing term of the springs (off by default)
   std::vector<Index> fixed;                      // pinned surface nodes
 };
@@ -61,6 +65,8 @@ struct VolumetricStats {
   double mass_g = 0;               // total mass of the nodes, after the floor and the mass scaling
   double added_mass_fraction = 0;  // mass added by min_mass_fraction and mass_scaling_dt / lumped mass
   Index scaled_nodes = 0;          // nodes whose mass mass_scaling_dt raised
+  // moduli_correction: the multipliers applied and the effective mu, K of the mesh / target before them
+  double spring_correction = 1, volume_correction = 1, mu_ratio_before = 0, K_ratio_before = 0;
 };
 
 class VolumetricBody final : public Body {
