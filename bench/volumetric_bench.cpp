@@ -14,6 +14,7 @@
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/forces.hpp"
+#include "medspring/physics/stability.hpp"
 #include "medspring/sim/simulation.hpp"
 
 namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
@@ -56,6 +57,12 @@ void BM_VolumetricKidneyUpdate(benchmark::State& st) {
       static_cast<double>(sim.state().substeps - s0) / static_cast<double>(sim.state().frames - f0);
   st.counters["dt_rest_ms"] = body->model().dt_safe_rest();
   st.counters["added_mass_pct"] = 100.0 * body->stats().added_mass_fraction;
+  // the stable-step rule against the loaded state's own omega (Lanczos on the exact Hessian at x)
+  const Model& m = body->model();
+  st.counters["stiffening"] = sim.state().stiffening;
+  st.counters["omega_bound_over_true"] =
+      m.omega_rest * std::sqrt(sim.state().stiffening) / power_iteration_omega(m, sim.state().x, 40, 1.0);
+  st.counters["omega_rest_over_true_rest"] = m.omega_rest / power_iteration_omega(m, m.x0, 40, 1.0);
 }
 BENCHMARK(BM_VolumetricKidneyUpdate)
     ->Args({1000, 250})
