@@ -65,8 +65,8 @@ void BM_VolumetricKidneyUpdate(benchmark::State& st) {
   st.counters["omega_rest_over_true_rest"] = m.omega_rest / power_iteration_omega(m, m.x0, 40, 1.0);
 }
 BENCHMARK(BM_VolumetricKidneyUpdate)
-    ->Args({400, 0})
-    ->Args({600, 0})
+    ->Args({500, 0})
+    ->Args({700, 0})
     ->Args({1000, 0})
     ->Args({1000, 250})
     ->Args({2000, 250})
