@@ -251,9 +251,25 @@ double volume_energy(const VolumeTerms& T, const MatX3& x) {
 }
 
 std::uint64_t count_inverted(const VolumeTerms& T, const MatX3& x) {
+  const double* X = x.data();
   std::uint64_t n = 0;
+  if (T.packed.size() == static_cast<std::size_t>(T.size())) {  // the packed corners (32-bit, one record)
+    for (const auto& r : T.packed) {
+      const double* a = X + 3 * static_cast<std::ptrdiff_t>(r.n[0]);
+      double e[3][3];
+      for (int k = 0; k < 3; ++k) {
+        const double* p = X + 3 * static_cast<std::ptrdiff_t>(r.n[k + 1]);
+        for (int d = 0; d < 3; ++d) e[k][d] = p[d] - a[d];
+      }
+      const double v6 = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) +
+                        e[0][1] * (e[1][2] * e[2][0] - e[1][0] * e[2][2]) +
+                        e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+      n += !(v6 > 0);
+    }
+    return n;
+  }
   for (Index t = 0; t < T.size(); ++t) {
-    if (!(volume_of(corners(T, x.data(), t)) > 0)) ++n;
+    if (!(volume_of(corners(T, X, t)) > 0)) ++n;
   }
   return n;
 }
