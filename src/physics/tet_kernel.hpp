@@ -74,12 +74,10 @@ template <int Own, bool Soft, bool Stiff, bool Local = false>
       l2 = q > l2 ? q : l2;
     }
     const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (1.0 / 12.0);  // |V - V0| L / 2
-    if constexpr (Local) {
-      const double st = cur * r.iG0;
-      if (st > 1.0) {
-        const double d = st - 1.0;
-        for (int k = 0; k < 4; ++k) rows[r.n[k]] += d * rr[k];
-      }
+    if constexpr (Local) {  // branch-free: about half the terms stiffen, a branch would be unpredictable
+      const double st = cur * r.iG0 - 1.0;
+      const double d = st > 0.0 ? st : 0.0;
+      for (int k = 0; k < 4; ++k) rows[r.n[k]] += d * rr[k];
     }
     // a branch, not a max: rarely taken, so no iteration waits on the previous one's square root
     if (cur * r.iG0 > sv) [[unlikely]]
