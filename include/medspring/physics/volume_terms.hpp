@@ -76,7 +76,8 @@ void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& i, const std::
                         Index nodes);
 
 /// Sets T.rest_rows from the rest positions, masses and pins (after finalize_volume_terms).
-void set_volume_rest_rows(VolumeTerms& T, const MatX3& x0, const VecX& mass, const std::vector<std::uint8_t>& fixed);
+void set_volume_rest_rows(VolumeTerms& T, const MatX3& x0, const VecX& mass,
+                          const std::vector<std::uint8_t>& fixed);
 
 /// The volume forces with the local stiffening (issue 23, docs/volumetric.md "Stable step"): adds -dE/dx to
 /// f like add_volume_forces and returns the terms' largest stiffening s_max (>= 1) as it does; in addition
