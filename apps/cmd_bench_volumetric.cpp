@@ -1,6 +1,6 @@
 // `medspring bench` cases of the volumetric spring kidney (issue 23, docs/volumetric.md "Speed"): the
-// kidney phantom meshed inside by TetGen to about 1,000 and 2,000 nodes, 10 kPa, nu = 0.45, supports on the
-// bottom 20 %, 0.5 N on the top node; one update = Simulation::update (a 0.5 ms frame with the sub-steps
+// kidney phantom meshed inside by TetGen to about 500, 1,000 and 2,000 nodes, 10 kPa, nu = 0.45, supports on
+// the bottom 20 %, 0.5 N on the top node; one update = Simulation::update (a 0.5 ms frame with the sub-steps
 // its stable step needs). The same set-up as bench/volumetric_bench.cpp. Needs the fem layer (TetGen).
 #include <memory>
 #include <string>
@@ -22,7 +22,7 @@ namespace medspring::cli {
 std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) {
   std::vector<bench::BenchCase> cases;
 #ifdef MEDSPRING_HAVE_FEM
-  for (const Index target : {1000, 2000})
+  for (const Index target : {500, 1000, 2000})
     for (const double mass_scaling_dt :
          {0.0, 0.25}) {  // the default (off), and opt-in selective mass scaling
       const std::string name =

@@ -452,6 +452,7 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
     st.spring_n.setZero(ns, 3);
   }
   if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
+  if (m.volume.size() > 0 && st.stiff_rows.size() != m.num_nodes()) st.stiff_rows.setZero(m.num_nodes());
   const int T = effective_threads(m, s);
   if (T <= 1) return;
   if (!st.threaded.p || st.threaded.p->pool.size() != T) st.threaded.p = std::make_shared<ThreadedStep>(T);
@@ -519,7 +520,10 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
         refresh_step_coefficients(m, st, h);
         r = static_cast<Substep>(detail::gather_substep(m, st, h, vmax2, s.guard, stiffening));
       } else {
-        const double stiff = detail::internal_forces(m, st.x, st.f_ext, st.f, stiffening);
+        // volume terms: the local stiffening (scratch sized by prepare_step; a state without it gets the
+        // global rule)
+        double* rows = st.stiff_rows.size() == m.num_nodes() ? st.stiff_rows.data() : nullptr;
+        const double stiff = detail::internal_forces(m, st.x, st.f_ext, st.f, stiffening, rows);
         if (stiffening) st.stiffening = stiff;
         r = s.guard ? symplectic_substep<true>(m, st, h, vmax2) : symplectic_substep<false>(m, st, h, vmax2);
       }

@@ -121,6 +121,7 @@ void finalize(Model& m) {
     // The records alone: letting them own springs too (plan_owned_springs, the fused pass) measured
     // slower than the packed volume pass followed by the plain spring pass (docs/volumetric.md, "Speed").
     finalize_volume_terms(m.volume, m.x0, w);
+    set_volume_rest_rows(m.volume, m.x0, m.mass, m.fixed);  // the stable step's local stiffening
   }
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
@@ -242,6 +243,7 @@ State make_state(const Model& m) {
   s.v_save.setZero(n, 3);
   s.x_trial.setZero(n, 3);
   s.step_coef.setZero(n);
+  if (m.volume.size() > 0) s.stiff_rows.setZero(n);  // the stable step's local stiffening (issue 23)
   for (VecX* b : {&s.cg_r, &s.cg_z, &s.cg_p, &s.cg_q, &s.dv, &s.rhs, &s.jacobi}) b->setZero(3 * n);
   s.spring_a.setZero(ns);
   s.spring_b.setZero(ns);

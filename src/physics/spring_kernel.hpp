@@ -84,5 +84,10 @@ inline void undo_symplectic(const Model& m, State& st, double h, const Index* fr
 /// internal_forces (forces.hpp) with the stiffening max computed only when `stiffening` (else 1 is
 /// returned): the step needs it from the last force evaluation of a frame only.
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
+/// The same, and for a model with volume terms and `rows` (scratch of #N doubles) the local stiffening of
+/// the volume terms (issue 23, docs/volumetric.md "Stable step"): the returned stiffening is
+/// min(max(s_springs, s_terms), s_springs + row_max / omega_rest^2) (add_volume_forces_local).
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
+                       double* rows);
 
 }  // namespace medspring::detail

@@ -27,11 +27,15 @@ inline void cross3(const double* u, const double* v, double* w) {
 }
 
 /// Adds the forces of record r (its volume term and its first Own owned springs) to f (flat 3N). With
-/// Stiff: sv = max(sv, the term's curvature bound |dV/dx|^2 + |V - V0| 4 L_max / 3 over its rest value)
-/// and ss = max(ss, kappa/k of its springs), as the separate passes compute them.
-template <int Own, bool Soft, bool Stiff>
+/// Stiff: sv = max(sv, the term's curvature bound |dV/dx|^2 + |V - V0| L_max / 2 over its rest value;
+/// ||d^2V|| <= L_max / 2: each corner row of d^2V has three 3x3 blocks [x_m - x_n]x / 6)
+/// and ss = max(ss, kappa/k of its springs), as the separate passes compute them. With Local (and Stiff):
+/// also rows[n_k] += (s_t - 1) rr[k] for the term's stiffening s_t > 1 (the local stiffening of the
+/// stable step; rr: the record's four rest_rows).
+template <int Own, bool Soft, bool Stiff, bool Local = false>
 [[gnu::always_inline]] inline void tet_record(const VolumeTerms::Packed& r, const SpringParams& S,
-                                              const double* x, double* f, double& ss, double& sv) {
+                                              const double* x, double* f, double& ss, double& sv,
+                                              double* rows = nullptr, const double* rr = nullptr) {
   double P[4][3];
   for (int k = 0; k < 4; ++k) {
     const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
@@ -69,7 +73,12 @@ template <int Own, bool Soft, bool Stiff>
       for (int d = 0; d < 3; ++d) q += (e[j][d] - e[k][d]) * (e[j][d] - e[k][d]);
       l2 = q > l2 ? q : l2;
     }
-    const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (2.0 / 9.0);  // |V - V0| 4 L / 3
+    const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (1.0 / 12.0);  // |V - V0| L / 2
+    if constexpr (Local) {  // branch-free: about half the terms stiffen, a branch would be unpredictable
+      const double st = cur * r.iG0 - 1.0;
+      const double d = st > 0.0 ? st : 0.0;
+      for (int k = 0; k < 4; ++k) rows[r.n[k]] += d * rr[k];
+    }
     // a branch, not a max: rarely taken, so no iteration waits on the previous one's square root
     if (cur * r.iG0 > sv) [[unlikely]]
       sv = cur * r.iG0;

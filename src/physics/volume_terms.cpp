@@ -99,6 +99,49 @@ double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool 
   return sv;
 }
 
+double add_volume_forces_local(const VolumeTerms& T, const double* x, double* f, double* rows, Index nodes,
+                               double& row_max) {
+  require(static_cast<Index>(T.packed.size()) == T.size() && T.rest_rows.size() == 4 * T.packed.size(),
+          "volume terms: no rest rows (set_volume_rest_rows)");
+  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
+  std::fill(rows, rows + nodes, 0.0);
+  double ss = 1.0, sv = 1.0;
+  const double* rr = T.rest_rows.data();
+  for (const auto& r : T.packed) {
+    detail::tet_record<0, false, true, true>(r, none, x, f, ss, sv, rows, rr);
+    rr += 4;
+  }
+  double m = 0.0;
+  for (Index i = 0; i < nodes; ++i) m = rows[i] > m ? rows[i] : m;
+  row_max = m;
+  return sv;
+}
+
+void set_volume_rest_rows(VolumeTerms& T, const MatX3& x0, const VecX& mass,
+                          const std::vector<std::uint8_t>& fixed) {
+  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: rest rows before finalize");
+  T.rest_rows.assign(4 * T.packed.size(), 0.0);
+  for (std::size_t t = 0; t < T.packed.size(); ++t) {
+    const auto& r = T.packed[t];
+    const Index id[4] = {r.n[0], r.n[1], r.n[2], r.n[3]};
+    const Vec3 xa = x0.row(id[0]).transpose();
+    const Tet q{xa, x0.row(id[1]).transpose() - xa, x0.row(id[2]).transpose() - xa,
+                x0.row(id[3]).transpose() - xa};
+    Vec3 g[4];
+    volume_gradient(q, g);
+    const double c = r.kv * 6.0 / r.V06;  // kv / V0
+    for (int k = 0; k < 4; ++k) {
+      if (fixed[static_cast<std::size_t>(id[k])]) continue;
+      double row = 0;
+      for (int l = 0; l < 4; ++l) {
+        if (fixed[static_cast<std::size_t>(id[l])]) continue;
+        row += g[k].norm() * g[l].norm() / std::sqrt(mass[id[k]] * mass[id[l]]);
+      }
+      T.rest_rows[4 * t + static_cast<std::size_t>(k)] = c * row;
+    }
+  }
+}
+
 void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& w) {
   const auto nt = static_cast<std::size_t>(T.size());
   require(T.b.size() == nt && T.c.size() == nt && T.d.size() == nt && T.kv.size() == nt, w,
@@ -132,6 +175,7 @@ void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& w
   T.owned_end[0] = T.owned_end[1] = T.owned_end[2] = T.size();
   T.loose_springs.clear();
   T.planned_springs = -1;
+  T.rest_rows.clear();
 }
 
 void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& si, const std::vector<Index>& sj,
@@ -193,6 +237,7 @@ void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& si, const std:
     T.owned_end[g] = static_cast<Index>(T.packed.size());
   }
   T.planned_springs = ns;
+  T.rest_rows.clear();  // in the former record order
 }
 
 double volume_energy(const VolumeTerms& T, const MatX3& x) {
@@ -206,9 +251,25 @@ double volume_energy(const VolumeTerms& T, const MatX3& x) {
 }
 
 std::uint64_t count_inverted(const VolumeTerms& T, const MatX3& x) {
+  const double* X = x.data();
   std::uint64_t n = 0;
+  if (T.packed.size() == static_cast<std::size_t>(T.size())) {  // the packed corners (32-bit, one record)
+    for (const auto& r : T.packed) {
+      const double* a = X + 3 * static_cast<std::ptrdiff_t>(r.n[0]);
+      double e[3][3];
+      for (int k = 0; k < 3; ++k) {
+        const double* p = X + 3 * static_cast<std::ptrdiff_t>(r.n[k + 1]);
+        for (int d = 0; d < 3; ++d) e[k][d] = p[d] - a[d];
+      }
+      const double v6 = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) +
+                        e[0][1] * (e[1][2] * e[2][0] - e[1][0] * e[2][2]) +
+                        e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+      n += !(v6 > 0);
+    }
+    return n;
+  }
   for (Index t = 0; t < T.size(); ++t) {
-    if (!(volume_of(corners(T, x.data(), t)) > 0)) ++n;
+    if (!(volume_of(corners(T, X, t)) > 0)) ++n;
   }
   return n;
 }

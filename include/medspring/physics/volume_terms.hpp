@@ -42,6 +42,11 @@ struct VolumeTerms {
   Index owned_end[3] = {0, 0, 0};    // ends of the groups owning 0, 1, 2 springs in `packed`
   std::vector<Index> loose_springs;  // springs evaluated by the plain spring pass
   Index planned_springs = -1;        // number of springs of the plan (-1: none; every spring is loose)
+  // Derived by set_volume_rest_rows (Model's finalize), for the local stiffening of the stable step: per
+  // record (in `packed` order) and corner k, the term's share of its corner's rest Gershgorin row of
+  // M^-1/2 K M^-1/2, r_k = kv/V0 |dV0/dx_k| sum_{l free} |dV0/dx_l| / sqrt(m_k m_l), (rad/ms)^2; 0 for a
+  // fixed corner. Empty (the global rule is used) until set, and cleared by finalize / plan.
+  std::vector<double> rest_rows;  // (4 #T)
 
   Index size() const { return static_cast<Index>(a.size()); }
   void add(Index na, Index nb, Index nc, Index nd, double modulus) {
@@ -69,6 +74,18 @@ void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& w
 /// Call after finalize_volume_terms with the model's final spring arrays (Model's finalize does).
 void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& i, const std::vector<Index>& j,
                         Index nodes);
+
+/// Sets T.rest_rows from the rest positions, masses and pins (after finalize_volume_terms).
+void set_volume_rest_rows(VolumeTerms& T, const MatX3& x0, const VecX& mass,
+                          const std::vector<std::uint8_t>& fixed);
+
+/// The volume forces with the local stiffening (issue 23, docs/volumetric.md "Stable step"): adds -dE/dx to
+/// f like add_volume_forces and returns the terms' largest stiffening s_max (>= 1) as it does; in addition
+/// sets row_max = max over nodes i of sum over the terms t at i with s_t > 1 of (s_t - 1) r_t,i, the
+/// Gershgorin bound of the stiffening's increment to M^-1/2 K M^-1/2 ((rad/ms)^2). `rows` is scratch of
+/// `nodes` doubles (overwritten). Needs T.rest_rows.
+double add_volume_forces_local(const VolumeTerms& T, const double* x, double* f, double* rows, Index nodes,
+                               double& row_max);
 
 /// Adds the volume forces -dE/dx to f (flat 3N arrays). With `stiffening`, returns the stiffening of the
 /// terms (>= 1): the largest ratio of a term's current curvature bound to its rest one, for the stable
