@@ -348,20 +348,9 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       const std::vector<MatX3> lin = fem::spring_displacement_linear(*b, loads);
       const Eigen::SparseMatrix<double> K = p1_stiffness(vm.X, vm.T, vb->stats().mu, vb->stats().lambda);
       const Model& m = b->model();
-      const Index n = m.num_nodes();
-      std::vector<Index> map(static_cast<std::size_t>(3 * n), -1);
       Index nf = 0;
-      for (Index a : m.free_nodes)
-        for (int d = 0; d < 3; ++d) map[static_cast<std::size_t>(3 * a + d)] = nf++;
-      std::vector<Eigen::Triplet<double>> T;
-      for (int c = 0; c < K.outerSize(); ++c)
-        for (Eigen::SparseMatrix<double>::InnerIterator e(K, c); e; ++e) {
-          const Index r = map[static_cast<std::size_t>(e.row())], q = map[static_cast<std::size_t>(e.col())];
-          if (r >= 0 && q >= 0) T.emplace_back(r, q, e.value());
-        }
-      Eigen::SparseMatrix<double> Kff(nf, nf);
-      Kff.setFromTriplets(T.begin(), T.end());
-      const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Kff);
+      const std::vector<Index> map = fem::free_dof_map(m, nf);
+      const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(fem::restrict_to_free(K, map, nf));
       json diag = json::array();
       double sums[4] = {0, 0, 0, 0}, nh = 0;
       for (std::size_t i = 0; i < cases.size(); ++i) {

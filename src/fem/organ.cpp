@@ -186,20 +186,16 @@ MatX3 spring_displacement(const Body& body, const ContactLoad& load) {
   return static_surface(body, load);
 }
 
-std::vector<MatX3> spring_displacement_linear(const Body& body, const std::vector<ContactLoad>& loads) {
-  const Model& m = body.model();
-  const Index n = m.num_nodes();
-  std::vector<Index> map(static_cast<std::size_t>(3 * n), -1);
-  Index nf = 0;
+std::vector<Index> free_dof_map(const Model& m, Index& free) {
+  std::vector<Index> map(static_cast<std::size_t>(3 * m.num_nodes()), -1);
+  free = 0;
   for (Index a : m.free_nodes)
-    for (int d = 0; d < 3; ++d) map[static_cast<std::size_t>(3 * a + d)] = nf++;
-  std::vector<MatX3> out;
-  if (nf == 0) {
-    for (std::size_t i = 0; i < loads.size(); ++i) out.push_back(MatX3::Zero(body.num_surface_nodes(), 3));
-    return out;
-  }
-  const Eigen::SparseMatrix<double> K =
-      tangent_stiffness(m, m.x0, {.clamp_transverse = false, .include_return = true});
+    for (int d = 0; d < 3; ++d) map[static_cast<std::size_t>(3 * a + d)] = free++;
+  return map;
+}
+
+Eigen::SparseMatrix<double> restrict_to_free(const Eigen::SparseMatrix<double>& K,
+                                             const std::vector<Index>& map, Index free) {
   std::vector<Eigen::Triplet<double>> T;
   T.reserve(static_cast<std::size_t>(K.nonZeros()));
   for (int c = 0; c < K.outerSize(); ++c)
@@ -207,9 +203,24 @@ std::vector<MatX3> spring_displacement_linear(const Body& body, const std::vecto
       const Index r = map[static_cast<std::size_t>(e.row())], q = map[static_cast<std::size_t>(e.col())];
       if (r >= 0 && q >= 0) T.emplace_back(r, q, e.value());
     }
-  Eigen::SparseMatrix<double> Kff(nf, nf);
+  Eigen::SparseMatrix<double> Kff(free, free);
   Kff.setFromTriplets(T.begin(), T.end());
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Kff);
+  return Kff;
+}
+
+std::vector<MatX3> spring_displacement_linear(const Body& body, const std::vector<ContactLoad>& loads) {
+  const Model& m = body.model();
+  const Index n = m.num_nodes();
+  Index nf = 0;
+  const std::vector<Index> map = free_dof_map(m, nf);
+  std::vector<MatX3> out;
+  if (nf == 0) {
+    for (std::size_t i = 0; i < loads.size(); ++i) out.push_back(MatX3::Zero(body.num_surface_nodes(), 3));
+    return out;
+  }
+  const Eigen::SparseMatrix<double> K =
+      tangent_stiffness(m, m.x0, {.clamp_transverse = false, .include_return = true});
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(restrict_to_free(K, map, nf));
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0).all())
     throw SolverError(cat(m.name, ": linear response: the stiffness at rest is not positive definite"));
   for (const auto& load : loads) {

@@ -7,6 +7,7 @@
 //   MatX3 u_spring = fem::spring_displacement(*body, load);       // static equilibrium, mm
 #pragma once
 
+#include <Eigen/SparseCore>
 #include <functional>
 #include <string>
 #include <utility>
@@ -87,6 +88,14 @@ std::vector<Index> apply_support_rule(const MatX3& P, const MatX3& N, const Supp
 /// displacement of its surface nodes (#S x 3, mm). The disk load becomes nodal forces on the surface
 /// (disk_load_linear) that travel the body's force map. Throws SolverError when there is no equilibrium.
 MatX3 spring_displacement(const Body& body, const ContactLoad& load);
+
+/// The DOFs of the model's free nodes: map[3 a + d] is the index of node a's component d among them (-1
+/// for pinned nodes); `free` gets their count.
+std::vector<Index> free_dof_map(const Model& m, Index& free);
+/// K (3 #N x 3 #N) restricted to the free DOFs of `map` (free_dof_map): pinned nodes' rows and columns
+/// dropped.
+Eigen::SparseMatrix<double> restrict_to_free(const Eigen::SparseMatrix<double>& K,
+                                             const std::vector<Index>& map, Index free);
 
 /// The small-strain response: the surface displacement (#S x 3, mm) under each load of the model linearised
 /// at rest, K(x0) u = f over the free nodes, with one factorisation of K(x0) for all loads (the static
