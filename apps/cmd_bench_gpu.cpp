@@ -5,14 +5,15 @@
 namespace medspring::cli {
 
 int cmd_bench_gpu(const Args& args) {
-  args.require_known({"gpu", "sizes", "batch", "cpu-max", "no-torch", "out", "device"});
+  args.require_known({"gpu", "sizes", "batch", "kidney", "cpu-max", "no-torch", "compact", "out", "device"});
   std::vector<std::string> a;
-  for (const char* name : {"sizes", "batch", "cpu-max", "out", "device"})
+  for (const char* name : {"sizes", "batch", "kidney", "cpu-max", "out", "device"})
     if (const auto v = args.get(name)) {
       a.push_back(std::string("--") + name);
       a.push_back(*v);
     }
   if (args.flag("no-torch")) a.emplace_back("--no-torch");
+  if (args.flag("compact")) a.emplace_back("--compact");
   return bench::run_gpu_bench(bench::parse_gpu_bench_args(a));
 }
 

@@ -33,8 +33,9 @@ const std::vector<CommandSpec>& commands() {
            "O] "
            "[--json]\n"
            "       medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
-           "       medspring bench --gpu [--sizes N,N,..] [--batch B] [--cpu-max N] [--no-torch] [--out DIR] "
-           "[--device I]",
+           "       medspring bench --gpu [--sizes N,N,..] [--batch B] [--kidney FILE] [--cpu-max N] "
+           "[--no-torch] "
+           "[--compact] [--out DIR] [--device I]",
        .about =
            "Times one update of every benchmark case (ALGORITHMS.md D-18): 200 warm-up updates, then N "
            "timed\n"
@@ -83,6 +84,10 @@ const std::vector<CommandSpec>& commands() {
              .value = "N",
              .help = "--gpu: largest tube also timed on the CPU engine (nodes)"},
             {.name = "no-torch", .help = "--gpu: leave the PyTorch step out"},
+            {.name = "kidney",
+             .value = "FILE",
+             .help = "--gpu: the batch's hybrid kidney from a model package (.msm) [default: the phantom]"},
+            {.name = "compact", .help = "--gpu: also time each tube with compact parameters (fp64c, fp32c)"},
             {.name = "device", .value = "I", .def = "0", .help = "--gpu: CUDA device index"}},
        .run = cmd_bench},
       {.name = "info",

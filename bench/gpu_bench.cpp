@@ -59,6 +59,8 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
       o.cpu_max_nodes = number(value(i), "--cpu-max");
     } else if (a == "--no-torch") {
       o.torch = false;
+    } else if (a == "--compact") {
+      o.compact = true;
     } else if (a == "--out") {
       o.out = value(i);
     } else if (a == "--kidney") {
@@ -68,7 +70,7 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
     } else {
       throw InvalidInput(
           cat("bench --gpu: unknown argument '", a,
-              "' (expected --sizes, --batch, --kidney, --cpu-max, --no-torch, --out, --device)"));
+              "' (expected --sizes, --batch, --kidney, --cpu-max, --no-torch, --compact, --out, --device)"));
     }
   }
   return o;
@@ -303,10 +305,14 @@ int run_gpu_bench(const GpuBenchOptions& o) {
       cpu_us = time_frames([&] { step(m, st, s, &loads); }, 2.0);
       cpu_subs = static_cast<double>(st.substeps - before) / static_cast<double>(st.frames - frames_before);
     }
-    for (const gpu::Precision p : {gpu::Precision::Double, gpu::Precision::Float}) {
+    for (const int variant : {0, 1, 2, 3}) {
+      const bool compact = variant >= 2;  // variants 2, 3: compact parameters (--compact), same precisions
+      if (compact && !o.compact) break;
+      const gpu::Precision p = variant % 2 == 0 ? gpu::Precision::Double : gpu::Precision::Float;
       gpu::Options go;
       go.precision = p;
       go.device = o.device;
+      go.compact_params = compact;
       gpu::Engine e({&m}, s, go);
       e.set_loads(0, loads);
       for (int f = 0; f < 20; ++f) e.step();
@@ -317,13 +323,14 @@ int run_gpu_bench(const GpuBenchOptions& o) {
       const double gbs = static_cast<double>(e.device_bytes()) / (substep_us * 1e-6) / 1e9;
       double torch_us = -1;
       std::string why = torch_why;
-      if (torch_ok) torch_us = torch_step(m, loads, s.dt / subs, gpu::to_string(p), work / "torch_step", why);
+      if (torch_ok && !compact)
+        torch_us = torch_step(m, loads, s.dt / subs, gpu::to_string(p), work / "torch_step", why);
       const double cpu_sub_us = cpu_us > 0 ? cpu_us / cpu_subs : -1;
+      const std::string key = gpu::to_string(p) + (compact ? "c" : "");  // fp64c: compact parameters
       std::printf("%-10s %-5s %12.2f %12.2f %10.0f %7.0f%% %12s %12s\n", size_name(m.num_nodes()).c_str(),
-                  gpu::to_string(p).c_str(), substep_us, frame_us, gbs, 100.0 * gbs / copy_gbs,
+                  key.c_str(), substep_us, frame_us, gbs, 100.0 * gbs / copy_gbs,
                   torch_us > 0 ? cat(torch_us).c_str() : "-", cpu_sub_us > 0 ? cat(cpu_sub_us).c_str() : "-");
       std::fflush(stdout);
-      const std::string key = gpu::to_string(p);
       js << (first ? "\n" : ",\n") << "    {\"name\": \"" << size_name(m.num_nodes())
          << "\", \"nodes\": " << m.num_nodes() << ", \"springs\": " << m.num_springs()
          << ", \"precision\": \"" << key << "\", \"build_s\": " << build_s

@@ -135,8 +135,38 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   param_models[0] = nodes_shared ? 1 : B;
   param_models[1] = table_shared ? 1 : B;
   const auto uBn = static_cast<std::size_t>(param_models[0]), uBt = static_cast<std::size_t>(param_models[1]);
-  for (DeviceArray<R>* a : {&L0, &k, &kp, &ik}) a->allocate(entries * uBt, "allocating the spring table");
-  for (DeviceArray<R>* a : {&mass, &damping, &kr}) a->allocate(un * uBn, "allocating the node arrays");
+  // Compact parameters (Options::compact_params, docs/gpu.md): shared parameters with few distinct
+  // values are stored as a 2-byte class per entry (node) and the classes' values.
+  bool compact_table = false, compact_nodes = false;
+  if (o.compact_params && table_shared) {
+    SpringTableArrays<R> Tc;
+    Tc.k = T0.k;
+    Tc.kp = T0.kp;
+    Tc.ik = T0.ik;
+    if ((compact_table = compact_spring_params(Tc))) {
+      spring_cls.assign(Tc.cls, "allocating the spring classes", "uploading the spring classes");
+      ck.assign(Tc.ck, "allocating the spring classes", "uploading the spring classes");
+      ckp.assign(Tc.ckp, "allocating the spring classes", "uploading the spring classes");
+      cik.assign(Tc.cik, "allocating the spring classes", "uploading the spring classes");
+    }
+  }
+  if (o.compact_params && nodes_shared) {
+    NodeArrayData<R> Nc;
+    Nc.mass = N0.mass;
+    Nc.damping = N0.damping;
+    Nc.kr = N0.kr;
+    if ((compact_nodes = compact_node_params(Nc))) {
+      node_cls.assign(Nc.cls, "allocating the node classes", "uploading the node classes");
+      cmass.assign(Nc.cmass, "allocating the node classes", "uploading the node classes");
+      cdamping.assign(Nc.cdamping, "allocating the node classes", "uploading the node classes");
+      ckr.assign(Nc.ckr, "allocating the node classes", "uploading the node classes");
+    }
+  }
+  L0.allocate(entries * uBt, "allocating the spring table");
+  if (!compact_table)
+    for (DeviceArray<R>* a : {&k, &kp, &ik}) a->allocate(entries * uBt, "allocating the spring table");
+  if (!compact_nodes)
+    for (DeviceArray<R>* a : {&mass, &damping, &kr}) a->allocate(un * uBn, "allocating the node arrays");
   x0.allocate(3 * un * uBn, "allocating the node arrays");
   fixed.allocate(un * uBn, "allocating the node arrays");
   load_slot.allocate(un * uB, "allocating the node arrays");
@@ -154,9 +184,11 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
       const SpringTableArrays<R> T = same ? SpringTableArrays<R>{} : table_of(m);
       const SpringTableArrays<R>& Tb = same ? T0 : T;
       L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
-      k.upload(Tb.k.data(), entries, ub * entries, "uploading the spring table");
-      kp.upload(Tb.kp.data(), entries, ub * entries, "uploading the spring table");
-      ik.upload(Tb.ik.data(), entries, ub * entries, "uploading the spring table");
+      if (!compact_table) {
+        k.upload(Tb.k.data(), entries, ub * entries, "uploading the spring table");
+        kp.upload(Tb.kp.data(), entries, ub * entries, "uploading the spring table");
+        ik.upload(Tb.ik.data(), entries, ub * entries, "uploading the spring table");
+      }
     }
     const NodeArrayData<R> N = same ? NodeArrayData<R>{} : node_arrays_of(m, ub);
     const NodeArrayData<R>& Nb = same ? N0 : N;
@@ -164,9 +196,11 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
       std::copy(origin.begin(), origin.begin() + 3, origin.begin() + 3 * static_cast<std::ptrdiff_t>(ub));
     if (ub < uBn) {
       x0.upload(Nb.x0.data(), 3 * un, ub * 3 * un, "uploading the node arrays");
-      mass.upload(Nb.mass.data(), un, ub * un, "uploading the node arrays");
-      damping.upload(Nb.damping.data(), un, ub * un, "uploading the node arrays");
-      kr.upload(Nb.kr.data(), un, ub * un, "uploading the node arrays");
+      if (!compact_nodes) {
+        mass.upload(Nb.mass.data(), un, ub * un, "uploading the node arrays");
+        damping.upload(Nb.damping.data(), un, ub * un, "uploading the node arrays");
+        kr.upload(Nb.kr.data(), un, ub * un, "uploading the node arrays");
+      }
       fixed.upload(Nb.fixed.data(), un, ub * un, "uploading the node arrays");
     }
     load_slot.upload(Nb.load_slot.data(), un, ub * un, "uploading the node arrays");
@@ -398,9 +432,10 @@ Engine::DeviceState Backend<R>::device_state() {
 template <class R>
 std::size_t Backend<R>::device_bytes() const {
   std::size_t total = 0;
-  for (const DeviceArray<R>* a :
-       {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &xb[0], &xb[1], &vb[0], &vb[1], &grid_parts})
+  for (const DeviceArray<R>* a : {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &ck, &ckp, &cik, &cmass,
+                                  &cdamping, &ckr, &xb[0], &xb[1], &vb[0], &vb[1], &grid_parts})
     total += a->n * sizeof(R);
+  total += (spring_cls.n + node_cls.n) * sizeof(unsigned short);
   total += fixed.n + (load_slot.n + row_node.n + slice_begin.n + slice_width.n + other.n + part.n +
                       heavy_node.n + part_begin.n + lead.n) *
                          sizeof(int);

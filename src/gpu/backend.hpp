@@ -62,6 +62,10 @@ struct Backend final : Engine::Impl {
   // copies of the node parameters and of the spring parameters are stored (1: shared by the batch).
   int param_models[2]{1, 1};
   DeviceArray<R> x0, mass, damping, kr, L0, k, kp, ik;
+  // Options::compact_params (shared parameters only): 2-byte classes instead of k, kp, ik (mass,
+  // damping, kr), which are then left unallocated.
+  DeviceArray<unsigned short> spring_cls, node_cls;
+  DeviceArray<R> ck, ckp, cik, cmass, cdamping, ckr;
   DeviceArray<unsigned char> fixed;
   DeviceArray<int> load_slot, row_node, slice_begin, slice_width, other;
   // The block kernel's split rows (hd::SplitRows): chunk slot per row, split nodes, their slots.

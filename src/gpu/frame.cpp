@@ -16,6 +16,18 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   detail::SubstepArgs<R> A;
   A.nodes = {static_cast<int>(n), x0.p, mass.p, damping.p, kr.p, fixed.p, load_slot.p};
   A.table = {static_cast<int>(n), row_node.p, slice_begin.p, slice_width.p, other.p, L0.p, k.p, kp.p, ik.p};
+  if (spring_cls.p) {  // compact parameters (shared: entry_stride 0)
+    A.table.cls = spring_cls.p;
+    A.table.ck = ck.p;
+    A.table.ckp = ckp.p;
+    A.table.cik = cik.p;
+  }
+  if (node_cls.p) {
+    A.nodes.cls = node_cls.p;
+    A.nodes.cmass = cmass.p;
+    A.nodes.cdamping = cdamping.p;
+    A.nodes.ckr = ckr.p;
+  }
   A.node_stride = param_models[0] > 1 ? n : 0;  // 0: the batch shares model 0's parameters
   A.slot_stride = n;
   A.entry_stride = param_models[1] > 1 ? static_cast<long long>(entries) : 0;

@@ -1,6 +1,11 @@
 #include "medspring/physics/spring_table.hpp"
 
 #include <algorithm>
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <map>
+#include <type_traits>
 
 #include "medspring/core/check.hpp"
 
@@ -323,6 +328,65 @@ template SpringTableArrays<double> make_spring_table<double>(const Model&, RowOr
 template SpringTableArrays<float> make_spring_table<float>(const Model&, RowOrder, int);
 template NodeArrayData<double> make_node_arrays<double>(const Model&);
 template NodeArrayData<float> make_node_arrays<float>(const Model&);
+
+namespace {
+
+// Classes of the triples (a[i], b[i], c[i]), bit for bit, in order of first appearance; false (outputs
+// untouched) when there are more than max_classes.
+template <class R>
+bool classify(const std::vector<R>& a, const std::vector<R>& b, const std::vector<R>& c, int max_classes,
+              std::vector<unsigned short>& cls, std::vector<R>& ca, std::vector<R>& cb, std::vector<R>& cc) {
+  require(max_classes >= 1 && max_classes <= 65536, "compact parameters: max_classes ", max_classes,
+          " outside [1, 65536]");
+  using Bits = std::conditional_t<sizeof(R) == 8, std::uint64_t, std::uint32_t>;
+  std::map<std::array<Bits, 3>, int> index;
+  std::vector<unsigned short> out(a.size());
+  std::vector<R> va, vb, vc;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const std::array<Bits, 3> key{std::bit_cast<Bits>(a[i]), std::bit_cast<Bits>(b[i]),
+                                  std::bit_cast<Bits>(c[i])};
+    auto [it, fresh] = index.try_emplace(key, static_cast<int>(va.size()));
+    if (fresh) {
+      if (static_cast<int>(va.size()) == max_classes) return false;
+      va.push_back(a[i]);
+      vb.push_back(b[i]);
+      vc.push_back(c[i]);
+    }
+    out[i] = static_cast<unsigned short>(it->second);
+  }
+  cls = std::move(out);
+  ca = std::move(va);
+  cb = std::move(vb);
+  cc = std::move(vc);
+  return true;
+}
+
+}  // namespace
+
+template <class R>
+bool compact_spring_params(SpringTableArrays<R>& T, int max_classes) {
+  if (!T.cls.empty()) return true;
+  if (!classify(T.k, T.kp, T.ik, max_classes, T.cls, T.ck, T.ckp, T.cik)) return false;
+  T.k = {};
+  T.kp = {};
+  T.ik = {};
+  return true;
+}
+
+template <class R>
+bool compact_node_params(NodeArrayData<R>& N, int max_classes) {
+  if (!N.cls.empty()) return true;
+  if (!classify(N.mass, N.damping, N.kr, max_classes, N.cls, N.cmass, N.cdamping, N.ckr)) return false;
+  N.mass = {};
+  N.damping = {};
+  N.kr = {};
+  return true;
+}
+
+template bool compact_spring_params<double>(SpringTableArrays<double>&, int);
+template bool compact_spring_params<float>(SpringTableArrays<float>&, int);
+template bool compact_node_params<double>(NodeArrayData<double>&, int);
+template bool compact_node_params<float>(NodeArrayData<float>&, int);
 
 LoadSlots make_load_slots(const std::vector<PointLoad>& loads, Index n) {
   validate_loads(loads, n);

@@ -9,22 +9,13 @@
 #include <utility>
 #include <vector>
 
+#include "gpu_test_support.hpp"
 #include "medspring/gpu/scene_batch.hpp"
 #include "medspring/scene/runner.hpp"
 #include "medspring/scene/scene.hpp"
 
 namespace medspring {
 namespace {
-
-bool have_device(std::string* why) {
-  try {
-    gpu::require_device();
-    return true;
-  } catch (const gpu::GpuError& e) {
-    *why = e.what();
-    return false;
-  }
-}
 
 std::string press(double k_surf, int node, double magnitude) {
   return cat(R"({"name": "press", "model": {"kind": "hybrid", "source": {"phantom": "kidney"},

@@ -27,8 +27,13 @@ struct GatherStepper {
   long substeps = 0;
   int failures = 0;
 
-  explicit GatherStepper(const Model& model, std::vector<PointLoad> L = {})
+  // compact: the parameters as classes (compact_spring_params / compact_node_params) where they fit.
+  explicit GatherStepper(const Model& model, std::vector<PointLoad> L = {}, bool compact = false)
       : m(model), T(make_spring_table<R>(model)), N(make_node_arrays<R>(model)), loads(std::move(L)) {
+    if (compact) {
+      compact_spring_params(T);
+      compact_node_params(N);
+    }
     slots = make_load_slots(loads, m.num_nodes());
     N.load_slot = slots.slot;
     x = N.x0;

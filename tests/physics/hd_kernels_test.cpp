@@ -259,5 +259,74 @@ TEST(SpringTable, BalancedDealGivesEveryThreadAHeavyAndALightRowInTurn) {
   EXPECT_TRUE(table_row_order(hybrid, RowOrder::Nodes, 0).empty());
 }
 
+// Compact parameters (spring_table.hpp, docs/gpu.md): the table's (k, k', 1/k) and the nodes' (mass,
+// damping, k_r) as 2-byte classes. The gather reads the same values, so the trajectory is bit for bit the
+// one of the per-entry arrays, in fp64 and fp32, hard and soft springs.
+template <class R>
+void expect_compact_bit_identical(const Model& m, const std::vector<PointLoad>& loads, int frames) {
+  StepSettings s;
+  s.dt = 0.5;
+  GatherStepper<R> full(m, loads), compact(m, loads, true);
+  ASSERT_FALSE(compact.T.cls.empty());
+  ASSERT_FALSE(compact.N.cls.empty());
+  EXPECT_TRUE(compact.T.k.empty() && compact.T.kp.empty() && compact.T.ik.empty());
+  EXPECT_TRUE(compact.N.mass.empty() && compact.N.damping.empty() && compact.N.kr.empty());
+  double peak = 0;  // the load moved the model (mm): not a trivial match
+  for (int f = 0; f < frames; ++f) {
+    full.frame(s);
+    compact.frame(s);
+    for (std::size_t q = 0; q < full.x.size(); ++q)
+      peak = std::max(peak, std::abs(static_cast<double>(full.x[q] - full.N.x0[q])));
+  }
+  EXPECT_GT(peak, 0.05);
+  EXPECT_EQ(compact.x, full.x);
+  EXPECT_EQ(compact.v, full.v);
+  EXPECT_EQ(compact.stiffening, full.stiffening);
+  EXPECT_EQ(compact.substeps, full.substeps);
+}
+
+TEST(SpringTable, CompactParametersGiveBitIdenticalSteps) {
+  expect_compact_bit_identical<double>(small_tube(false), press(55, Vec3(0, 0, -0.8)), 200);
+  expect_compact_bit_identical<double>(small_tube(true), press(55, Vec3(0.3, 0, -0.6)), 200);
+  expect_compact_bit_identical<float>(small_tube(false), press(55, Vec3(0, 0, -0.8)), 200);
+}
+
+TEST(SpringTable, CompactClassesAreTheDistinctValues) {
+  const Model m = small_tube(false);
+  SpringTableArrays<double> T = make_spring_table<double>(m);
+  const SpringTableArrays<double> full = T;
+  ASSERT_TRUE(compact_spring_params(T));
+  ASSERT_EQ(T.cls.size(), full.entries());
+  for (std::size_t e = 0; e < T.entries(); ++e) {  // each entry's class holds its own values
+    const auto c = T.cls[e];
+    EXPECT_EQ(T.ck[c], full.k[e]);
+    EXPECT_EQ(T.ckp[c], full.kp[e]);
+    EXPECT_EQ(T.cik[c], full.ik[e]);
+  }
+  for (std::size_t c = 0; c < T.ck.size(); ++c)  // classes distinct
+    for (std::size_t d = c + 1; d < T.ck.size(); ++d)
+      EXPECT_FALSE(T.ck[c] == T.ck[d] && T.ckp[c] == T.ckp[d] && T.cik[c] == T.cik[d]);
+  // A uniform tube: the padding class (0, 0, 0) and a few stiffnesses (the rule k ~ 1/L0 or constant).
+  EXPECT_LE(T.ck.size(), 8u);
+  EXPECT_TRUE(compact_spring_params(T));  // idempotent
+  // A cap below the class count leaves the table untouched; an out-of-range cap is refused.
+  SpringTableArrays<double> U = full;
+  EXPECT_FALSE(compact_spring_params(U, 1));
+  EXPECT_TRUE(U.cls.empty());
+  EXPECT_EQ(U.k, full.k);
+  EXPECT_THROW(compact_spring_params(U, 0), InvalidInput);
+  EXPECT_THROW(compact_spring_params(U, 65537), InvalidInput);
+  NodeArrayData<double> N = make_node_arrays<double>(m);
+  const NodeArrayData<double> Nfull = N;
+  ASSERT_TRUE(compact_node_params(N));
+  for (std::size_t a = 0; a < N.cls.size(); ++a) {
+    EXPECT_EQ(N.cmass[N.cls[a]], Nfull.mass[a]);
+    EXPECT_EQ(N.cdamping[N.cls[a]], Nfull.damping[a]);
+    EXPECT_EQ(N.ckr[N.cls[a]], Nfull.kr[a]);
+  }
+  ::testing::Test::RecordProperty("spring_classes", std::to_string(T.ck.size()));
+  ::testing::Test::RecordProperty("node_classes", std::to_string(N.cmass.size()));
+}
+
 }  // namespace
 }  // namespace medspring

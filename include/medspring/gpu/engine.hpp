@@ -65,6 +65,12 @@ struct Options {
   /// (on request). Auto: kernel_for() below (the grid kernel).
   enum class Kernel { Auto, Grid, PerBlock };
   Kernel kernel = Kernel::Auto;
+  /// Compact parameters (docs/gpu.md): where the batch shares its parameters and they take at most
+  /// kCompactClasses distinct values (a uniform tube: 8 spring classes, 1 node class), a 2-byte class per
+  /// spring end and node instead of three reals each -- fewer bytes per substep, the same values, so the
+  /// same results bit for bit (checked on the CPU: SpringTable.CompactParametersGiveBitIdenticalSteps).
+  /// Off by default until its speed is measured on a device (`medspring bench --gpu --compact`).
+  bool compact_params = false;
 };
 
 /// The kernel a batch of `batch` models of `nodes` nodes runs on `device` (docs/gpu.md): PerBlock when

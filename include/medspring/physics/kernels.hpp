@@ -165,7 +165,30 @@ struct SpringTable {
   const R* k = nullptr;              // (entries) linear stiffness
   const R* kp = nullptr;             // (entries) cubic stiffness
   const R* ik = nullptr;             // (entries) 1/k (0 for k = 0)
+  // Compact parameters (compact_spring_params, spring_table.hpp): when cls is set, entry e's k, k', 1/k
+  // are class cls[e]'s ck, ckp, cik (k, kp, ik unused): 2 bytes per entry instead of 3 reals, the same
+  // values, so the same arithmetic. Models whose springs share a few stiffnesses (the tube, a uniform
+  // material) move fewer bytes per substep.
+  const unsigned short* cls = nullptr;  // (entries) parameter class
+  const R* ck = nullptr;                // (classes) linear stiffness
+  const R* ckp = nullptr;               // (classes) cubic stiffness
+  const R* cik = nullptr;               // (classes) 1/k
 };
+
+/// Entry e's stiffness parameters (k, k', 1/k), from the per-entry arrays or their compact classes.
+template <class R>
+MEDSPRING_HD inline void spring_params(const SpringTable<R>& T, int e, R& k, R& kp, R& ik) {
+  if (T.cls) {
+    const int c = T.cls[e];
+    k = T.ck[c];
+    kp = T.ckp[c];
+    ik = T.cik[c];
+  } else {
+    k = T.k[e];
+    kp = T.kp[e];
+    ik = T.ik[e];
+  }
+}
 
 /// Node of table row r.
 template <class R>
@@ -184,9 +207,10 @@ MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, in
   const R xa = x[3 * a], ya = x[3 * a + 1], za = x[3 * a + 2];
   for (int j = 0; j < w; ++j, e += kSlice) {
     const int b = T.other[e];
-    R fx, fy, fz;
-    if (!spring_force<Soft, Stiff>(x[3 * b] - xa, x[3 * b + 1] - ya, x[3 * b + 2] - za, T.L0[e], T.k[e],
-                                   T.kp[e], T.ik[e], stiff, fx, fy, fz))
+    R k, kp, ik, fx, fy, fz;
+    spring_params(T, e, k, kp, ik);
+    if (!spring_force<Soft, Stiff>(x[3 * b] - xa, x[3 * b + 1] - ya, x[3 * b + 2] - za, T.L0[e], k, kp, ik,
+                                   stiff, fx, fy, fz))
       continue;
     f[0] += fx;
     f[1] += fy;
@@ -204,7 +228,27 @@ struct NodeArrays {
   const R* kr = nullptr;                 // (n) return-spring stiffness
   const unsigned char* fixed = nullptr;  // (n) 1 = pinned
   const int* load_slot = nullptr;        // (n) row of the substep's load table, -1 = no load
+  // Compact parameters (compact_node_params): when cls is set, node a's mass, damping and k_r are class
+  // cls[a]'s (mass, damping, kr unused).
+  const unsigned short* cls = nullptr;  // (n) parameter class
+  const R* cmass = nullptr;             // (classes)
+  const R* cdamping = nullptr;          // (classes)
+  const R* ckr = nullptr;               // (classes)
 };
+
+/// Node a's mass, damping and return-spring stiffness, from the per-node arrays or their classes.
+template <class R>
+MEDSPRING_HD inline R node_mass(const NodeArrays<R>& N, int a) {
+  return N.cls ? N.cmass[N.cls[a]] : N.mass[a];
+}
+template <class R>
+MEDSPRING_HD inline R node_damping(const NodeArrays<R>& N, int a) {
+  return N.cls ? N.cdamping[N.cls[a]] : N.damping[a];
+}
+template <class R>
+MEDSPRING_HD inline R node_kr(const NodeArrays<R>& N, int a) {
+  return N.cls ? N.ckr[N.cls[a]] : N.kr[a];
+}
 
 /// Outcome codes of one node's update (the guard, §2.5).
 inline constexpr int kNodeOk = 0, kNodeTooFast = 1, kNodeNonFinite = 2;
@@ -233,7 +277,7 @@ MEDSPRING_HD inline void load_and_return_force(const NodeArrays<R>& N, int a, co
     fe[1] = loads[3 * slot + 1];
     fe[2] = loads[3 * slot + 2];
   }
-  return_force(fe, x + 3 * a, N.x0 + 3 * a, N.kr[a], g);
+  return_force(fe, x + 3 * a, N.x0 + 3 * a, node_kr(N, a), g);
 }
 
 /// Node a's symplectic update with implicit damping under its total force g (reads x, v; writes xo, vo;
@@ -242,8 +286,8 @@ template <class R>
 MEDSPRING_HD inline int advance_node(const NodeArrays<R>& N, int a, R h, R vmax2, const R* x, const R* v,
                                      const R* g, R* xo, R* vo) {
   const int q = 3 * a;
-  const R mass = N.mass[a];
-  const R c = step_coefficient(mass, N.damping[a], h);
+  const R mass = node_mass(N, a);
+  const R c = step_coefficient(mass, node_damping(N, a), h);
   R vn[3];
   const R v2 = symplectic_velocity(mass, c, h, v + q, g, vn);
   vo[q] = vn[0];

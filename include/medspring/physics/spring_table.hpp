@@ -20,17 +20,28 @@ struct SpringTableArrays {
   std::vector<int> row_node;  // node of each row; empty: row r is node r
   std::vector<int> slice_begin, slice_width, other;
   std::vector<R> L0, k, kp, ik;
+  std::vector<unsigned short> cls;  // compact_spring_params: class of each entry (then k, kp, ik are empty)
+  std::vector<R> ck, ckp, cik;      // the classes' k, k', 1/k
   std::size_t entries() const { return other.size(); }
   hd::SpringTable<R> view() const {
-    return {nodes,
-            row_node.empty() ? nullptr : row_node.data(),
-            slice_begin.data(),
-            slice_width.data(),
-            other.data(),
-            L0.data(),
-            k.data(),
-            kp.data(),
-            ik.data()};
+    hd::SpringTable<R> T;
+    T.nodes = nodes;
+    T.row_node = row_node.empty() ? nullptr : row_node.data();
+    T.slice_begin = slice_begin.data();
+    T.slice_width = slice_width.data();
+    T.other = other.data();
+    T.L0 = L0.data();
+    if (cls.empty()) {
+      T.k = k.data();
+      T.kp = kp.data();
+      T.ik = ik.data();
+    } else {
+      T.cls = cls.data();
+      T.ck = ck.data();
+      T.ckp = ckp.data();
+      T.cik = cik.data();
+    }
+    return T;
   }
 };
 
@@ -104,12 +115,37 @@ struct NodeArrayData {
   std::vector<R> x0, mass, damping, kr;
   std::vector<unsigned char> fixed;
   std::vector<int> load_slot;
+  std::vector<unsigned short> cls;  // compact_node_params: class of each node (then mass, damping, kr empty)
+  std::vector<R> cmass, cdamping, ckr;
   hd::NodeArrays<R> view() const {
-    return {nodes, x0.data(), mass.data(), damping.data(), kr.data(), fixed.data(), load_slot.data()};
+    hd::NodeArrays<R> N{nodes,     x0.data(),    mass.data(),     damping.data(),
+                        kr.data(), fixed.data(), load_slot.data()};
+    if (!cls.empty()) {
+      N.mass = N.damping = N.kr = nullptr;
+      N.cls = cls.data();
+      N.cmass = cmass.data();
+      N.cdamping = cdamping.data();
+      N.ckr = ckr.data();
+    }
+    return N;
   }
 };
 template <class R>
 NodeArrayData<R> make_node_arrays(const Model& model);
+
+/// Default cap on the classes of a compact table: 1,024 classes of three reals stay in a GPU's L1.
+inline constexpr int kCompactClasses = 1024;
+
+/// Compact parameters (docs/gpu.md): where the table's (k, k', 1/k) triples take at most `max_classes`
+/// distinct values (bit for bit; max_classes <= 65,536), replaces the per-entry arrays by a 2-byte class
+/// per entry and the classes' values, and returns true; otherwise leaves the table as it is and returns
+/// false. The gather then reads the same values, so its results are bit-identical.
+template <class R>
+bool compact_spring_params(SpringTableArrays<R>& table, int max_classes = kCompactClasses);
+
+/// The same for the nodes' (mass, damping, k_r).
+template <class R>
+bool compact_node_params(NodeArrayData<R>& nodes, int max_classes = kCompactClasses);
 
 /// The distinct loaded nodes of a load list, in order of first appearance: node -> row of the load table.
 struct LoadSlots {
