@@ -355,3 +355,16 @@ int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard
 }
 
 }  // namespace medspring::detail
+
+namespace medspring::detail {
+
+void spring_tensions(Index nb, const SpringArrays& S, Index s0, const double* x, double* ex, double* ey,
+                     double* ez, double* tt, bool stiffening, std::int64_t& stiff_bits) {
+  spring_vectors(nb, S.I + s0, S.J + s0, x, ex, ey, ez);
+  if (stiffening)
+    block_forces<true>(nb, ex, ey, ez, S.L0 + s0, S.K + s0, S.KP + s0, S.IK + s0, tt, stiff_bits);
+  else
+    block_forces<false>(nb, ex, ey, ez, S.L0 + s0, S.K + s0, S.KP + s0, S.IK + s0, tt, stiff_bits);
+}
+
+}  // namespace medspring::detail

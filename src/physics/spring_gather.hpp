@@ -6,6 +6,8 @@
 // contraction may differ between the vectorised and the scalar loop).
 #pragma once
 
+#include <cstdint>
+
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/state.hpp"
 
@@ -23,5 +25,14 @@ bool gather_ready(const Model& m, State& st);
 /// (as symplectic_substep does). st.f holds the node forces afterwards, as after internal_forces (after
 /// a failed substep only those of the nodes up to the failing one: f is scratch then).
 int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening);
+
+struct SpringArrays;
+
+/// The spring vectors e = x_j - x_i (ex, ey, ez) and tensions over length t (tt) of the springs
+/// [s0, s0 + nb) into arrays of nb values, the gather pass's vectorised arithmetic (a spring shorter than
+/// kMinSpringLength gets t = 0; no soft springs). With `stiffening`, the largest kappa/k is folded into
+/// stiff_bits (the bit pattern of a non-negative double, >= 0).
+void spring_tensions(Index nb, const SpringArrays& S, Index s0, const double* x, double* ex, double* ey,
+                     double* ez, double* tt, bool stiffening, std::int64_t& stiff_bits);
 
 }  // namespace medspring::detail

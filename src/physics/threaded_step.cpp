@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "medspring/physics/kernels.hpp"
+#include "spring_gather.hpp"
 #include "spring_kernel.hpp"
 
 namespace medspring {
@@ -163,6 +165,8 @@ void sweep(const Model& m, State& st, ThreadedStep& P, int t, double h, double v
   const std::uint8_t* kind = P.kind.data();
   const SpringArrays S(m);
   double stiff = 1.0;
+  std::int64_t stiff_bits = 0;  // spring_tensions' running maximum
+  alignas(64) double ex[kChunk], ey[kChunk], ez[kChunk], tt[kChunk];
   Index init = p.n0, ready = p.n0;
   int code = kOk;
   for (const ThreadedStep::Chunk& c : p.chunks) {
@@ -170,7 +174,24 @@ void sweep(const Model& m, State& st, ThreadedStep& P, int t, double h, double v
       return_forces(m, X, FE, f, init, c.init);
       init = c.init;
     }
-    for (Index s = c.s0; s < c.s1; ++s) add_spring_force<Soft, Stiff>(S, s, X, stiff, f);
+    if constexpr (Soft) {
+      for (Index s = c.s0; s < c.s1; ++s) add_spring_force<Soft, Stiff>(S, s, X, stiff, f);
+    } else {  // tensions vectorised (spring_gather.cpp), then scattered in spring order
+      const Index nb = c.s1 - c.s0;
+      spring_tensions(nb, S, c.s0, X, ex, ey, ez, tt, Stiff, stiff_bits);
+      const Index* I = S.I + c.s0;
+      const Index* J = S.J + c.s0;
+      for (Index q = 0; q < nb; ++q) {
+        const double fx = tt[q] * ex[q], fy = tt[q] * ey[q], fz = tt[q] * ez[q];
+        const Index a = 3 * I[q], b = 3 * J[q];
+        f[a] += fx;
+        f[a + 1] += fy;
+        f[a + 2] += fz;
+        f[b] -= fx;
+        f[b + 1] -= fy;
+        f[b + 2] -= fz;
+      }
+    }
     if (c.ready > ready && code == kOk) {
       if (c.ready > init) {  // nodes without springs of their own
         return_forces(m, X, FE, f, init, c.ready);
@@ -198,6 +219,11 @@ void sweep(const Model& m, State& st, ThreadedStep& P, int t, double h, double v
     }
   }
   if (code == kOk && ready < p.n1) code = advance_range<Guard>(m, st, h, vmax2, kind, ready, p.n1, p.n0);
+  if constexpr (Stiff && !Soft) {
+    double vs;
+    std::memcpy(&vs, &stiff_bits, sizeof vs);
+    stiff = std::max(stiff, vs);
+  }
   p.stiff = stiff;
   p.code = code;
 }
