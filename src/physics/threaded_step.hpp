@@ -1,4 +1,4 @@
-// The fused node-range step of large models (docs/performance.md, "The fused node-range step"): the
+// The fused node-range step of large models (docs/threads.md, "The fused node-range step"): the
 // threaded symplectic step, and the serial step of models beyond the gather pass. Thread t owns the nodes
 // [node_begin[t], node_begin[t+1]). In one sweep over its inner springs (both ends among its nodes, in
 // spring order, in chunks) it initialises each node's force with its load and return spring just before

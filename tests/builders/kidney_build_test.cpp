@@ -104,7 +104,7 @@ TEST(RealKidney, ForceThenReleaseReturnsToRestWithin1umIn200ms) {
   EXPECT_EQ(sim.state().warnings.total(), 0u);
 }
 
-// The three symplectic paths on the real kidney (docs/performance.md): the gather pass (the model as
+// The three symplectic paths on the real kidney (docs/threads.md): the gather pass (the model as
 // built), the fused node-range step (its gather table cleared) and the two-pass reference (a bending
 // term of stiffness 0 added, whose force is exactly 0), 1 N ramped on the node nearest atom 21 for 100 ms
 // then released: positions and velocities agree to 1e-12 after 200 frames, with the same substeps.

@@ -1,4 +1,4 @@
-// The fused node-range step of large models (src/physics/threaded_step.cpp, docs/performance.md): one
+// The fused node-range step of large models (src/physics/threaded_step.cpp, docs/threads.md): one
 // sweep per thread initialises, scatters and advances every node. Checked against the two-pass
 // reference step (the scatter pass of forces.cpp, then the node pass), which a model with a bending term
 // takes: a copy of the model with one bending term of stiffness 0 (its force is exactly 0) runs that
