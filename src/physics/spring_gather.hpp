@@ -26,13 +26,12 @@ bool gather_ready(const Model& m, State& st);
 /// a failed substep only those of the nodes up to the failing one: f is scratch then).
 int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening);
 
-struct SpringArrays;
-
-/// The spring vectors e = x_j - x_i (ex, ey, ez) and tensions over length t (tt) of the springs
-/// [s0, s0 + nb) into arrays of nb values, the gather pass's vectorised arithmetic (a spring shorter than
-/// kMinSpringLength gets t = 0; no soft springs). With `stiffening`, the largest kappa/k is folded into
-/// stiff_bits (the bit pattern of a non-negative double, >= 0).
-void spring_tensions(Index nb, const SpringArrays& S, Index s0, const double* x, double* ex, double* ey,
-                     double* ez, double* tt, bool stiffening, std::int64_t& stiff_bits);
+/// The forces t e (e = x_j - x_i, t the tension over the length) of the springs [s0, s0 + nb) on their
+/// ends i, as rows (x, y, z, 0) of F (nb x 4 doubles), with the gather pass's vectorised arithmetic (its
+/// 4-springs-at-a-time AVX-512 pass where built, a spring shorter than kMinSpringLength gets 0; no soft
+/// springs). With `stiffening`, the largest kappa/k is folded into stiff_bits (the bit pattern of a
+/// non-negative double, start at 0).
+void spring_chunk_forces(const Model& m, Index s0, Index nb, const double* x, double* F, bool stiffening,
+                         std::int64_t& stiff_bits);
 
 }  // namespace medspring::detail

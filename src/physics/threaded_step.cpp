@@ -158,14 +158,13 @@ int advance_list(const Model& m, State& st, double h, double vmax2, const Index*
 // run of springs with the same end i stays in registers over the run (loaded at its start, stored at its
 // end, every other update of that node made to the registers too): the same additions in the same order
 // as the plain scatter, without a store-to-load round trip per spring.
-void scatter(Index nb, const Index* __restrict I, const Index* __restrict J, const double* __restrict ex,
-             const double* __restrict ey, const double* __restrict ez, const double* __restrict tt,
+void scatter(Index nb, const Index* __restrict I, const Index* __restrict J, const double* __restrict F4,
              double* __restrict f) {
   if (nb <= 0) return;
   Index cur = 3 * I[0];
   double cx = f[cur], cy = f[cur + 1], cz = f[cur + 2];
   for (Index q = 0; q < nb; ++q) {
-    const double fx = tt[q] * ex[q], fy = tt[q] * ey[q], fz = tt[q] * ez[q];
+    const double fx = F4[4 * q], fy = F4[4 * q + 1], fz = F4[4 * q + 2];
     const Index a = 3 * I[q], b = 3 * J[q];
     if (a != cur) {
       f[cur] = cx;
@@ -205,8 +204,8 @@ void sweep(const Model& m, State& st, ThreadedStep& P, int t, double h, double v
   const std::uint8_t* kind = P.kind.data();
   const SpringArrays S(m);
   double stiff = 1.0;
-  std::int64_t stiff_bits = 0;  // spring_tensions' running maximum
-  alignas(64) double ex[kChunk], ey[kChunk], ez[kChunk], tt[kChunk];
+  std::int64_t stiff_bits = 0;        // spring_chunk_forces' running maximum
+  alignas(64) double F4[4 * kChunk];  // the chunk's spring forces, rows (x, y, z, 0)
   Index init = p.n0, ready = p.n0;
   int code = kOk;
   for (const ThreadedStep::Chunk& c : p.chunks) {
@@ -216,10 +215,10 @@ void sweep(const Model& m, State& st, ThreadedStep& P, int t, double h, double v
     }
     if constexpr (Soft) {
       for (Index s = c.s0; s < c.s1; ++s) add_spring_force<Soft, Stiff>(S, s, X, stiff, f);
-    } else {  // tensions vectorised (spring_gather.cpp), then scattered in spring order
+    } else {  // forces vectorised (spring_gather.cpp), then scattered in spring order
       const Index nb = c.s1 - c.s0;
-      spring_tensions(nb, S, c.s0, X, ex, ey, ez, tt, Stiff, stiff_bits);
-      scatter(nb, S.I + c.s0, S.J + c.s0, ex, ey, ez, tt, f);
+      spring_chunk_forces(m, c.s0, nb, X, F4, Stiff, stiff_bits);
+      scatter(nb, S.I + c.s0, S.J + c.s0, F4, f);
     }
     if (c.ready > ready && code == kOk) {
       if (c.ready > init) {  // nodes without springs of their own
