@@ -10,6 +10,7 @@
 #include "medspring/physics/stability.hpp"
 #include "spring_gather.hpp"
 #include "spring_kernel.hpp"
+#include "threaded_step.hpp"
 
 namespace medspring {
 
@@ -35,66 +36,6 @@ void validate_step_settings(const Model& model, const StepSettings& s) {
             model.name, "' (sub-stepping is off; enable it or use a smaller dt)");
   }
 }
-
-// Worker pool and static partition of the threaded symplectic step. Thread t owns the nodes
-// [node_begin[t], node_begin[t+1]); it evaluates the return springs of its nodes, the springs with both
-// ends among them (scatter, in spring order) and its end of every spring that crosses to another
-// thread's nodes, then (second phase) advances its free nodes. Every force is therefore summed by one
-// thread in a fixed order: reruns with the same thread count are bit-identical.
-struct ThreadedStep {
-  explicit ThreadedStep(int threads) : pool(threads), slot(static_cast<std::size_t>(threads)) {}
-  WorkerPool pool;
-  const Model* model = nullptr;  // the model (and arrays) the partition was made for
-  const double* x0 = nullptr;
-  const Index* spring_i = nullptr;
-  Index nodes = -1, springs = -1;
-  std::vector<Index> node_begin;          // (T + 1)
-  std::vector<std::vector<Index>> inner;  // springs with both ends in thread t's nodes
-  std::vector<std::vector<Index>> cross;  // s: thread t owns end i; -(s + 1): it owns end j
-  std::vector<std::vector<Index>> free;   // free nodes of thread t
-  struct alignas(64) Slot {
-    double stiff = 1.0;
-    int code = 0;  // Substep of the thread's last update phase
-  };
-  std::vector<Slot> slot;
-
-  bool matches(const Model& m) const {
-    return model == &m && x0 == m.x0.data() && spring_i == m.springs.i.data() && nodes == m.num_nodes() &&
-           springs == m.num_springs();
-  }
-  void partition(const Model& m) {
-    const int T = pool.size();
-    const Index n = m.num_nodes(), ns = m.num_springs();
-    node_begin.assign(static_cast<std::size_t>(T) + 1, 0);
-    for (int t = 0; t <= T; ++t)
-      node_begin[static_cast<std::size_t>(t)] = static_cast<Index>(static_cast<long long>(n) * t / T);
-    auto owner = [&](Index a) {
-      int t = static_cast<int>(static_cast<long long>(a) * T / n);
-      while (a >= node_begin[static_cast<std::size_t>(t) + 1]) ++t;
-      while (a < node_begin[static_cast<std::size_t>(t)]) --t;
-      return t;
-    };
-    inner.assign(static_cast<std::size_t>(T), {});
-    cross.assign(static_cast<std::size_t>(T), {});
-    free.assign(static_cast<std::size_t>(T), {});
-    for (Index s = 0; s < ns; ++s) {
-      const int ti = owner(m.springs.i[static_cast<std::size_t>(s)]);
-      const int tj = owner(m.springs.j[static_cast<std::size_t>(s)]);
-      if (ti == tj) {
-        inner[static_cast<std::size_t>(ti)].push_back(s);
-      } else {
-        cross[static_cast<std::size_t>(ti)].push_back(s);
-        cross[static_cast<std::size_t>(tj)].push_back(-(s + 1));
-      }
-    }
-    for (Index a : m.free_nodes) free[static_cast<std::size_t>(owner(a))].push_back(a);
-    model = &m;
-    x0 = m.x0.data();
-    spring_i = m.springs.i.data();
-    nodes = n;
-    springs = ns;
-  }
-};
 
 namespace {
 
@@ -145,72 +86,6 @@ Substep symplectic_substep(const Model& m, State& st, double h, double vmax2) {
   refresh_step_coefficients(m, st, h);
   return symplectic_range<Guard>(m, st, h, vmax2, m.free_nodes.data(),
                                  static_cast<Index>(m.free_nodes.size()));
-}
-
-// Force phase of thread t of the threaded step (see ThreadedStep).
-template <bool Soft, bool Stiff>
-void threaded_forces(const Model& m, State& st, ThreadedStep& P, int t) {
-  const auto ut = static_cast<std::size_t>(t);
-  const double* X = st.x.data();
-  double* f = st.f.data();
-  detail::return_forces(m, X, st.f_ext.data(), f, P.node_begin[ut], P.node_begin[ut + 1]);
-  const detail::SpringArrays S(m);
-  double stiff = 1.0;
-  for (const Index s : P.inner[ut]) {
-    detail::add_spring_force<Soft, Stiff>(S, s, X, stiff, f);
-  }
-  for (const Index c : P.cross[ut]) {
-    const Index s = c >= 0 ? c : -c - 1;
-    double fx, fy, fz;
-    if (!detail::spring_force<Soft, Stiff>(S, s, X, stiff, fx, fy, fz)) continue;
-    if (c >= 0) {
-      const Index a = 3 * S.I[s];
-      f[a] += fx;
-      f[a + 1] += fy;
-      f[a + 2] += fz;
-    } else {
-      const Index b = 3 * S.J[s];
-      f[b] -= fx;
-      f[b + 1] -= fy;
-      f[b + 2] -= fz;
-    }
-  }
-  P.slot[ut].stiff = stiff;
-}
-
-// One threaded symplectic substep: forces (phase 1), then the node update (phase 2). The result equals
-// the serial substep up to the order of the force sums (rounding, ~1e-16 relative per substep).
-Substep threaded_substep(const Model& m, State& st, ThreadedStep& P, double h, double vmax2, bool guard,
-                         bool stiffening) {
-  refresh_step_coefficients(m, st, h);
-  auto forces = [&](int t) {
-    if (m.has_soft_springs)
-      stiffening ? threaded_forces<true, true>(m, st, P, t) : threaded_forces<true, false>(m, st, P, t);
-    else
-      stiffening ? threaded_forces<false, true>(m, st, P, t) : threaded_forces<false, false>(m, st, P, t);
-  };
-  P.pool.run(forces);
-  double stiff = 1.0;
-  for (const auto& sl : P.slot) stiff = std::max(stiff, sl.stiff);
-  if (stiffening) st.stiffening = stiff;
-  auto update = [&](int t) {
-    const auto ut = static_cast<std::size_t>(t);
-    const Index* fr = P.free[ut].data();
-    const auto nf = static_cast<Index>(P.free[ut].size());
-    P.slot[ut].code = static_cast<int>(guard ? symplectic_range<true>(m, st, h, vmax2, fr, nf)
-                                             : symplectic_range<false>(m, st, h, vmax2, fr, nf));
-  };
-  P.pool.run(update);
-  Substep r = Substep::Ok;
-  for (const auto& sl : P.slot) {
-    const auto c = static_cast<Substep>(sl.code);
-    if (c == Substep::NonFinite || (c == Substep::TooFast && r == Substep::Ok)) r = c;
-  }
-  if (r != Substep::Ok)  // threads that finished their nodes undo them too (the others already did)
-    for (std::size_t t = 0; t < P.slot.size(); ++t)
-      if (static_cast<Substep>(P.slot[t].code) == Substep::Ok)
-        undo_symplectic(m, st, h, P.free[t].data(), static_cast<Index>(P.free[t].size()));
-  return r;
 }
 
 // Per-spring coefficients of K_s = a n n^T + b I at x with the transverse clamp (§2.3).
@@ -433,6 +308,13 @@ int effective_threads(const Model& m, const StepSettings& s) {
 
 namespace {
 
+// The serial symplectic step of m goes through the fused node-range step: no gather pass (too many
+// springs, or soft springs), no bending or volume terms.
+bool fused_serial(const Model& m, const StepSettings& s) {
+  return s.integrator == Integrator::SymplecticEuler && detail::fused_step_applies(m) && m.gather.empty() &&
+         m.num_springs() > 0;
+}
+
 bool implicit_scratch_ready(const Model& m, const State& st) {
   return st.x_save.rows() == m.num_nodes() && st.spring_a.size() == m.num_springs() &&
          st.jacobi.size() == 3 * m.num_nodes();
@@ -454,7 +336,8 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
   if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
   if (m.volume.size() > 0 && st.stiff_rows.size() != m.num_nodes()) st.stiff_rows.setZero(m.num_nodes());
   const int T = effective_threads(m, s);
-  if (T <= 1) return;
+  // one thread: the fused node-range step (threaded_step.hpp) for models beyond the gather pass
+  if (T <= 1 && !fused_serial(m, s)) return;
   if (!st.threaded.p || st.threaded.p->pool.size() != T) st.threaded.p = std::make_shared<ThreadedStep>(T);
   if (!st.threaded.p->matches(m)) st.threaded.p->partition(m);
 }
@@ -478,8 +361,8 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st))
     prepare_step(m, st, s);  // a state from make_state(model, symplectic settings): allocates once
   ThreadedStep* par = nullptr;
-  if (s.integrator == Integrator::SymplecticEuler && effective_threads(m, s) > 1) {
-    prepare_step(m, st, s);  // allocates only on the first threaded step of this state
+  if (s.integrator == Integrator::SymplecticEuler && (effective_threads(m, s) > 1 || fused_serial(m, s))) {
+    prepare_step(m, st, s);  // allocates only on the first fused step of this state
     par = st.threaded.p.get();
   }
   // the gather pass (spring_gather.hpp) for the serial symplectic step of a model that has one
@@ -515,7 +398,8 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
       // whose failure would end it (rollbacks == max_rollbacks). Skipping it elsewhere changes no result.
       const bool stiffening = left == 1 || rollbacks == s.max_rollbacks;
       if (par) {
-        r = threaded_substep(m, st, *par, h, vmax2, s.guard, stiffening);
+        refresh_step_coefficients(m, st, h);
+        r = static_cast<Substep>(detail::threaded_substep(m, st, *par, h, vmax2, s.guard, stiffening));
       } else if (gather) {
         refresh_step_coefficients(m, st, h);
         r = static_cast<Substep>(detail::gather_substep(m, st, h, vmax2, s.guard, stiffening));

@@ -155,8 +155,9 @@ typedef std::int64_t v4i __attribute__((vector_size(32)));  // lane masks and bi
 // end ((x, y, z) and a zero: the masked lane is neither read nor faulted, so the last node's row is
 // safe), a 4 x 4 transpose to (ex, ey, ez), block_forces' arithmetic lane-wise (the same expressions:
 // the same bits), and the slot stores t e as (x, y, z, 0) and its negation. Returns the running maximum
-// of the stiffening bits (see block_forces).
-template <bool Stiff>
+// of the stiffening bits (see block_forces). With Chunk (the fused node-range step, threaded_step.cpp)
+// only t e, to Fi[s - s0].
+template <bool Stiff, bool Chunk = false>
 v4i fused_forces(Index s0, Index s1, const Springs& S, const double* __restrict IKp,
                  const double* __restrict x, v4d* __restrict Fi, v4d* __restrict Fj, v4i sm) {
   const Index* __restrict I = S.i.data();
@@ -199,8 +200,12 @@ v4i fused_forces(Index s0, Index s1, const Springs& S, const double* __restrict 
     }
     for (int k = 0; k < 4; ++k) {
       const v4d f = reinterpret_cast<v4r>(e[k]) * t[k];  // (t ex, t ey, t ez, t 0)
-      Fi[s + k] = f;
-      Fj[s + k] = -f;  // exactly the negated force: f_j -= f of the scatter pass
+      if constexpr (Chunk) {
+        Fi[s - s0 + k] = f;
+      } else {
+        Fi[s + k] = f;
+        Fj[s + k] = -f;  // exactly the negated force: f_j -= f of the scatter pass
+      }
     }
   }
   return sm;
@@ -352,6 +357,42 @@ int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard
   else
     slot_forces<false>(m, st.x.data(), F);
   return guard ? node_pass_any<true>(m, st, h, vmax2) : node_pass_any<false>(m, st, h, vmax2);
+}
+
+}  // namespace medspring::detail
+
+namespace medspring::detail {
+
+void spring_chunk_forces(const Model& m, Index s0, Index nb, const double* x, double* F, bool stiffening,
+                         std::int64_t& stiff_bits) {
+  v4d* Fo = reinterpret_cast<v4d*>(F);
+  Index done = 0;
+#if defined(MEDSPRING_FUSED_SPRING_PASS)
+  done = nb - nb % 4;
+  const v4i z{stiff_bits, stiff_bits, stiff_bits, stiff_bits};
+  const v4i sv = stiffening
+                     ? fused_forces<true, true>(s0, s0 + done, m.springs, m.inv_k.data(), x, Fo, nullptr, z)
+                     : fused_forces<false, true>(s0, s0 + done, m.springs, m.inv_k.data(), x, Fo, nullptr, z);
+  for (int k = 0; k < 4; ++k) stiff_bits = stiff_bits < sv[k] ? sv[k] : stiff_bits;
+#endif
+  if (done == nb) return;
+  alignas(64) double ex[kBlock], ey[kBlock], ez[kBlock], tt[kBlock];
+  for (Index b0 = s0 + done; b0 < s0 + nb; b0 += kBlock) {
+    const Index nk = std::min(kBlock, s0 + nb - b0);
+    spring_vectors(nk, m.springs.i.data() + b0, m.springs.j.data() + b0, x, ex, ey, ez);
+    const double* L0 = m.springs.L0.data() + b0;
+    const double* K = m.springs.k.data() + b0;
+    const double* KP = m.springs.kp.data() + b0;
+    const double* IK = m.inv_k.data() + b0;
+    if (stiffening)
+      block_forces<true>(nk, ex, ey, ez, L0, K, KP, IK, tt, stiff_bits);
+    else
+      block_forces<false>(nk, ex, ey, ez, L0, K, KP, IK, tt, stiff_bits);
+    for (Index q = 0; q < nk; ++q) {
+      const double t = tt[q];
+      Fo[b0 - s0 + q] = v4d{t * ex[q], t * ey[q], t * ez[q], 0.0};
+    }
+  }
 }
 
 }  // namespace medspring::detail

@@ -6,6 +6,8 @@
 // contraction may differ between the vectorised and the scalar loop).
 #pragma once
 
+#include <cstdint>
+
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/state.hpp"
 
@@ -23,5 +25,13 @@ bool gather_ready(const Model& m, State& st);
 /// (as symplectic_substep does). st.f holds the node forces afterwards, as after internal_forces (after
 /// a failed substep only those of the nodes up to the failing one: f is scratch then).
 int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening);
+
+/// The forces t e (e = x_j - x_i, t the tension over the length) of the springs [s0, s0 + nb) on their
+/// ends i, as rows (x, y, z, 0) of F (nb x 4 doubles), with the gather pass's vectorised arithmetic (its
+/// 4-springs-at-a-time AVX-512 pass where built, a spring shorter than kMinSpringLength gets 0; no soft
+/// springs). With `stiffening`, the largest kappa/k is folded into stiff_bits (the bit pattern of a
+/// non-negative double, start at 0).
+void spring_chunk_forces(const Model& m, Index s0, Index nb, const double* x, double* F, bool stiffening,
+                         std::int64_t& stiff_bits);
 
 }  // namespace medspring::detail

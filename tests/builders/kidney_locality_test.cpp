@@ -140,9 +140,12 @@ TEST(KidneyLocality, ShuffledRealKidneySimulatesInRcmOrderWithTheUsersNumbering)
             1e-12 * (1.0 + scale));
   const double vscale = a.state().v.cwiseAbs().maxCoeff();
   ASSERT_GT(vscale, 0.0);
+  // the floor: velocities near rest are sums of opposing spring forces of ~1 N, so a different
+  // summation order (the node order) leaves ~1e-16 N x h / m; 1e-13 was reached (1.01e-13) once the
+  // fused step's vectorised tensions (docs/threads.md) changed the FMA contraction
   for (Index v = 0; v < ns; ++v)
     ASSERT_LT((a.state().v.row(v) - b.state().v.row(local->dof_of(v))).cwiseAbs().maxCoeff(),
-              1e-10 * vscale + 1e-13)
+              1e-10 * vscale + 5e-13)
         << v;
   for (const Index f : hs.fixed) EXPECT_EQ(b.surface().row(f), k.surface.V.row(f));
 

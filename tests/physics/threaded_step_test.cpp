@@ -1,4 +1,4 @@
-// The threaded symplectic step (docs/performance.md): agreement with one thread, bit-identical reruns,
+// The threaded symplectic step (docs/threads.md): agreement with one thread, bit-identical reruns,
 // the automatic single thread for small models and bad thread counts.
 #include <gtest/gtest.h>
 
