@@ -19,6 +19,13 @@
 
 namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
+struct LocalStiffening {
+  double* scratch;
+  double frame_dt;
+  double safety;
+};
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
+                       const LocalStiffening* local);
 }  // namespace medspring::detail
 
 using namespace medspring;
@@ -93,6 +100,18 @@ TEST(VolumetricStep, LocalStiffeningBoundsTheLoadedOmegaAndIsTighterThanTheGloba
     EXPECT_GE(local, 1.0);
     EXPECT_LE(local, global * (1 + 1e-12)) << load << " N";
     EXPECT_GE(m.omega_rest * std::sqrt(local), omega_true) << load << " N";
+    // The step scatters the local rows only where the range [s_springs, global] holds more than one
+    // sub-step count of its frame: the same sub-steps as the rule always scattered (a frame of 1e12 ms
+    // gives every value its own count, so the rows are always scattered), at the same state.
+    VecX scratch(m.num_nodes() + m.volume.size());
+    const detail::LocalStiffening gated{scratch.data(), 0.5, 0.8}, always{scratch.data(), 1e12, 0.8};
+    const double s_gated = detail::internal_forces(m, st.x, st.f_ext, f, true, &gated);
+    const double s_always = detail::internal_forces(m, st.x, st.f_ext, f, true, &always);
+    EXPECT_LE(s_always, s_gated * (1 + 1e-12)) << load << " N";
+    EXPECT_LE(s_gated, global * (1 + 1e-12)) << load << " N";
+    EXPECT_EQ(stable_substeps(m, s_gated, 0.5, 0.8), stable_substeps(m, s_always, 0.5, 0.8)) << load << " N";
+    EXPECT_GE(m.omega_rest * std::sqrt(s_always), omega_true) << load << " N";
+    std::cout << load << " N: always scattered " << s_always << ", gated " << s_gated << "\n";
     std::cout << load << " N: stiffening local " << local << ", global " << global
               << "; omega bound / true = " << m.omega_rest * std::sqrt(local) / omega_true << "\n";
   }
