@@ -117,4 +117,38 @@ TEST(VolumetricStep, LocalStiffeningBoundsTheLoadedOmegaAndIsTighterThanTheGloba
   }
 }
 
+// The springs of a volumetric model go through the gather pass (spring_gather.cpp: the volume pass writes
+// State::f, the node pass adds loads, return springs and spring slots): the same motion as the scatter pass
+// (internal_forces + symplectic update, the model with its gather table cleared) to rounding, the same
+// sub-steps and stiffening, over 300 frames of a 0.5 N load on the 800-node kidney.
+TEST(VolumetricStep, GatherPassEqualsTheScatterPassToRounding) {
+  const SurfaceMesh s = kidney_phantom();
+  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+  VolumetricSettings vs;
+  vs.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  const VolumetricBody body(fem::volumetric_mesh(s, {.target_nodes = 800}), vs, "kidney");
+  const Model& m = body.model();
+  ASSERT_FALSE(m.gather.empty());
+  Model scatter = m;
+  scatter.gather = SpringGather{};
+  Index top = 0;
+  for (Index i = 0; i < body.num_surface_nodes(); ++i)
+    if (s.V(i, 2) > s.V(top, 2)) top = i;
+  State a = make_state(m), b = make_state(scatter);
+  body.transfer_force(top, Vec3(0, 0, -0.5), a.f_ext);
+  b.f_ext = a.f_ext;
+  double disp = 0;
+  for (int i = 0; i < 300; ++i) {
+    step(m, a, {.dt = 0.5});
+    step(scatter, b, {.dt = 0.5});
+    ASSERT_EQ(a.substeps, b.substeps) << "frame " << i;
+    disp = std::max(disp, (b.x - m.x0).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(disp, 1.0);  // the load moved the kidney by millimetres
+  EXPECT_LE((a.x - b.x).cwiseAbs().maxCoeff(), 1e-9 * disp);
+  EXPECT_LE((a.v - b.v).cwiseAbs().maxCoeff(), 1e-9 * (1.0 + b.v.cwiseAbs().maxCoeff()));
+  EXPECT_NEAR(a.stiffening, b.stiffening, 1e-9 * b.stiffening);
+  EXPECT_EQ(a.warnings.total(), b.warnings.total());
+}
+
 }  // namespace
