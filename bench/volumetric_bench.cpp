@@ -166,5 +166,39 @@ BENCHMARK(BM_VolumetricKidneyForcesUnfused)
     ->Args({2, 0})
     ->Unit(benchmark::kMicrosecond);
 
+// Where a default update's time goes (docs/volumetric.md "Where the time goes"), one phase per Arg, on the
+// 2,000-node kidney without mass scaling at a 2 % compressed state: 0 = the spring pass (return springs and
+// loads included; the model without its volume terms), 1 = the volume pass without the stiffening bound (the
+// frame's first sub-steps), 2 = with the global bound, 3 = with the local stiffening (the frame's last
+// sub-step: the pass with the increments, then the row scatter), 4 = the per-frame inversion count, 5 = the
+// pass with the increments alone (the frame's last sub-step where the local rule cannot save a sub-step).
+void BM_VolumetricKidneyPhases(benchmark::State& st) {
+  const auto body = kidney(2000, 0.0);
+  const Model& m = body->model();
+  Model springs_only = m;
+  springs_only.volume = VolumeTerms{};
+  MatX3 x = m.x0, f = MatX3::Zero(m.num_nodes(), 3), fe = MatX3::Zero(m.num_nodes(), 3);
+  x.col(2) *= 0.98;
+  VecX rows(m.num_nodes() + m.volume.size());
+  const int phase = static_cast<int>(st.range(0));
+  double row_max = 0;
+  for (auto _ : st) {
+    if (phase == 0) detail::internal_forces(springs_only, x, fe, f, false);
+    if (phase == 1 || phase == 2)
+      benchmark::DoNotOptimize(add_volume_forces(m.volume, x.data(), f.data(), phase == 2));
+    if (phase == 3)
+      benchmark::DoNotOptimize(
+          add_volume_forces_local(m.volume, x.data(), f.data(), rows.data(), m.num_nodes(), row_max));
+    if (phase == 4) benchmark::DoNotOptimize(count_inverted(m.volume, x));
+    if (phase == 5)
+      benchmark::DoNotOptimize(
+          add_volume_forces_inc(m.volume, x.data(), f.data(), rows.data() + m.num_nodes()));
+    benchmark::DoNotOptimize(f.data());
+  }
+  st.counters["tets"] = static_cast<double>(m.volume.size());
+  st.counters["springs"] = static_cast<double>(m.num_springs());
+}
+BENCHMARK(BM_VolumetricKidneyPhases)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 #endif

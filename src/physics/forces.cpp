@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "medspring/core/check.hpp"
+#include "medspring/physics/stability.hpp"
 #include "spring_kernel.hpp"
 #include "tet_kernel.hpp"
 
@@ -62,12 +63,34 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
 
 namespace detail {
 
+double volume_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
+                     const LocalStiffening* local) {
+  const double w2 = m.omega_rest * m.omega_rest;
+  if (stiffening && local && m.volume.rest_rows.size() == 4 * m.volume.packed.size() && w2 > 0) {
+    // Local stiffening (docs/volumetric.md "Stable step"): with K_t(x) <= s_t K_t(x0) per term (the
+    // assumption of the global rule), K(x) <= s_springs K(x0) + sum_t (s_t - 1)+ K_t(x0), so by Weyl
+    // omega^2 <= s_springs omega_rest^2 + the Gershgorin bound of the sum, row_max. Never above the global
+    // rule max(s_springs, s_terms), never below s_springs: scattered only where that range holds more
+    // than one sub-step count (the same sub-steps as always scattering, without its cost elsewhere).
+    const Index n = m.num_nodes();
+    const double sv = add_volume_forces_inc(m.volume, X, Fo, local->scratch + n);
+    const double global = std::max(stiff, sv);
+    if (stable_substeps(m, global, local->frame_dt, local->safety) <=
+        stable_substeps(m, stiff, local->frame_dt, local->safety))
+      return global;
+    const double row_max = volume_row_max(m.volume, local->scratch + n, local->scratch, n);
+    return std::min(global, stiff + row_max / w2);
+  }
+  const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
+  return stiffening ? std::max(stiff, sv) : stiff;
+}
+
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening) {
   return internal_forces(m, x, f_ext, f, stiffening, nullptr);
 }
 
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
-                       double* rows) {
+                       const LocalStiffening* local) {
   const double* X = x.data();
   double* Fo = f.data();
   return_forces(m, X, f_ext.data(), Fo, 0, m.num_nodes());  // external force and return springs (§1.4)
@@ -85,20 +108,7 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
   else
     stiff = stiffening ? spring_forces<false, true>(m, X, Fo) : spring_forces<false, false>(m, X, Fo);
   if (m.bending.size() > 0) bending_forces(m.bending, x, f);
-  if (m.volume.size() > 0) {
-    const double w2 = m.omega_rest * m.omega_rest;
-    if (stiffening && rows && m.volume.rest_rows.size() == 4 * m.volume.packed.size() && w2 > 0) {
-      // Local stiffening (docs/volumetric.md "Stable step"): with K_t(x) <= s_t K_t(x0) per term (the
-      // assumption of the global rule), K(x) <= s_springs K(x0) + sum_t (s_t - 1)+ K_t(x0), so by Weyl
-      // omega^2 <= s_springs omega_rest^2 + the Gershgorin bound of the sum, row_max. Never above the global
-      // rule max(s_springs, s_terms).
-      double row_max = 0;
-      const double sv = add_volume_forces_local(m.volume, X, Fo, rows, m.num_nodes(), row_max);
-      return std::min(std::max(stiff, sv), stiff + row_max / w2);
-    }
-    const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
-    if (stiffening) stiff = std::max(stiff, sv);
-  }
+  if (m.volume.size() > 0) stiff = volume_forces(m, X, Fo, stiffening, stiff, local);
   return stiff;
 }
 

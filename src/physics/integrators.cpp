@@ -334,7 +334,8 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
     st.spring_n.setZero(ns, 3);
   }
   if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
-  if (m.volume.size() > 0 && st.stiff_rows.size() != m.num_nodes()) st.stiff_rows.setZero(m.num_nodes());
+  if (m.volume.size() > 0 && st.stiff_rows.size() != m.num_nodes() + m.volume.size())
+    st.stiff_rows.setZero(m.num_nodes() + m.volume.size());
   const int T = effective_threads(m, s);
   // one thread: the fused node-range step (threaded_step.hpp) for models beyond the gather pass
   if (T <= 1 && !fused_serial(m, s)) return;
@@ -383,6 +384,11 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
       subs = static_cast<long>(std::min<double>(need, s.max_substeps));
     }
   }
+  // volume terms: the local stiffening (scratch sized by prepare_step; a state without it gets the global
+  // rule)
+  const detail::LocalStiffening local{st.stiff_rows.data(), T, s.safety};
+  const detail::LocalStiffening* local_rule =
+      m.volume.size() > 0 && st.stiff_rows.size() == m.num_nodes() + m.volume.size() ? &local : nullptr;
   const double t0 = st.t;
   double h = T / static_cast<double>(subs);
   double t = t0;
@@ -402,12 +408,9 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
         r = static_cast<Substep>(detail::threaded_substep(m, st, *par, h, vmax2, s.guard, stiffening));
       } else if (gather) {
         refresh_step_coefficients(m, st, h);
-        r = static_cast<Substep>(detail::gather_substep(m, st, h, vmax2, s.guard, stiffening));
+        r = static_cast<Substep>(detail::gather_substep(m, st, h, vmax2, s.guard, stiffening, local_rule));
       } else {
-        // volume terms: the local stiffening (scratch sized by prepare_step; a state without it gets the
-        // global rule)
-        double* rows = st.stiff_rows.size() == m.num_nodes() ? st.stiff_rows.data() : nullptr;
-        const double stiff = detail::internal_forces(m, st.x, st.f_ext, st.f, stiffening, rows);
+        const double stiff = detail::internal_forces(m, st.x, st.f_ext, st.f, stiffening, local_rule);
         if (stiffening) st.stiffening = stiff;
         r = s.guard ? symplectic_substep<true>(m, st, h, vmax2) : symplectic_substep<false>(m, st, h, vmax2);
       }

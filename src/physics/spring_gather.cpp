@@ -27,8 +27,10 @@ constexpr int kWidths[] = {4, 6, 8, 10, 12, 16};
 void build_spring_gather(Model& m) {
   m.gather = SpringGather{};
   const Index n = m.num_nodes(), ns = m.num_springs();
+  // volume terms: their pass adds into st.f, which the node pass reads (issue 23); not with the fused pass
+  // of terms that own springs (plan_owned_springs)
   if (ns == 0 || ns > kSpringGatherMaxSprings || m.has_soft_springs || m.bending.size() > 0 ||
-      m.volume.size() > 0)
+      (m.volume.size() > 0 && m.volume.planned_springs >= 0))
     return;
   const auto un = static_cast<std::size_t>(n);
   std::vector<Index> degree(un + 1, 0);
@@ -246,10 +248,11 @@ double slot_forces(const Model& m, const double* __restrict x, double* __restric
   return hd::max_of(1.0, stiff);
 }
 
-// The node pass: every node's force (load, return spring, its slots in increasing spring index) into
-// st.f and, for a free node, the symplectic update (§2.1) in place: the spring pass has read every
-// position already. Returns 0, or 1 / 2 after restoring the free nodes already advanced.
-template <int W, bool Guard>
+// The node pass: every node's force (load, return spring, with Vol the volume terms' force already in
+// st.f, its slots in increasing spring index) into st.f and, for a free node, the symplectic update (§2.1)
+// in place: the spring pass has read every position already. Returns 0, or 1 / 2 after restoring the free
+// nodes already advanced.
+template <int W, bool Guard, bool Vol>
 int node_pass(const Model& m, State& st, double h, double vmax2) {
   const SpringGather& Gt = m.gather;
   const Index n = m.num_nodes();
@@ -273,17 +276,24 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
     // load and return spring (§1.4) lane-wise from masked loads: hd::return_force's arithmetic
     const v4r xa = _mm256_maskz_loadu_pd(0x7, X + q);
     v4d acc = _mm256_maskz_loadu_pd(0x7, FE + q) - KR[a] * (xa - v4r(_mm256_maskz_loadu_pd(0x7, X0 + q)));
+    if constexpr (Vol) acc += _mm256_maskz_loadu_pd(0x7, G + q);
 #else
     double g[3];
     hd::return_force(FE + q, X + q, X0 + q, KR[a], g);  // load and return spring (§1.4)
     v4d acc = {g[0], g[1], g[2], 0.0};                  // lane-wise adds: the same sums as three scalar ones
+    if constexpr (Vol) acc += v4d{G[q], G[q + 1], G[q + 2], 0.0};
 #endif
     const Index* r = row + static_cast<std::size_t>(a) * W;
 #pragma GCC unroll 16
     for (int k = 0; k < W; ++k) acc += *reinterpret_cast<const v4d*>(F4 + r[k]);
     for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += *reinterpret_cast<const v4d*>(F4 + xs[e]);
 #if defined(MEDSPRING_FUSED_SPRING_PASS)
-    _mm256_mask_storeu_pd(G + q, 0x7, acc);
+    if constexpr (Vol) {  // the next node loads its row of G: no masked store over it (see below)
+      _mm_storeu_pd(G + q, _mm256_castpd256_pd128(v4r(acc)));
+      _mm_store_sd(G + q + 2, _mm256_extractf128_pd(v4r(acc), 1));
+    } else {
+      _mm256_mask_storeu_pd(G + q, 0x7, acc);
+    }
     if (fixed[a]) continue;
     // hd::symplectic_velocity / symplectic_position lane-wise (equal to rounding: FMA contraction)
     const v4r vn = (Mv[a] * v4r(_mm256_maskz_loadu_pd(0x7, V + q)) + h * acc) * C[a];
@@ -330,33 +340,38 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
   return 0;
 }
 
-template <bool Guard>
+template <bool Guard, bool Vol>
 int node_pass_any(const Model& m, State& st, double h, double vmax2) {
   switch (m.gather.width) {
     case 4:
-      return node_pass<4, Guard>(m, st, h, vmax2);
+      return node_pass<4, Guard, Vol>(m, st, h, vmax2);
     case 6:
-      return node_pass<6, Guard>(m, st, h, vmax2);
+      return node_pass<6, Guard, Vol>(m, st, h, vmax2);
     case 8:
-      return node_pass<8, Guard>(m, st, h, vmax2);
+      return node_pass<8, Guard, Vol>(m, st, h, vmax2);
     case 10:
-      return node_pass<10, Guard>(m, st, h, vmax2);
+      return node_pass<10, Guard, Vol>(m, st, h, vmax2);
     case 12:
-      return node_pass<12, Guard>(m, st, h, vmax2);
+      return node_pass<12, Guard, Vol>(m, st, h, vmax2);
     default:
-      return node_pass<16, Guard>(m, st, h, vmax2);
+      return node_pass<16, Guard, Vol>(m, st, h, vmax2);
   }
 }
 
 }  // namespace
 
-int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening) {
+int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening,
+                   const LocalStiffening* local) {
   double* F = st.spring_force.data();
-  if (stiffening)
-    st.stiffening = slot_forces<true>(m, st.x.data(), F);
-  else
-    slot_forces<false>(m, st.x.data(), F);
-  return guard ? node_pass_any<true>(m, st, h, vmax2) : node_pass_any<false>(m, st, h, vmax2);
+  const double ss = stiffening ? slot_forces<true>(m, st.x.data(), F) : slot_forces<false>(m, st.x.data(), F);
+  if (m.volume.size() > 0) {  // the volume terms' forces into st.f first, read by the node pass
+    st.f.setZero();
+    const double s = volume_forces(m, st.x.data(), st.f.data(), stiffening, ss, local);
+    if (stiffening) st.stiffening = s;
+    return guard ? node_pass_any<true, true>(m, st, h, vmax2) : node_pass_any<false, true>(m, st, h, vmax2);
+  }
+  if (stiffening) st.stiffening = ss;
+  return guard ? node_pass_any<true, false>(m, st, h, vmax2) : node_pass_any<false, false>(m, st, h, vmax2);
 }
 
 }  // namespace medspring::detail

@@ -10,6 +10,7 @@
 
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/state.hpp"
+#include "spring_kernel.hpp"
 
 namespace medspring::detail {
 
@@ -24,7 +25,10 @@ bool gather_ready(const Model& m, State& st);
 /// Returns 0 (ok), 1 (a velocity over v_max) or 2 (non-finite), the nodes already advanced restored
 /// (as symplectic_substep does). st.f holds the node forces afterwards, as after internal_forces (after
 /// a failed substep only those of the nodes up to the failing one: f is scratch then).
-int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening);
+/// A model with volume terms (issue 23): their pass (volume_forces, with `local` as in internal_forces)
+/// writes st.f before the node pass adds the rest, and the stiffening is that of springs and terms.
+int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening,
+                   const LocalStiffening* local = nullptr);
 
 /// The forces t e (e = x_j - x_i, t the tension over the length) of the springs [s0, s0 + nb) on their
 /// ends i, as rows (x, y, z, 0) of F (nb x 4 doubles), with the gather pass's vectorised arithmetic (its

@@ -84,10 +84,24 @@ inline void undo_symplectic(const Model& m, State& st, double h, const Index* fr
 /// internal_forces (forces.hpp) with the stiffening max computed only when `stiffening` (else 1 is
 /// returned): the step needs it from the last force evaluation of a frame only.
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
-/// The same, and for a model with volume terms and `rows` (scratch of #N doubles) the local stiffening of
-/// the volume terms (issue 23, docs/volumetric.md "Stable step"): the returned stiffening is
-/// min(max(s_springs, s_terms), s_springs + row_max / omega_rest^2) (add_volume_forces_local).
+/// The local stiffening of a model with volume terms (issue 23, docs/volumetric.md "Stable step"):
+/// scratch of #N + #T doubles (State::stiff_rows), and the frame step and safety of the step that will use
+/// the stiffening.
+struct LocalStiffening {
+  double* scratch;
+  double frame_dt;
+  double safety;
+};
+/// The same, and with `local` (and stiffening) the local stiffening of the volume terms: the returned
+/// stiffening is min(max(s_springs, s_terms), s_springs + row_max / omega_rest^2) (add_volume_forces_local)
+/// where that asks for fewer sub-steps of local->frame_dt than the global rule max(s_springs, s_terms);
+/// else (the local value, never below s_springs, could not save a sub-step: the global rule asks for no
+/// more than s_springs does) the global rule, without the scatter of the local rows.
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
-                       double* rows);
+                       const LocalStiffening* local);
+/// The volume terms' part of internal_forces: adds their forces to Fo (flat 3N) and returns the stiffening
+/// of springs (s_springs = `stiff`) and terms together by the rule above (s_springs without `stiffening`).
+double volume_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
+                     const LocalStiffening* local);
 
 }  // namespace medspring::detail

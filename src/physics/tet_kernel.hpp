@@ -30,12 +30,13 @@ inline void cross3(const double* u, const double* v, double* w) {
 /// Stiff: sv = max(sv, the term's curvature bound |dV/dx|^2 + |V - V0| L_max / 2 over its rest value;
 /// ||d^2V|| <= L_max / 2: each corner row of d^2V has three 3x3 blocks [x_m - x_n]x / 6)
 /// and ss = max(ss, kappa/k of its springs), as the separate passes compute them. With Local (and Stiff):
-/// also rows[n_k] += (s_t - 1) rr[k] for the term's stiffening s_t > 1 (the local stiffening of the
-/// stable step; rr: the record's four rest_rows).
+/// also *inc = (s_t - 1)+, the term's stiffening increment (the local stiffening of the stable step,
+/// scattered to the nodes afterwards by volume_row_max: a scatter here would chain the next terms' row
+/// updates to this term's square root through memory).
 template <int Own, bool Soft, bool Stiff, bool Local = false>
 [[gnu::always_inline]] inline void tet_record(const VolumeTerms::Packed& r, const SpringParams& S,
                                               const double* x, double* f, double& ss, double& sv,
-                                              double* rows = nullptr, const double* rr = nullptr) {
+                                              double* inc = nullptr) {
   double P[4][3];
   for (int k = 0; k < 4; ++k) {
     const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
@@ -76,8 +77,7 @@ template <int Own, bool Soft, bool Stiff, bool Local = false>
     const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (1.0 / 12.0);  // |V - V0| L / 2
     if constexpr (Local) {  // branch-free: about half the terms stiffen, a branch would be unpredictable
       const double st = cur * r.iG0 - 1.0;
-      const double d = st > 0.0 ? st : 0.0;
-      for (int k = 0; k < 4; ++k) rows[r.n[k]] += d * rr[k];
+      *inc = st > 0.0 ? st : 0.0;
     }
     // a branch, not a max: rarely taken, so no iteration waits on the previous one's square root
     if (cur * r.iG0 > sv) [[unlikely]]

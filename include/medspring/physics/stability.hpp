@@ -1,6 +1,8 @@
 // Stable time-step estimates for the explicit integrator (ALGORITHMS.md §2.2).
 #pragma once
 
+#include <cmath>
+
 #include "medspring/physics/model.hpp"
 
 namespace medspring {
@@ -17,6 +19,13 @@ double power_iteration_omega(const Model& model, const MatX3& x, int iterations 
 /// The run-time stable step: safety * 2 / (omega_rest * sqrt(stiffening)) (ms).
 inline double dt_safe(const Model& model, double stiffening, double safety = 0.8) {
   return safety * 2.0 / (model.omega_rest * std::sqrt(stiffening < 1.0 ? 1.0 : stiffening));
+}
+
+/// Sub-steps the symplectic step takes for a frame of dt under that step (uncapped; 1 when the frame is
+/// stable as it is), as integrators.cpp's step decides them.
+inline double stable_substeps(const Model& model, double stiffening, double dt, double safety) {
+  const double hs = dt_safe(model, stiffening, safety);
+  return dt > hs * (1.0 + 1e-12) ? std::ceil(dt / hs) : 1.0;
 }
 
 }  // namespace medspring

@@ -57,7 +57,7 @@ struct State {
   MatX3 x_trial;                                 // implicit Newton: trial positions
   VecX step_coef;                                // symplectic: 1 / (m + h d) per node for the cached h
   VecX spring_force;                             // gather pass: force of every spring slot, x | y | z blocks
-  VecX stiff_rows;                               // volume terms: local stiffening rows per node (#N)
+  VecX stiff_rows;                               // volume terms: local stiffening rows (#N), increments (#T)
   double step_coef_h = -1.0;                     // the h step_coef was computed for
   VecX cg_r, cg_z, cg_p, cg_q, dv, rhs, jacobi;  // implicit Euler (3N)
   VecX spring_a, spring_b;                       // implicit: per-spring stiffness coefficients (#S)

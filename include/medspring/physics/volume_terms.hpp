@@ -83,9 +83,16 @@ void set_volume_rest_rows(VolumeTerms& T, const MatX3& x0, const VecX& mass,
 /// f like add_volume_forces and returns the terms' largest stiffening s_max (>= 1) as it does; in addition
 /// sets row_max = max over nodes i of sum over the terms t at i with s_t > 1 of (s_t - 1) r_t,i, the
 /// Gershgorin bound of the stiffening's increment to M^-1/2 K M^-1/2 ((rad/ms)^2). `rows` is scratch of
-/// `nodes` doubles (overwritten). Needs T.rest_rows.
+/// `nodes` + #T doubles (overwritten). Needs T.rest_rows. The two halves are add_volume_forces_inc and
+/// volume_row_max.
 double add_volume_forces_local(const VolumeTerms& T, const double* x, double* f, double* rows, Index nodes,
                                double& row_max);
+/// add_volume_forces with the stiffening, and each term's stiffening increment (s_t - 1)+ into inc (#T, in
+/// `packed` order).
+double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc);
+/// max over nodes i of sum over the terms t at i of inc_t r_t,i (the rest rows); `rows`: scratch of `nodes`
+/// doubles. Needs T.rest_rows.
+double volume_row_max(const VolumeTerms& T, const double* inc, double* rows, Index nodes);
 
 /// Adds the volume forces -dE/dx to f (flat 3N arrays). With `stiffening`, returns the stiffening of the
 /// terms (>= 1): the largest ratio of a term's current curvature bound to its rest one, for the stable
