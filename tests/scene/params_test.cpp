@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -289,6 +290,29 @@ TEST(DeclaredParameters, LoadToolRecordAndVolumetricErrorsNameTheJsonPath) {
        "t.json: tools[0].path_file: must not be empty"},
   };
   for (const auto& [got, expected] : cases) EXPECT_EQ(got, expected);
+}
+
+TEST(DeclaredParameters, EveryCommittedSceneFileParsesAndItsWrittenFormIsAFixedPoint) {
+  int files = 0;
+  for (const char* dir : {"scenes", "scenes/phantom", "examples/scenes", "examples/tools"}) {
+    const std::filesystem::path folder = std::filesystem::path(MEDSPRING_SOURCE_DIR) / dir;
+    if (!std::filesystem::is_directory(folder)) continue;
+    for (const auto& f : std::filesystem::directory_iterator(folder)) {
+      if (f.path().extension() != ".json") continue;
+      Scene s;
+      try {
+        s = load_scene(f.path());
+      } catch (const std::exception& e) {
+        if (std::string(e.what()).find("MEDSPRING_DATA") != std::string::npos) continue;  // no data here
+        ADD_FAILURE() << e.what();
+        continue;
+      }
+      const std::string written = scene_to_json(s);
+      EXPECT_EQ(scene_to_json(parse_scene(written, f.path().parent_path(), "w.json")), written) << f.path();
+      ++files;
+    }
+  }
+  EXPECT_GE(files, 8);
 }
 
 TEST(DeclaredParameters, SceneFormsKeptBesideTheDeclarations) {
