@@ -154,10 +154,6 @@ nlohmann::json value_json(const F& f) {
   }
 }
 
-}  // namespace params_json_detail
-
-namespace params_json_detail {
-
 template <class F>
 void read_value(const ParamSpec& s, const nlohmann::json& j, const std::string& path, F& f) {
   if constexpr (ParamStruct<F>) {
