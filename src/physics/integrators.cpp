@@ -10,6 +10,7 @@
 #include "medspring/physics/stability.hpp"
 #include "spring_gather.hpp"
 #include "spring_kernel.hpp"
+#include "stiffness_product.hpp"
 #include "threaded_step.hpp"
 
 namespace medspring {
@@ -107,29 +108,14 @@ void spring_coefficients(const Model& m, const MatX3& x, State& st) {
   }
 }
 
-// y = K p (springs + bending + return springs), matrix-free.
+// y = K p (springs + bending + return springs + volume terms), matrix-free (stiffness_product.hpp), with
+// the springs' coefficients of spring_coefficients.
 void apply_stiffness(const Model& m, const State& st, const VecX& p, VecX& y) {
-  const Index n = m.num_nodes();
-  for (Index a = 0; a < n; ++a) y.segment<3>(3 * a) = m.kr[a] * p.segment<3>(3 * a);
-  const Springs& S = m.springs;
-  for (Index s = 0; s < S.size(); ++s) {
-    const Index i = 3 * S.i[s], j = 3 * S.j[s];
-    const Vec3 dp = p.segment<3>(i) - p.segment<3>(j);
-    const Vec3 nh = st.spring_n.row(s).transpose();
-    const Vec3 kd = st.spring_a[s] * nh * nh.dot(dp) + st.spring_b[s] * dp;
-    y.segment<3>(i) += kd;
-    y.segment<3>(j) -= kd;
-  }
-  const BendingTerms& B = m.bending;
-  for (Index t = 0; t < B.size(); ++t) {
-    const Vec3 g =
-        B.kb[t] * (p.segment<3>(3 * B.a[t]) - 2.0 * p.segment<3>(3 * B.b[t]) + p.segment<3>(3 * B.c[t]));
-    y.segment<3>(3 * B.a[t]) += g;
-    y.segment<3>(3 * B.b[t]) -= 2.0 * g;
-    y.segment<3>(3 * B.c[t]) += g;
-  }
   // volume terms (issue 23): Gauss-Newton part only, so the CG system stays positive definite
-  if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, st.x, p, y, true);
+  detail::stiffness_product<false>(m, st.x, nullptr, p, y, nullptr, true, [&](Index s, const Vec3& dp) {
+    const Vec3 nh = st.spring_n.row(s).transpose();
+    return Vec3(st.spring_a[s] * nh * nh.dot(dp) + st.spring_b[s] * dp);
+  });
 }
 
 // y = (M + h D + h^2 K) p on free DOFs, 0 on fixed DOFs.

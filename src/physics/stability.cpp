@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "medspring/physics/forces.hpp"
+#include "stiffness_product.hpp"
 
 namespace medspring {
 
@@ -70,48 +71,17 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
     ce[q] = (spring_tension_derivative(S.k[q], S.kp[q], d) - cb[q]) / L2;
   }
   const double* X = x.data();
-  const Index* SI = S.i.data();
-  const Index* SJ = S.j.data();
   VecX sc(n);  // M^-1/2 per node, zero on fixed DOFs (removed from the system, §1.5)
   for (Index a = 0; a < n; ++a) sc[a] = m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]);
-  const bool extra_terms = m.bending.size() > 0 || m.volume.size() > 0;
-  VecX w(extra_terms ? 3 * n : 0);  // M^-1/2 q, for the bending and volume terms only
-  // y = M^-1/2 K_t M^-1/2 q: springs read M^-1/2 q on the fly (no vector of it for spring models)
+  VecX w;  // M^-1/2 q, for the bending and volume terms only
+  // y = M^-1/2 K_t M^-1/2 q (stiffness_product.hpp): springs read M^-1/2 q on the fly
   auto apply_A = [&](const VecX& qv, VecX& y) {
-    const double* Q = qv.data();
-    double* Y = y.data();
-    for (Index a = 0; a < n; ++a)
-      for (int c = 0; c < 3; ++c) Y[3 * a + c] = m.kr[a] * (sc[a] * Q[3 * a + c]);
-    for (Index q = 0; q < ns; ++q) {
-      const Index i = 3 * SI[q], j = 3 * SJ[q];
-      const double si = sc[SI[q]], sj = sc[SJ[q]];
+    detail::stiffness_product<true>(m, x, sc.data(), qv, y, &w, false, [&](Index q, const Vec3& d) {
+      const Index i = 3 * S.i[q], j = 3 * S.j[q];
       const double ex = X[j] - X[i], ey = X[j + 1] - X[i + 1], ez = X[j + 2] - X[i + 2];
-      const double dx = si * Q[i] - sj * Q[j], dy = si * Q[i + 1] - sj * Q[j + 1],
-                   dz = si * Q[i + 2] - sj * Q[j + 2];
-      const double g = ce[q] * (ex * dx + ey * dy + ez * dz);
-      const double c = cb[q];
-      const double kx = g * ex + c * dx, ky = g * ey + c * dy, kz = g * ez + c * dz;
-      Y[i] += kx;
-      Y[i + 1] += ky;
-      Y[i + 2] += kz;
-      Y[j] -= kx;
-      Y[j + 1] -= ky;
-      Y[j + 2] -= kz;
-    }
-    if (extra_terms) {
-      for (Index a = 0; a < n; ++a) w.segment<3>(3 * a) = sc[a] * qv.segment<3>(3 * a);
-      const BendingTerms& B = m.bending;
-      for (Index t = 0; t < B.size(); ++t) {
-        const Vec3 g =
-            B.kb[t] * (w.segment<3>(3 * B.a[t]) - 2.0 * w.segment<3>(3 * B.b[t]) + w.segment<3>(3 * B.c[t]));
-        y.segment<3>(3 * B.a[t]) += g;
-        y.segment<3>(3 * B.b[t]) -= 2.0 * g;
-        y.segment<3>(3 * B.c[t]) += g;
-      }
-      if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, w, y);
-    }
-    for (Index a = 0; a < n; ++a)
-      for (int c = 0; c < 3; ++c) Y[3 * a + c] *= sc[a];
+      const double g = ce[q] * (ex * d.x() + ey * d.y() + ez * d.z());  // as before: the same bits
+      return Vec3(g * ex + cb[q] * d.x(), g * ey + cb[q] * d.y(), g * ez + cb[q] * d.z());
+    });
   };
   // Lanczos (issue 15: the 30 power-iteration products were 56 % of a 3M-node build): `iterations`
   // products span the Krylov space of the start vector, and the largest eigenvalue of the tridiagonal

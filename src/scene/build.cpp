@@ -195,7 +195,7 @@ struct Builder {
     const SceneModel& m = scene.model;
     std::shared_ptr<VolumetricBody> b;
     try {
-      b = std::make_shared<VolumetricBody>(loader->tetrahedralize(surface, m.volumetric_nodes), m.volumetric,
+      b = std::make_shared<VolumetricBody>(loader->tetrahedralize(surface, m.volumetric.mesh_nodes), m.volumetric,
                                            name);
     } catch (const InvalidInput& e) {
       fail("model", e.what());

@@ -5,10 +5,12 @@
 
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/smrm_vessel.hpp"
+#include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/spring_law.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/scene_tools.hpp"
 #include "medspring/scene/study_schema.hpp"
 #include "medspring/scene/study_settings.hpp"
 #include "medspring/sim/simulation.hpp"
@@ -56,12 +58,24 @@ std::vector<ParamSet> parameter_sets() {
        "include/medspring/physics/spring_law.hpp", param_rows<DuffingSettings>()},
       {"Surface model", "SurfaceBodyParams", "`model.parameters` (kind `surface`)",
        "include/medspring/physics/model.hpp", param_rows<SurfaceBodyParams>()},
+      {"Volumetric model", "VolumetricSettings", "`model.parameters` (kind `volumetric`)",
+       "include/medspring/models/volumetric_body.hpp", param_rows<VolumetricSettings>()},
       {"SMRM vessel", "SmrmSettings", "`model.parameters` (kind `smrm`)",
        "include/medspring/models/smrm_vessel.hpp", param_rows<SmrmSettings>()},
       {"Step settings", "StepSettings", "`integrator`", "include/medspring/physics/integrators.hpp",
        param_rows<StepSettings>()},
       {"Local deformation", "LocalOptions", "`local`", "include/medspring/sim/simulation.hpp",
        param_rows<LocalOptions>()},
+      {"Loads", "LoadEntry",
+       "each entry of `loads`: exactly one of `node`, `point`, or `ring` + `spoke`; `atom` only with "
+       "`towards_atom`",
+       "include/medspring/scene/scene.hpp", param_rows<LoadEntry>()},
+      {"Recording", "SceneRecord", "`record`", "include/medspring/scene/scene.hpp",
+       param_rows<SceneRecord>()},
+      {"Tools", "ToolEntry",
+       "each entry of `tools` ([tools.md](tools.md)): exactly one of `path` (`path[]` is each keyframe) or "
+       "`path_file`",
+       "include/medspring/scene/scene_tools.hpp", param_rows<ToolEntry>()},
       {"Tool contact", "ContactSettings", "`contact` (with `tools`)", "include/medspring/tools/contact.hpp",
        param_rows<ContactSettings>()},
       {"Parameter study", "StudySettings",
@@ -93,9 +107,10 @@ std::string parameter_tables_markdown() {
       "file's keys ([scenes.md](scenes.md)), their checks, the Python properties and keyword arguments, "
       "and this page. The name is the JSON key; in Python the property of the same name (`integrator` "
       "for the key `method`). A nested name `duffing.eta` is the key `eta` of the object `duffing`. Numbers "
-      "and names can also be set on the command line: `medspring run SCENE --set integrator.dt=0.25`.\n\n"
-      "Declared so far: the sets below. Still read by hand ([scenes.md](scenes.md), [tools.md](tools.md)): "
-      "the volumetric model's parameters, each tool's shape and path, loads and `record`.\n";
+      "and names can also be set on the command line: `medspring run SCENE --set integrator.dt=0.25`. A list "
+      "of objects `tools[]` is each entry of the list `tools`; `required` keys have no default.\n\n"
+      "Read by hand besides the sets below ([scenes.md](scenes.md)): the model's kind, source and material, "
+      "and the scene's name, description and duration.\n";
   for (ParamSet p : parameter_sets()) {
     for (ParamRow& r : p.rows) {  // a '|' would end the table cell
       std::string doc;
@@ -126,6 +141,12 @@ void set_scene_parameter(Scene& scene, const std::string& path, const std::strin
       name = path.substr(17);
       set_param(scene.model.smrm, name, value);
       if (name == "k_b") scene.model.smrm.bending = BendingMode::Constant;  // as in a scene file
+    } else if (starts("model.parameters.") && scene.model.kind == ModelKind::Volumetric) {
+      name = path.substr(17);
+      set_param(scene.model.volumetric, name, value);
+    } else if (starts("record.")) {
+      name = path.substr(7);
+      set_param(scene.record, name, value);
     } else if (starts("local.")) {
       name = path.substr(6);
       set_param(scene.local, name, value);
@@ -135,8 +156,8 @@ void set_scene_parameter(Scene& scene, const std::string& path, const std::strin
       set_param(scene.contact, name, value);
     } else {
       throw InvalidInput(
-          "not a declared parameter of this scene (integrator.NAME, local.NAME, contact.NAME, or "
-          "model.parameters.NAME of a hybrid, surface or smrm model; see docs/parameters.md)");
+          "not a declared parameter of this scene (integrator.NAME, local.NAME, contact.NAME, record.NAME, "
+          "or model.parameters.NAME; see docs/parameters.md)");
     }
   } catch (const InvalidInput& e) {
     std::string what = e.what();

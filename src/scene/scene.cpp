@@ -32,6 +32,17 @@ ModelKind parse_model_kind(const std::string& text) {
   throw InvalidInput(cat("unknown model kind '", text, "' (expected surface, hybrid, smrm or volumetric)"));
 }
 
+std::string to_string(NamedDirection d) {
+  return d == NamedDirection::InwardNormal ? "inward_normal" : "towards_atom";
+}
+
+NamedDirection parse_enum(const std::string& text, NamedDirection*) {
+  if (text == "inward_normal") return NamedDirection::InwardNormal;
+  if (text == "towards_atom") return NamedDirection::TowardsAtom;
+  throw InvalidInput(
+      cat("unknown direction '", text, "' (expected [x, y, z], inward_normal or towards_atom)"));
+}
+
 std::string to_string(ModelKind kind) {
   switch (kind) {
     case ModelKind::Surface:
@@ -60,17 +71,6 @@ LengthUnit parse_unit(Obj& o, const std::string& key) {
   if (!v) fail(o.ctx(), o.at(key), "is required (the unit of the file's coordinates: mm, cm, m or um)");
   const std::string s = as_string(o.ctx(), *v, o.at(key));
   return with_path(o.ctx(), o.at(key), [&] { return parse_length_unit(s); });
-}
-
-std::vector<Index> parse_index_list(const Ctx& c, const json& j, const std::string& path) {
-  if (!j.is_array()) fail(c, path, "must be an array of node indices");
-  std::vector<Index> out;
-  for (std::size_t k = 0; k < j.size(); ++k) {
-    const Index i = as_index(c, j[k], cat(path, "[", k, "]"));
-    if (i < 0) fail(c, cat(path, "[", k, "]"), cat("must be >= 0 (got ", i, ")"));
-    out.push_back(i);
-  }
-  return out;
 }
 
 void parse_source(const Ctx& c, const json& j, const std::string& path, SceneModel& m) {
@@ -186,7 +186,6 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
 }
 
 void parse_parameters(const Ctx& c, const json& j, const std::string& path, SceneModel& m) {
-  Obj o(c, j, path);
   switch (m.kind) {
     case ModelKind::Hybrid:
       // Declared once (models/hybrid_kidney.hpp, for_each_field): every key, type and range checked there.
@@ -202,25 +201,13 @@ void parse_parameters(const Ctx& c, const json& j, const std::string& path, Scen
       // A k_b without "bending" means "constant".
       if (j.contains("k_b") && !j.contains("bending")) s.bending = BendingMode::Constant;
       if (j.contains("k_b") && s.bending == BendingMode::Wall)
-        fail(c, o.at("k_b"), "applies to \"bending\": \"constant\" only");
+        fail(c, path + ".k_b", "applies to \"bending\": \"constant\" only");
       return;
     }
-    case ModelKind::Volumetric: {  // issue 23: E and nu come from "material"
-      VolumetricSettings& v = m.volumetric;
-      m.volumetric_nodes = o.index("nodes", m.volumetric_nodes, 10);
-      v.density = o.positive("density", v.density);
-      v.beta = o.nonnegative("beta", v.beta);
-      if (o.has("k_r")) v.return_k = o.nonnegative("k_r", 0.0);
-      v.spring_scale = o.positive("spring_scale", v.spring_scale);
-      v.volume_scale = o.nonnegative("volume_scale", v.volume_scale);
-      v.mass_scaling_dt = o.nonnegative("mass_scaling_dt", v.mass_scaling_dt);
-      if (const json* d = o.get("duffing"))  // declared in physics/spring_law.hpp
-        with_origin(c, [&] { params_from_json(*d, o.at("duffing"), v.duffing); });
-      if (const json* f = o.get("fixed")) v.fixed = parse_index_list(c, *f, o.at("fixed"));
-      break;
-    }
+    case ModelKind::Volumetric:  // declared in models/volumetric_body.hpp; E and nu from "material"
+      with_origin(c, [&] { params_from_json(j, path, m.volumetric); });
+      return;
   }
-  o.finish();
 }
 
 // "material": "kidney" | {"preset": "aorta"} | {"E_kPa": 12, "nu": 0.45} -> calibrated stiffnesses of the
@@ -299,63 +286,49 @@ void parse_model(const Ctx& c, const json& j, SceneModel& m) {
   if (!m.nonlinear) m.surface.duffing.mode = DuffingMode::Linear;
 }
 
+// One entry of "loads": the declared keys (LoadEntry, scene.hpp) read, then resolved to a SceneLoad.
 SceneLoad parse_load(const Ctx& c, const json& j, const std::string& path) {
-  Obj o(c, j, path);
+  LoadEntry e;
+  with_origin(c, [&] { params_from_json(j, path, e); });
   SceneLoad L;
   L.where = path;
-  const json* node = o.get("node");
-  const json* point = o.get("point");
-  const json* ring = o.get("ring");
-  const json* spoke = o.get("spoke");
-  const int picks = (node != nullptr) + (point != nullptr) + (ring != nullptr || spoke != nullptr);
+  const int picks = e.node.has_value() + e.point.has_value() + (e.ring || e.spoke);
   if (picks != 1) fail(c, path, "needs exactly one of node, point, or ring + spoke");
-  if (node) {
+  if (e.node) {
     L.pick = SceneLoad::Pick::Node;
-    L.node = as_index(c, *node, o.at("node"));
-  } else if (point) {
+    L.node = *e.node;
+  } else if (e.point) {
     L.pick = SceneLoad::Pick::Point;
-    L.point = as_vec3(c, *point, o.at("point"));
+    L.point = *e.point;
   } else {
-    if (!ring || !spoke) fail(c, path, "ring and spoke go together");
+    if (!e.ring || !e.spoke) fail(c, path, "ring and spoke go together");
     L.pick = SceneLoad::Pick::RingSpoke;
-    L.ring = as_index(c, *ring, o.at("ring"));
-    L.spoke = as_index(c, *spoke, o.at("spoke"));
+    L.ring = *e.ring;
+    L.spoke = *e.spoke;
   }
-  const json* dir = o.get("direction");
-  if (!dir) fail(c, o.at("direction"), "is required ([x, y, z], \"inward_normal\" or \"towards_atom\")");
-  if (dir->is_string()) {
-    const std::string d = dir->get<std::string>();
-    if (d == "inward_normal")
-      L.direction = SceneLoad::Direction::InwardNormal;
-    else if (d == "towards_atom")
-      L.direction = SceneLoad::Direction::TowardsAtom;
-    else
-      fail(c, o.at("direction"),
-           cat("unknown direction '", d, "' (expected [x, y, z], inward_normal or towards_atom)"));
-  } else {
+  if (const Vec3* v = std::get_if<Vec3>(&e.direction)) {
     L.direction = SceneLoad::Direction::Vector;
-    L.vector = as_vec3(c, *dir, o.at("direction"));
+    L.vector = *v;  // kept as written (build_scene normalises): scene_to_json -> parse_scene is the identity
     const double norm = L.vector.norm();
-    if (norm < 1e-12) fail(c, o.at("direction"), "must not be the zero vector");
-    if (!std::isfinite(norm)) fail(c, o.at("direction"), "is too long to normalise");
-    // kept as written (build_scene normalises): scene_to_json -> parse_scene is then the identity
+    if (norm < 1e-12) fail(c, path + ".direction", "must not be the zero vector");
+    if (!std::isfinite(norm)) fail(c, path + ".direction", "is too long to normalise");
+  } else {
+    L.direction = std::get<NamedDirection>(e.direction) == NamedDirection::InwardNormal
+                      ? SceneLoad::Direction::InwardNormal
+                      : SceneLoad::Direction::TowardsAtom;
   }
-  if (o.has("atom") && L.direction != SceneLoad::Direction::TowardsAtom)
-    fail(c, o.at("atom"), "applies only with direction \"towards_atom\"");
-  L.target_atom = o.index("atom", -1, 0);
-  const json* mag = o.get("magnitude");
-  if (!mag) fail(c, o.at("magnitude"), "is required (N)");
-  L.magnitude = as_number(c, *mag, o.at("magnitude"));
-  if (L.magnitude < 0) fail(c, o.at("magnitude"), cat("must be >= 0 N (got ", L.magnitude, ")"));
-  L.t_on = o.nonnegative("t_on", 0.0);
-  L.t_ramp = o.nonnegative("t_ramp", 20.0);
-  if (const json* r = o.get("t_release"); r && !r->is_null()) {
-    L.t_release = as_number(c, *r, o.at("t_release"));
+  if (e.atom && L.direction != SceneLoad::Direction::TowardsAtom)
+    fail(c, path + ".atom", "applies only with direction \"towards_atom\"");
+  L.target_atom = e.atom.value_or(-1);
+  L.magnitude = e.magnitude;
+  L.t_on = e.t_on;
+  L.t_ramp = e.t_ramp;
+  if (e.t_release) {
+    L.t_release = *e.t_release;
     if (L.t_release < L.t_on)
-      fail(c, o.at("t_release"), cat("must be >= t_on (", L.t_release, " < ", L.t_on, ")"));
+      fail(c, path + ".t_release", cat("must be >= t_on (", L.t_release, " < ", L.t_on, ")"));
   }
-  L.ramp_down = o.boolean("ramp_down", false);
-  o.finish();
+  L.ramp_down = e.ramp_down;
   return L;
 }
 
@@ -376,23 +349,12 @@ void parse_local(const Ctx& c, const json& j, Scene& scene) {
 }
 
 void parse_record(const Ctx& c, const json& j, Scene& scene) {
-  Obj o(c, j, "record");
   SceneRecord& r = scene.record;
-  r.every = o.index("every", r.every, 1);
-  r.frames = o.boolean("frames", r.frames);
-  if (const json* n = o.get("nodes")) r.nodes = parse_index_list(c, *n, "record.nodes");
-  if (const json* a = o.get("atoms")) r.atoms = parse_index_list(c, *a, "record.atoms");
-  if (const json* k = o.get("key_times")) {
-    if (!k->is_array()) fail(c, "record.key_times", "must be an array of times (ms)");
-    for (std::size_t i = 0; i < k->size(); ++i) {
-      const std::string p = cat("record.key_times[", i, "]");
-      const double t = as_number(c, (*k)[i], p);
-      if (t < 0 || t > scene.duration)
-        fail(c, p, cat("must be within [0, duration = ", scene.duration, "] ms (got ", t, ")"));
-      r.key_times.push_back(t);
-    }
-  }
-  o.finish();
+  with_origin(c, [&] { params_from_json(j, "record", r); });  // declared in scene.hpp
+  for (std::size_t i = 0; i < r.key_times.size(); ++i)
+    if (r.key_times[i] > scene.duration)
+      fail(c, cat("record.key_times[", i, "]"),
+           cat("must be within [0, duration = ", scene.duration, "] ms (got ", r.key_times[i], ")"));
 }
 
 }  // namespace

@@ -14,14 +14,6 @@ namespace medspring {
 
 using json = nlohmann::json;
 
-namespace {
-
-json vec_json(const Vec3& v) {
-  return json::array({v.x(), v.y(), v.z()});
-}
-
-}  // namespace
-
 std::string scene_to_json(const Scene& s) {
   const ModelSource& src = s.model.source;
   json source;
@@ -74,16 +66,7 @@ std::string scene_to_json(const Scene& s) {
   } else if (m.kind == ModelKind::Surface) {
     params = params_to_json(m.surface);
   } else if (m.kind == ModelKind::Volumetric) {
-    const VolumetricSettings& v = m.volumetric;
-    params = {{"nodes", m.volumetric_nodes},
-              {"density", v.density},
-              {"beta", v.beta},
-              {"spring_scale", v.spring_scale},
-              {"volume_scale", v.volume_scale},
-              {"mass_scaling_dt", v.mass_scaling_dt},
-              {"duffing", params_to_json(v.duffing)},
-              {"fixed", v.fixed}};
-    if (v.return_k) params["k_r"] = *v.return_k;
+    params = params_to_json(m.volumetric);
   } else {
     params = params_to_json(m.smrm);
     if (m.smrm.bending != BendingMode::Constant) params.erase("k_b");
@@ -104,39 +87,30 @@ std::string scene_to_json(const Scene& s) {
   }
 
   json loads = json::array();
-  for (const SceneLoad& L : s.loads) {
-    json l;
-    if (L.pick == SceneLoad::Pick::Node) l["node"] = L.node;
-    if (L.pick == SceneLoad::Pick::Point) l["point"] = vec_json(L.point);
-    if (L.pick == SceneLoad::Pick::RingSpoke) l.update({{"ring", L.ring}, {"spoke", L.spoke}});
-    if (L.direction == SceneLoad::Direction::Vector) l["direction"] = vec_json(L.vector);
-    if (L.direction == SceneLoad::Direction::InwardNormal) l["direction"] = "inward_normal";
-    if (L.direction == SceneLoad::Direction::TowardsAtom) {
-      l["direction"] = "towards_atom";
-      if (L.target_atom >= 0) l["atom"] = L.target_atom;
-    }
-    l.update({{"magnitude", L.magnitude},
-              {"t_on", L.t_on},
-              {"t_ramp", L.t_ramp},
-              {"t_release", std::isfinite(L.t_release) ? json(L.t_release) : json(nullptr)},
-              {"ramp_down", L.ramp_down}});
+  for (const SceneLoad& L : s.loads) {  // back to the declared entry (LoadEntry, scene.hpp)
+    LoadEntry e;
+    if (L.pick == SceneLoad::Pick::Node) e.node = L.node;
+    if (L.pick == SceneLoad::Pick::Point) e.point = L.point;
+    if (L.pick == SceneLoad::Pick::RingSpoke) e.ring = L.ring, e.spoke = L.spoke;
+    if (L.direction == SceneLoad::Direction::Vector) e.direction = L.vector;
+    if (L.direction == SceneLoad::Direction::InwardNormal) e.direction = NamedDirection::InwardNormal;
+    if (L.direction == SceneLoad::Direction::TowardsAtom) e.direction = NamedDirection::TowardsAtom;
+    if (L.direction == SceneLoad::Direction::TowardsAtom && L.target_atom >= 0) e.atom = L.target_atom;
+    e.magnitude = L.magnitude;
+    e.t_on = L.t_on;
+    e.t_ramp = L.t_ramp;
+    if (std::isfinite(L.t_release)) e.t_release = L.t_release;
+    e.ramp_down = L.ramp_down;
+    json l = params_to_json(e);
+    for (const char* unset : {"node", "point", "ring", "spoke", "atom"})  // the pick given, not the others
+      if (l[unset].is_null()) l.erase(unset);
     loads.push_back(l);
   }
   json local = params_to_json(s.local);
   if (s.local_k_from_body) local.erase("k_loc");
-  json j = {{"name", s.name},
-            {"description", s.description},
-            {"model", model},
-            {"loads", loads},
-            {"integrator", params_to_json(s.step)},
-            {"duration", s.duration},
-            {"local", local},
-            {"record",
-             {{"every", s.record.every},
-              {"frames", s.record.frames},
-              {"key_times", s.record.key_times},
-              {"nodes", s.record.nodes},
-              {"atoms", s.record.atoms}}}};
+  json j = {{"name", s.name}, {"description", s.description},         {"model", model},
+            {"loads", loads}, {"integrator", params_to_json(s.step)}, {"duration", s.duration},
+            {"local", local}, {"record", params_to_json(s.record)}};
   if (!s.tools.empty()) {
     j["tools"] = json::parse(scene_tools_json(s.tools));
     j["contact"] = json::parse(scene_contact_json(s.contact));

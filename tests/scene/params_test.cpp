@@ -7,9 +7,11 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "medspring/core/check.hpp"
 #include "medspring/geometry/phantoms.hpp"
@@ -20,6 +22,7 @@
 #include "medspring/physics/model.hpp"
 #include "medspring/scene/parameter_docs.hpp"
 #include "medspring/scene/scene.hpp"
+#include "medspring/scene/scene_tools.hpp"
 #include "medspring/scene/study_settings.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "medspring/tools/contact.hpp"
@@ -45,6 +48,16 @@ void perturb(T& p) {
     } else if constexpr (std::is_arithmetic_v<F>) {
       const F up = f * 1.25 + 0.125;
       f = range_error(s, up).empty() ? up : f * 0.5;
+    } else if constexpr (ParamOptionalNumber<F>) {
+      typename F::value_type x = f.value_or(1);
+      x = std::is_integral_v<typename F::value_type> ? x + 1 : x * 1.25 + 0.125;
+      f = x;
+    } else if constexpr (ParamOptional<F>) {
+      f = typename F::value_type(1, 2, 3);
+    } else if constexpr (std::is_same_v<F, std::vector<double>>) {
+      f = {1.5, 2.5};
+    } else if constexpr (std::is_same_v<F, std::string>) {
+      f += "x";
     } else {
       f = {1, 3, 4};
     }
@@ -59,10 +72,13 @@ std::string dump(const T& p, const std::string& prefix = "") {
   for_each_field(p, [&](const ParamSpec& s, const auto& f) {
     using F = std::remove_cvref_t<decltype(f)>;
     if (s.derived) return;
-    if constexpr (ParamStruct<F>)
+    if constexpr (ParamStruct<F>) {
       out += dump(f, cat(prefix, s.json_name(), "."));
-    else
+    } else if constexpr (ParamList<F>) {
+      for (std::size_t k = 0; k < f.size(); ++k) out += dump(f[k], cat(prefix, s.json_name(), "[", k, "]."));
+    } else {
       out += cat(prefix, s.json_name(), "=", param_value_text(f), "\n");
+    }
   });
   return out;
 }
@@ -111,6 +127,192 @@ TEST(DeclaredParameters, EverySurfaceSmrmLocalAndContactFieldRoundTripsThroughAS
   Scene local = surface;
   local.local_k_from_body = false;  // as a file with "k_loc" says
   expect_round_trip<LocalOptions>(local, &Scene::local, nullptr);
+}
+
+const char* kVolumetric =
+    R"({"model": {"kind": "volumetric", "source": {"phantom": "kidney"}, "material": {"E_kPa": 12, "nu": 0.4}},
+        "duration": 10})";
+
+TEST(DeclaredParameters, EveryVolumetricAndRecordFieldRoundTripsThroughASceneFile) {
+  const Scene v = parse_scene(kVolumetric, ".", "t.json");
+  EXPECT_EQ(v.model.volumetric.E_kPa, 12);  // from "material", not a parameter
+  expect_round_trip<VolumetricSettings>(v, nullptr, &SceneModel::volumetric);
+  expect_round_trip<SceneRecord>(parse_scene(kHybrid, ".", "t.json"), &Scene::record, nullptr);
+  // k_r: null (the default) is the model's choice; a number is kept
+  Scene s = v;
+  ASSERT_FALSE(s.model.volumetric.return_k.has_value());
+  EXPECT_FALSE(parse_scene(scene_to_json(s), ".", "t.json").model.volumetric.return_k.has_value());
+  apply_scene_settings(s, "model.parameters.k_r=0.03,model.parameters.nodes=500,record.every=3");
+  EXPECT_EQ(s.model.volumetric.return_k, 0.03);
+  EXPECT_EQ(s.model.volumetric.mesh_nodes, 500);
+  EXPECT_EQ(s.record.every, 3);
+  apply_scene_settings(s, "model.parameters.k_r=null");
+  EXPECT_FALSE(s.model.volumetric.return_k.has_value());
+}
+
+/// The keys of every object in the JSON text's array `list` (and of their `nested` arrays).
+std::string written_keys(const std::string& scene_json, const std::string& list) {
+  std::string out;
+  const auto add = [&](const std::string& key) {
+    if (out.find(cat("|", key, "|")) == std::string::npos) out += cat("|", key, "|");
+  };
+  const std::size_t at = scene_json.find(cat("\"", list, "\": ["));
+  for (std::size_t q = scene_json.find('"', at + list.size() + 4); q != std::string::npos;
+       q = scene_json.find('"', q + 1)) {
+    const std::size_t e = scene_json.find('"', q + 1);
+    if (scene_json.compare(e + 1, 1, ":") == 0) add(scene_json.substr(q + 1, e - q - 1));
+    q = e;
+    if (scene_json.find("\n  }", e) < scene_json.find('"', e + 1)) break;  // the end of the top-level key
+  }
+  return out;
+}
+
+TEST(DeclaredParameters, EveryLoadAndToolKeyRoundTripsThroughASceneFile) {
+  std::string text = kHybrid;
+  text.insert(text.size() - 1, R"(, "loads": [
+      {"node": 5, "direction": [0, 0, -2], "magnitude": 0.5, "t_on": 1, "t_ramp": 3, "t_release": 8,
+       "ramp_down": true},
+      {"point": [1, 2, 3], "direction": "towards_atom", "atom": 4, "magnitude": 1},
+      {"ring": 2, "spoke": 3, "direction": "inward_normal", "magnitude": 2, "t_release": null}],
+    "tools": [{"shape": "grasper", "radius": 1.5, "length": 12, "opening_deg": 60,
+               "path": [{"t": 0, "position": [0, 40, 10], "rotation": [0, 0, 0, 2], "opening_deg": 30},
+                        {"t": 10, "position": [0, 30, 10]}]},
+              {"shape": "capsule", "radius": 2, "length": 5, "path": [{"t": 0, "position": [1, 2, 3]}]}])");
+  const Scene s = parse_scene(text, ".", "t.json");
+  const std::string written = scene_to_json(s);
+  const Scene b = parse_scene(written, ".", "t.json");
+  ASSERT_EQ(b.loads.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const SceneLoad &x = s.loads[k], &y = b.loads[k];
+    EXPECT_EQ(x.pick, y.pick);
+    EXPECT_EQ(x.node, y.node);
+    EXPECT_EQ(x.point, y.point);
+    EXPECT_EQ(x.ring, y.ring);
+    EXPECT_EQ(x.spoke, y.spoke);
+    EXPECT_EQ(x.direction, y.direction);
+    EXPECT_EQ(x.vector, y.vector);
+    EXPECT_EQ(x.target_atom, y.target_atom);
+    EXPECT_EQ(x.magnitude, y.magnitude);
+    EXPECT_EQ(x.t_on, y.t_on);
+    EXPECT_EQ(x.t_ramp, y.t_ramp);
+    EXPECT_EQ(x.t_release, y.t_release);
+    EXPECT_EQ(x.ramp_down, y.ramp_down);
+  }
+  EXPECT_EQ(s.loads[0].vector, Vec3(0, 0, -2));  // as written
+  EXPECT_EQ(s.loads[1].target_atom, 4);
+  EXPECT_TRUE(std::isinf(s.loads[2].t_release));
+  ASSERT_EQ(b.tools.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const SceneTool &x = s.tools[k], &y = b.tools[k];
+    EXPECT_EQ(x.tool.kind, y.tool.kind);
+    EXPECT_EQ(x.tool.radius, y.tool.radius);
+    EXPECT_EQ(x.tool.length, y.tool.length);
+    EXPECT_NEAR(x.tool.opening, y.tool.opening, 1e-15);
+    ASSERT_EQ(x.path.size(), y.path.size());
+    for (std::size_t r = 0; r < x.path.size(); ++r) {
+      EXPECT_EQ(x.path[r].t, y.path[r].t);
+      EXPECT_EQ(x.path[r].pose.position, y.path[r].pose.position);
+      EXPECT_NEAR((x.path[r].pose.rotation.coeffs() - y.path[r].pose.rotation.coeffs()).norm(), 0, 1e-15);
+      EXPECT_NEAR(x.path[r].opening, y.path[r].opening, 1e-15);
+    }
+  }
+  EXPECT_NEAR(s.tools[0].tool.opening, std::acos(-1.0) / 3, 1e-15);
+  EXPECT_NEAR(s.tools[0].path[0].pose.rotation.z(), 1, 1e-15);  // normalised
+  EXPECT_LT(s.tools[0].path[1].opening, 0);                     // not given: the tool's own
+  // every declared key is written (path_file is read into keyframes)
+  const LoadEntry kConstLoadEntry{};
+  const ToolEntry kConstToolEntry{};
+  const ToolKeyframeEntry kConstToolKeyframeEntry{};
+  const std::string loads = written_keys(written, "loads"), tools = written_keys(written, "tools");
+  for_each_field(kConstLoadEntry, [&](const ParamSpec& p, const auto&) {
+    EXPECT_NE(loads.find(cat("|", p.json_name(), "|")), std::string::npos) << p.name << " in " << loads;
+  });
+  for_each_field(kConstToolEntry, [&](const ParamSpec& p, const auto&) {
+    if (p.name != "path_file")
+      EXPECT_NE(tools.find(cat("|", p.json_name(), "|")), std::string::npos) << p.name << " in " << tools;
+  });
+  for_each_field(kConstToolKeyframeEntry, [&](const ParamSpec& p, const auto&) {
+    EXPECT_NE(tools.find(cat("|", p.json_name(), "|")), std::string::npos) << p.name << " in " << tools;
+  });
+}
+
+TEST(DeclaredParameters, LoadToolRecordAndVolumetricErrorsNameTheJsonPath) {
+  const auto error = [](std::string base, const std::string& where, const std::string& what) {
+    if (where == "parameters")
+      base.insert(base.find(", \"material\""), cat(", \"parameters\": ", what));
+    else
+      base.insert(base.size() - 1, cat(", \"", where, "\": ", what));
+    try {
+      parse_scene(base, ".", "t.json");
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  const std::string path = R"("path": [{"t": 0, "position": [0, 0, 1]}])";
+  const std::pair<std::string, std::string> cases[] = {
+      {error(kVolumetric, "parameters", R"({"nodes": 5})"),
+       "t.json: model.parameters.nodes: must be >= 10 (got 5)"},
+      {error(kVolumetric, "parameters", R"({"k_r": -1})"),
+       "t.json: model.parameters.k_r: must be >= 0 (got -1)"},
+      {error(kVolumetric, "parameters", R"({"E_kPa": 3})"),
+       "t.json: model.parameters.E_kPa: unknown key (expected one of: nodes, density, beta, k_r, "
+       "spring_scale, volume_scale, mass_scaling_dt, min_mass_fraction, moduli_correction, duffing, fixed)"},
+      {error(kVolumetric, "parameters", R"({"duffing": {"mode": "cubic"}})"),
+       "t.json: model.parameters.duffing.mode: duffing mode: unknown value 'cubic' (expected linear, strain, "
+       "absolute or scaled_strain)"},
+      {error(kHybrid, "record", R"({"every": 0})"), "t.json: record.every: must be >= 1 (got 0)"},
+      {error(kHybrid, "record", R"({"key_times": [1, -1]})"),
+       "t.json: record.key_times[1]: must be >= 0 (got -1)"},
+      {error(kHybrid, "record", R"({"nodes": 3})"), "t.json: record.nodes: must be an array of node indices"},
+      {error(kHybrid, "loads", R"([{"node": 1, "direction": 5, "magnitude": 1}])"),
+       "t.json: loads[0].direction: must be 3 numbers or enum (got a number)"},
+      {error(kHybrid, "loads", R"([{"node": 1, "direction": "up", "magnitude": 1}])"),
+       "t.json: loads[0].direction: unknown direction 'up' (expected [x, y, z], inward_normal or "
+       "towards_atom)"},
+      {error(kHybrid, "loads", R"([{"point": [1, 2], "direction": [0, 0, 1], "magnitude": 1}])"),
+       "t.json: loads[0].point: must be an array of 3 numbers"},
+      {error(kHybrid, "loads", R"([{"node": 1, "magnitude": 1}])"),
+       "t.json: loads[0].direction: is required"},
+      {error(kHybrid, "loads", R"([{"node": 1, "direction": [0, 0, 1], "magnitude": 1, "t_ramp": -2}])"),
+       "t.json: loads[0].t_ramp: must be >= 0 (got -2)"},
+      {error(kHybrid, "tools", cat(R"([{"shape": "sphere", "radius": 1, "length": -1, )", path, "}]")),
+       "t.json: tools[0].length: must be >= 0 (got -1)"},
+      {error(kHybrid, "tools", R"([{"shape": "sphere", "radius": 1, "path": [{"position": [0, 0, 1]}]}])"),
+       "t.json: tools[0].path[0].t: is required (ms)"},
+      {error(kHybrid, "tools",
+             R"([{"shape": "grasper", "radius": 1, "length": 3, "path": [{"t": 0, "position": [0, 0, 1],
+                  "opening_deg": 200}]}])"),
+       "t.json: tools[0].path[0].opening_deg: must be in [0, 180] (got 200)"},
+      {error(kHybrid, "tools", R"([{"radius": 1, "path_file": "a.csv"}])"),
+       "t.json: tools[0].shape: is required"},
+      {error(kHybrid, "tools", R"([{"shape": "sphere", "radius": 1, "path_file": ""}])"),
+       "t.json: tools[0].path_file: must not be empty"},
+  };
+  for (const auto& [got, expected] : cases) EXPECT_EQ(got, expected);
+}
+
+TEST(DeclaredParameters, EveryCommittedSceneFileParsesAndItsWrittenFormIsAFixedPoint) {
+  int files = 0;
+  for (const char* dir : {"scenes", "scenes/phantom", "examples/scenes", "examples/tools"}) {
+    const std::filesystem::path folder = std::filesystem::path(MEDSPRING_SOURCE_DIR) / dir;
+    if (!std::filesystem::is_directory(folder)) continue;
+    for (const auto& f : std::filesystem::directory_iterator(folder)) {
+      if (f.path().extension() != ".json") continue;
+      Scene s;
+      try {
+        s = load_scene(f.path());
+      } catch (const std::exception& e) {
+        if (std::string(e.what()).find("MEDSPRING_DATA") != std::string::npos) continue;  // no data here
+        ADD_FAILURE() << e.what();
+        continue;
+      }
+      const std::string written = scene_to_json(s);
+      EXPECT_EQ(scene_to_json(parse_scene(written, f.path().parent_path(), "w.json")), written) << f.path();
+      ++files;
+    }
+  }
+  EXPECT_GE(files, 8);
 }
 
 TEST(DeclaredParameters, SceneFormsKeptBesideTheDeclarations) {

@@ -56,7 +56,47 @@ struct VolumetricSettings {
   bool moduli_correction = false;
   DuffingSettings duffing{DuffingMode::Linear};  // Duffing term of the springs (off by default)
   std::vector<Index> fixed;                      // pinned surface nodes
+  Index mesh_nodes = 2000;  // node count aimed at when a scene build tetrahedralises the surface (TetGen)
 };
+
+/// The declaration of VolumetricSettings (core/params.hpp): the "parameters" of a volumetric model in a
+/// scene, their checks, `run --set model.parameters.NAME=VALUE`, the table in docs/parameters.md. E and nu
+/// come from the model's "material".
+template <ParamOf<VolumetricSettings> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"nodes", "", "node count aimed at when the surface is tetrahedralised (TetGen)"}.at_least(10),
+    s.mesh_nodes);
+  v(ParamSpec{"density", "g/mm^3", "tissue density (lumped: a quarter of each tetrahedron per corner)"}
+        .positive(),
+    s.density);
+  v(ParamSpec{"beta", "1/ms", "mass-proportional damping, d = beta m"}.nonnegative(), s.beta);
+  v(ParamSpec{"return_k", "N/mm", "return spring per surface node; null: 0 with fixed nodes, else 0.02"}
+        .nonnegative()
+        .json_key("k_r"),
+    s.return_k);
+  v(ParamSpec{"spring_scale", "", "calibration multiplier of the edge springs"}.positive(), s.spring_scale);
+  v(ParamSpec{"volume_scale", "", "calibration multiplier of the volume terms"}.nonnegative(),
+    s.volume_scale);
+  v(ParamSpec{"mass_scaling_dt", "ms", "selective mass scaling for this sub-step (0 = off)"}.nonnegative(),
+    s.mass_scaling_dt);
+  v(ParamSpec{"min_mass_fraction", "", "every node weighs at least this fraction of the mean node mass"}
+        .nonnegative(),
+    s.min_mass_fraction);
+  v(
+      ParamSpec{
+          "moduli_correction", "",
+          "scale springs and volume terms so the mesh's measured moduli match E and nu (~1 s / 2,000 nodes)"},
+      s.moduli_correction);
+  v(ParamSpec{"duffing", "", "Duffing law of the edge springs (linear unless the model is nonlinear)"},
+    s.duffing);
+  v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
+  v(ParamSpec{"E_kPa", "kPa", "Young's modulus, from model.material"}.positive().set_by_program(), s.E_kPa);
+  v(ParamSpec{"nu", "", "Poisson ratio, from model.material"}
+        .greater_than(-1)
+        .at_most(0.5, true)
+        .set_by_program(),
+    s.nu);
+}
 
 struct VolumetricStats {
   Index nodes = 0, surface_nodes = 0, interior_nodes = 0, tetrahedra = 0, springs = 0;

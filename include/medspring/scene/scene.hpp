@@ -16,8 +16,10 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
+#include "medspring/core/params.hpp"
 #include "medspring/core/types.hpp"
 #include "medspring/core/units.hpp"
 #include "medspring/medial/vessel_phantoms.hpp"
@@ -83,9 +85,8 @@ struct SceneModel {
   HybridSettings hybrid;      // kind "hybrid" (nonlinear copied in by the parser)
   SurfaceBodyParams surface;  // kind "surface" (duffing.mode Linear when not nonlinear)
   SmrmSettings smrm;          // kind "smrm" (chain.nonlinear copied in by the parser)
-  /// Kind "volumetric" (issue 23): E, nu from "material"; the node count aimed at ("parameters": {"nodes"}).
+  /// Kind "volumetric" (issue 23): E, nu from "material"; the node count aimed at is "nodes" (mesh_nodes).
   VolumetricSettings volumetric;
-  Index volumetric_nodes = 2000;
   // "material": a preset name or {"E_kPa", "nu"} (or {"preset"}): resolved by the parser to the calibrated
   // stiffnesses of the kind (models/tissue.hpp) before "parameters", which override them.
   std::optional<TissueMaterial> material;
@@ -110,6 +111,46 @@ struct SceneLoad {
   std::string where;                                           // JSON path, "loads[k]", for messages
 };
 
+/// A direction given by name in a load: "inward_normal" or "towards_atom".
+enum class NamedDirection { InwardNormal, TowardsAtom };
+std::string to_string(NamedDirection d);
+NamedDirection parse_enum(const std::string& text, NamedDirection*);
+
+/// One entry of "loads" as a scene file writes it; parse_scene resolves it to a SceneLoad (exactly one
+/// of node, point, ring + spoke; atom only with "towards_atom"; t_release >= t_on).
+struct LoadEntry {
+  std::optional<Index> node, ring, spoke;
+  std::optional<Vec3> point;
+  std::variant<Vec3, NamedDirection> direction = NamedDirection::InwardNormal;
+  std::optional<Index> atom;
+  double magnitude = 0.0, t_on = 0.0, t_ramp = 20.0;
+  std::optional<double> t_release;
+  bool ramp_down = false;
+};
+
+/// The declaration of LoadEntry (core/params.hpp): the keys of each entry of "loads", the table in
+/// docs/parameters.md.
+template <ParamOf<LoadEntry> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"node", "", "the surface node loaded (give node, point or ring + spoke)"}.nonnegative(),
+    s.node);
+  v(ParamSpec{"point", "mm", "the surface node nearest to this point is loaded"}, s.point);
+  v(ParamSpec{"ring", "", "ring of a structured grid (tube phantom; with spoke): node ring * spokes + spoke"}
+        .nonnegative(),
+    s.ring);
+  v(ParamSpec{"spoke", "", "spoke of a structured grid (with ring)"}.nonnegative(), s.spoke);
+  v(ParamSpec{"direction", "", "[x, y, z] (normalised), inward_normal or towards_atom"}.required(),
+    s.direction);
+  v(ParamSpec{"atom", "", "towards_atom: the atom pulled towards (null: the middle atom)"}.nonnegative(),
+    s.atom);
+  v(ParamSpec{"magnitude", "N", "force"}.nonnegative().required().unit_in_messages(), s.magnitude);
+  v(ParamSpec{"t_on", "ms", "time the force starts"}.nonnegative(), s.t_on);
+  v(ParamSpec{"t_ramp", "ms", "linear ramp up (and down, with ramp_down)"}.nonnegative(), s.t_ramp);
+  v(ParamSpec{"t_release", "ms", "time the force is released (null: never); >= t_on"}.nonnegative(),
+    s.t_release);
+  v(ParamSpec{"ramp_down", "", "release over t_ramp instead of instantly"}, s.ramp_down);
+}
+
 /// What a run records besides the per-frame traces (which cover every frame).
 struct SceneRecord {
   Index every = 10;               // write a surface frame every N updates (and the first and last)
@@ -118,6 +159,20 @@ struct SceneRecord {
   std::vector<Index> atoms;       // atoms whose displacement is traced (hybrid, smrm)
   bool frames = true;             // write surface frames (.vtp + .pvd); false: traces only
 };
+
+/// The declaration of SceneRecord (core/params.hpp): the scene's "record" block, `run --set
+/// record.NAME=VALUE`, the table in docs/parameters.md.
+template <ParamOf<SceneRecord> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"every", "", "write a surface frame every N updates (and the first and last)"}.at_least(1),
+    s.every);
+  v(ParamSpec{"frames", "", "write surface frames (.vtp + .pvd); false: traces only"}, s.frames);
+  v(ParamSpec{"key_times", "ms", "frames also written at the first update reaching each time (<= duration)"}
+        .nonnegative(),
+    s.key_times);
+  v(ParamSpec{"nodes", "", "surface nodes whose displacement is traced (load nodes always are)"}, s.nodes);
+  v(ParamSpec{"atoms", "", "atoms whose displacement is traced (hybrid, smrm)"}, s.atoms);
+}
 
 struct Scene {
   std::string name;            // default: the file name without extension

@@ -11,13 +11,63 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "medspring/core/params.hpp"
 #include "medspring/sim/tool_sim.hpp"
 #include "medspring/tools/contact.hpp"
 
 namespace medspring {
+
+/// The names of tool shapes in scene files: "sphere", "capsule", "grasper".
+ToolKind parse_enum(const std::string& text, ToolKind*);
+
+/// One keyframe of a tool's "path" as a scene file writes it.
+struct ToolKeyframeEntry {
+  double t = 0;                                            // ms
+  Vec3 position = Vec3::Zero();                            // mm
+  Eigen::Vector4d rotation = Eigen::Vector4d(1, 0, 0, 0);  // quaternion [w, x, y, z]
+  std::optional<double> opening_deg;                       // grasper opening from this keyframe on
+};
+
+template <ParamOf<ToolKeyframeEntry> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"t", "ms", "time of the keyframe (increasing along the path)"}.required(), s.t);
+  v(ParamSpec{"position", "mm", "tool origin [x, y, z]"}.required(), s.position);
+  v(ParamSpec{"rotation", "", "orientation as a quaternion [w, x, y, z] (normalised; not zero)"}, s.rotation);
+  v(ParamSpec{"opening_deg", "deg", "grasper opening (null: the tool's own)"}.nonnegative().at_most(180),
+    s.opening_deg);
+}
+
+/// One entry of "tools" as a scene file writes it: a shape and exactly one of path or path_file.
+struct ToolEntry {
+  ToolKind shape = ToolKind::Sphere;
+  double radius = 5.0;       // mm
+  double length = 0.0;       // mm
+  double opening_deg = 0.0;  // deg
+  std::vector<ToolKeyframeEntry> path;
+  std::string path_file;
+};
+
+/// The declaration of ToolEntry (core/params.hpp): the keys of each entry of "tools" and of its path, the
+/// tables in docs/parameters.md.
+template <ParamOf<ToolEntry> S, class V>
+void for_each_field(S& s, V&& v) {
+  v(ParamSpec{"shape", "", "sphere, capsule or grasper"}.required(), s.shape);
+  v(ParamSpec{"radius", "mm", "radius of the sphere, of the capsule and of each grasper jaw"}
+        .positive()
+        .required(),
+    s.radius);
+  v(ParamSpec{"length", "mm", "capsule shaft, grasper jaw (> 0 for a grasper)"}.nonnegative(), s.length);
+  v(ParamSpec{"opening_deg", "deg", "grasper: angle between the jaws (0 = closed)"}.nonnegative().at_most(
+        180),
+    s.opening_deg);
+  v(ParamSpec{"path", "", "keyframes (give path or path_file)"}, s.path);
+  v(ParamSpec{"path_file", "", "CSV of keyframes, relative to the scene (sim/tool_sim.hpp read_tool_path)"},
+    s.path_file);
+}
 
 struct SceneTool {
   Tool tool;
