@@ -295,6 +295,9 @@ void bind_vessels(py::module_& m) {
         d["mean_distance_mm"] = r.mean_distance_mm;
         d["to_input_max_mm"] = r.to_input_max_mm;
         d["to_input_mean_mm"] = r.to_input_mean_mm;
+        d["away_hausdorff_mm"] = r.away.hausdorff_mm;  // away from the cut ends (docs/vessels.md)
+        d["away_mean_mm"] = r.away.mean_mm;
+        d["away_nodes_over_2mm"] = r.away.nodes_over_2mm;
         d["blended"] = r.blended;
         d["surface_closed"] = r.surface_closed;
         d["build_seconds"] = r.seconds;

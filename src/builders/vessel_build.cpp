@@ -157,6 +157,14 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   VesselSummary& r = out.summary;
   const SmrmTree& t = *out.tree;
   measure_distance_to_input(SurfaceMesh{t.rest_surface(), t.faces()}, organ.surface, r);
+  std::vector<builders_detail::CutEnd> cuts{{0, false}};  // the root's start and every leaf's end
+  for (Index b = 0; b < t.num_branches(); ++b) {
+    bool leaf = true;
+    for (Index c = 0; c < t.num_branches(); ++c) leaf = leaf && t.parent(c) != b;
+    if (leaf) cuts.push_back({b, true});
+  }
+  builders_detail::measure_away_from_ends(SurfaceMesh{t.rest_surface(), t.faces()}, organ.surface,
+                                          out.centerlines, cuts, r);
   out.input = std::move(organ.surface);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
@@ -367,6 +375,9 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   atoms_line.points = C;
   atoms_line.radii = v.atom_radius();
   out.centerlines.push_back(std::move(atoms_line));
+  if (out.input.num_faces() > 0)
+    builders_detail::measure_away_from_ends(SurfaceMesh{v.rest_surface(), v.faces()}, out.input,
+                                            out.centerlines, {{0, false}, {0, true}}, s);
   out.vessel = std::move(vessel);
   s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return out;
@@ -385,6 +396,18 @@ std::string VesselSummary::text() const {
              " mm (both count the input's end caps, which the open tube lacks); surface nodes to the input: "
              "max ",
              to_input_max_mm, " mm, mean ", to_input_mean_mm, " mm\n");
+  if (away.measured) {
+    t +=
+        cat("  away from the cut ends (samples whose axis point is more than an end radius of arc from a cut "
+            "end): Hausdorff ",
+            away.hausdorff_mm, " mm, mean ", away.mean_mm, " mm; ", away.samples_over_2mm, " of ",
+            away.samples, " samples and ", away.nodes_over_2mm, " of ", away.nodes,
+            " surface nodes farther than 2 mm (nodes max ", away.node_max_mm, " mm)\n");
+    if (away.worst_branch >= 0)
+      t += cat("    largest at branch ", away.worst_branch, " atom ", away.worst_atom, ", ",
+               away.worst_from_cut_mm, " mm of arc from the nearest cut end, (", away.worst_point.x(), ", ",
+               away.worst_point.y(), ", ", away.worst_point.z(), ") mm, ", away.worst_direction, "\n");
+  }
   if (blended)
     t += cat("  watertight surface: union of ", path_tubes, " closed path tubes, ",
              surface_closed ? "closed and manifold" : "NOT closed", ", ", surface_components,
