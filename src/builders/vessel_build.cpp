@@ -125,6 +125,12 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   MaskVolume mask;
   if (organ.from_mask) {
     mask = organ.mask;
+    Index holes = 0;  // enclosed holes: the skeleton would bend around them, the wall get an inner surface
+    if (const Index filled = builders_detail::fill_enclosed_holes(mask, &holes); filled > 0) {
+      organ.surface = isosurface(mask);
+      s.notes.push_back(cat(organ.name, ": ", filled, " voxels in ", holes,
+                            " enclosed hole(s) of the label filled (a vessel's lumen has none)"));
+    }
   } else {
     SurfaceMesh closed = organ.surface;
     const std::vector<BoundaryCap> caps = close_boundary_loops(closed);  // open ends of a tube mesh
@@ -144,7 +150,12 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   s.input_branches = sk.endpoints;
   SmrmTreeSettings ts;
   ts.vessel = st.smrm;
-  const CenterlineTree ct = merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min));
+  builders_detail::Recentring rc;
+  const CenterlineTree ct = builders_detail::recentre_tree(
+      merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min)), organ.surface, rc);
+  s.notes.push_back(cat("tree skeleton re-centred in its cross-sections: ", rc.points, " of ", rc.total,
+                        " points moved to their wall section's centroid, by ", rc.mean_shift_mm,
+                        " mm on average (max ", rc.max_shift_mm, " mm); radii from there to the wall"));
   // the watertight surface marched to the wall is the default here (docs/vessels.md: the plain tubes are
   // open, a radius short of the input's caps, and circles); no_blend keeps the tubes
   const bool blend = !st.no_blend;

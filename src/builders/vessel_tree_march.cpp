@@ -188,6 +188,13 @@ std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeS
                         "surface crossed itself ",
                         to_nearest, " took the input's nearest point, ", halved, " went part of the way, ",
                         kept, " kept the circle"));
+  // the nodes evened out along the wall and put on it (the marched rays of an off-centre axis leave the
+  // wall between them uncovered at a bulge, and the nodes that stopped part of the way off it)
+  const WallFit fit = fit_to_wall(m, input, 8);
+  s.notes.push_back(cat("watertight surface fitted to the input's wall: ", fit.rounds,
+                        " rounds of a tangential umbrella step and the closest wall point; ", fit.held,
+                        " nodes held back in the last round (their faces would cross or fold); ", fit.pulled,
+                        " nodes pulled onto input vertices the surface missed by more than 0.5 mm"));
   s.surface_volume_mm3 = signed_volume(m.V, m.F);
   return std::make_shared<SmrmTree>(ct, ts, m);
 }
