@@ -1,8 +1,10 @@
 // A vessel's rebuilt surface against its input away from the cut ends (docs/vessels.md, "Distance to the
 // input"); internal to the builders.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 
 #include "medspring/core/check.hpp"
@@ -98,15 +100,19 @@ std::vector<Index> problem_faces(const SurfaceMesh& m, const MatX3& prev,
   return bad;
 }
 
-// Puts the nodes of the faces that problem_faces finds back to `prev` until none is left; false (and m.V =
+// Puts the nodes of the faces that problem_faces finds back towards `prev` (halfway in the first 4 passes,
+// then all the way) until none is left; false (and m.V =
 // prev) when that takes more than 16 passes.
 bool settle(SurfaceMesh& m, const MatX3& prev) {
   const std::vector<Index> folds = folded_faces(SurfaceMesh{prev, m.F});
   for (int pass = 0; pass < 16; ++pass) {
     const std::vector<Index> bad = problem_faces(m, prev, folds);
     if (bad.empty()) return true;
-    for (Index f : bad)
-      for (int c = 0; c < 3; ++c) m.V.row(m.F(f, c)) = prev.row(m.F(f, c));
+    for (Index f : bad)  // first half of the way back, then all of it
+      for (int c = 0; c < 3; ++c) {
+        const Index v = m.F(f, c);
+        m.V.row(v) = pass < 4 ? MatX3(0.5 * (m.V.row(v) + prev.row(v))) : MatX3(prev.row(v));
+      }
   }
   m.V = prev;
   return false;
@@ -271,7 +277,7 @@ CenterlineTree recentre_tree(const CenterlineTree& ct, const SurfaceMesh& input,
       if (!fitted[static_cast<std::size_t>(k)]) continue;
       Index cnt = 0;
       for (Index q = 0; q < n; ++q)
-        if (std::abs(s[q] - s[k]) <= 0.5 * c.radii[k]) {
+        if (std::abs(s[q] - s[k]) <= c.radii[k]) {
           smooth.row(k) += offset.row(q);
           ++cnt;
         }
@@ -296,6 +302,57 @@ CenterlineTree recentre_tree(const CenterlineTree& ct, const SurfaceMesh& input,
   }
   rep.mean_shift_mm = rep.points > 0 ? shift_sum / static_cast<double>(rep.points) : 0.0;
   return out;
+}
+
+Index refine_long_edges(SurfaceMesh& m, double max_edge) {
+  std::map<std::pair<Index, Index>, Index> mid;
+  std::vector<Vec3> added;
+  const Index n0 = m.num_vertices();
+  auto split = [&](Index a, Index b) -> Index {  // -1: not split
+    if ((m.V.row(a) - m.V.row(b)).norm() <= max_edge) return -1;
+    const auto key = std::minmax(a, b);
+    auto it = mid.find(key);
+    if (it != mid.end()) return it->second;
+    const Index k = n0 + static_cast<Index>(added.size());
+    added.push_back(0.5 * (m.V.row(a) + m.V.row(b)).transpose());
+    mid.emplace(key, k);
+    return k;
+  };
+  std::vector<std::array<Index, 3>> F;
+  for (Index f = 0; f < m.num_faces(); ++f) {
+    Index v[3] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+    Index e[3] = {split(v[0], v[1]), split(v[1], v[2]), split(v[2], v[0])};
+    const int cnt = (e[0] >= 0) + (e[1] >= 0) + (e[2] >= 0);
+    if (cnt == 0) {
+      F.push_back({v[0], v[1], v[2]});
+    } else if (cnt == 3) {
+      F.push_back({v[0], e[0], e[2]});
+      F.push_back({e[0], v[1], e[1]});
+      F.push_back({e[2], e[1], v[2]});
+      F.push_back({e[0], e[1], e[2]});
+    } else {
+      // rotate: cnt 1 puts the split edge first (v0 v1); cnt 2 puts the edge left whole last (v2 v0)
+      int r = 0;
+      while (cnt == 1 ? e[0] < 0 : e[2] >= 0) {
+        std::rotate(v, v + 1, v + 3);
+        std::rotate(e, e + 1, e + 3);
+        if (++r > 3) break;
+      }
+      if (cnt == 1) {
+        F.push_back({v[0], e[0], v[2]});
+        F.push_back({e[0], v[1], v[2]});
+      } else {
+        F.push_back({e[0], v[1], e[1]});
+        F.push_back({v[0], e[0], e[1]});
+        F.push_back({v[0], e[1], v[2]});
+      }
+    }
+  }
+  m.V.conservativeResize(n0 + static_cast<Index>(added.size()), 3);
+  for (std::size_t k = 0; k < added.size(); ++k) m.V.row(n0 + static_cast<Index>(k)) = added[k].transpose();
+  m.F.resize(static_cast<Index>(F.size()), 3);
+  for (std::size_t f = 0; f < F.size(); ++f) m.F.row(static_cast<Index>(f)) << F[f][0], F[f][1], F[f][2];
+  return static_cast<Index>(added.size());
 }
 
 WallFit fit_to_wall(SurfaceMesh& m, const SurfaceMesh& input, int rounds) {

@@ -13,7 +13,8 @@ namespace medspring::builders_detail {
 /// The tree with `tree`'s watertight surface marched to `input` (notes and warnings into s, and its
 /// volume); null when the marched surface would intersect itself (then the circles stay, with a warning).
 std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeSettings& ts,
-                                       const SmrmTree& tree, const SurfaceMesh& input, VesselSummary& s);
+                                       const SmrmTree& tree, const SurfaceMesh& input, VesselSummary& s,
+                                       bool refine = true);
 
 /// Fills the background voxels of `mask` that the border cannot reach (6-connected): enclosed holes, a
 /// segmentation's defects inside a vessel (they would bend the skeleton away from them and give the
@@ -48,6 +49,10 @@ struct WallFit {
 /// the fit. Then, up to 3 rounds, every input vertex farther than 0.5 mm from the surface pulls its
 /// nearest node onto itself (the same checks). The connectivity is kept.
 WallFit fit_to_wall(SurfaceMesh& m, const SurfaceMesh& input, int rounds);
+
+/// Splits every edge of `m` longer than max_edge at its midpoint (a face with 1, 2 or 3 long edges becomes
+/// 2, 3 or 4 faces, orientation kept); closed and manifold stay so. Returns the nodes added.
+Index refine_long_edges(SurfaceMesh& m, double max_edge);
 
 /// A cut end of a vessel: the start (at_end false) or the end of a branch's atom line.
 struct CutEnd {
