@@ -311,7 +311,7 @@ void bind_vessels(py::module_& m) {
       "(label: the "
       "vessel's, default the only non-zero one), as `medspring build vessel --branches all` "
       "(docs/vessels.md): the tree skeleton of every endpoint (ends extended to the input's caps), and by "
-      "default the watertight surface marched to the input's wall (blend=False: one open tube per branch, "
+      "default the watertight surface fitted to the input's wall (blend=False: one open tube per branch, "
       "the skeleton's circles). Returns (tree, summary, input_surface): summary is a dict (atoms, branches, "
       "junctions, rest_error_mm, hausdorff_mm, mean_distance_mm, to_input_max_mm, to_input_mean_mm, "
       "blended, notes, ...); input_surface the mesh the distances are measured to. Raises InvalidInput "

@@ -36,7 +36,7 @@ struct VesselBuildSettings {
   double merge_tolerance = 0.05;  // mm: points of two polylines closer than this are one
   bool blend = false;             // tree: one watertight surface (union of the closed path tubes, CGAL)
                                   // instead of one open tube per branch; always for a mesh / mask tree
-                                  // (there marched to the input's wall) unless no_blend
+                                  // (there fitted to the input's wall) unless no_blend
   bool no_blend = false;          // mesh / mask tree: one open tube per branch (the skeleton's circles)
   double blend_spacing = 0.0;     // mm between the rings of the path tubes; 0 = the atom spacing
   OrganSource source{};           // a mesh or a segmentation (exactly one source in all)
