@@ -15,6 +15,7 @@
 #include "medspring/meshing/mesh_repair.hpp"
 #include "medspring/meshing/mesh_union.hpp"
 #include "medspring/meshing/surface_distance.hpp"
+#include "medspring/models/model_package.hpp"
 #include "medspring/physics/state.hpp"
 #include "medspring/skeleton/centerline_tree.hpp"
 #include "test_support.hpp"
@@ -142,8 +143,18 @@ TEST(VesselTreeSkeleton, BuildVesselFromAYSegmentationAndMeshIsATreeCloseToTheIn
     EXPECT_LE(s.away.hausdorff_mm, s.hausdorff_mm);
     EXPECT_LT(s.away.hausdorff_mm, from_mask ? 0.7 : 1.2);  // measured 0.51 / 1.02 mm
     EXPECT_GT(s.hausdorff_mm, 0.0);
-    write_vessel_files(dir, v);  // the package of a tree from a mask
-    EXPECT_TRUE(std::filesystem::exists(dir / "vessel.msm"));
+    write_vessel_files(dir, v);  // the package of a tree from a mask / mesh: the fitted surface is stored
+    const ModelPackage pkg = read_model_package(dir / "vessel.msm");
+    EXPECT_EQ(pkg.kind, "smrm_tree");
+    const BodyPtr body = make_body(pkg);
+    EXPECT_TRUE(check_fingerprint(pkg, *body));
+    ASSERT_EQ(body->rest_surface().rows(), v.tree->rest_surface().rows());
+    EXPECT_EQ(body->faces(), v.tree->faces());
+    EXPECT_LE((body->rest_surface() - v.tree->rest_surface()).cwiseAbs().maxCoeff(), 1e-12);
+    const State rest = make_state(body->model());
+    MatX3 S;
+    body->map_to_surface(rest, S);
+    EXPECT_LE((S - v.tree->rest_surface()).rowwise().norm().maxCoeff(), 1e-9);
   }
 }
 
