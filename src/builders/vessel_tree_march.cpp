@@ -209,7 +209,7 @@ std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeS
     const double max_edge = 1.5 * 2.0 * std::numbers::pi * (rsum / static_cast<double>(ra)) /
                             static_cast<double>(ts.vessel.spokes);
     const Index added = refine_long_edges(m, max_edge);
-    const WallFit fine = fit_to_wall(m, input, 4);
+    const WallFit fine = fit_to_wall(m, input, 8);
     s.notes.push_back(cat("edges longer than ", max_edge, " mm split (", added,
                           " nodes added) and fitted again: ", fine.rounds, " rounds, ", fine.held,
                           " nodes held back, ", fine.pulled, " pulled onto input vertices"));
