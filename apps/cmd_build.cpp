@@ -253,6 +253,21 @@ nlohmann::json vessel_json(const VesselSummary& s) {
     j["to_input_max_mm"] = s.to_input_max_mm;
     j["to_input_mean_mm"] = s.to_input_mean_mm;
   }
+  if (s.away.measured) {
+    const AwayFromEnds& a = s.away;
+    j["away_from_cut_ends"] = {{"hausdorff_mm", a.hausdorff_mm},
+                               {"mean_distance_mm", a.mean_mm},
+                               {"samples", a.samples},
+                               {"samples_over_2mm", a.samples_over_2mm},
+                               {"nodes", a.nodes},
+                               {"nodes_over_2mm", a.nodes_over_2mm},
+                               {"nodes_max_mm", a.node_max_mm},
+                               {"worst_branch", a.worst_branch},
+                               {"worst_atom", a.worst_atom},
+                               {"worst_from_cut_mm", a.worst_from_cut_mm},
+                               {"worst_point_mm", {a.worst_point.x(), a.worst_point.y(), a.worst_point.z()}},
+                               {"worst_direction", a.worst_direction}};
+  }
   return j;
 }
 

@@ -90,7 +90,7 @@ CommandSpec build_command() {
                  {.name = "blend",
                   .help = "with --branches all: one watertight surface (the union of the closed path tubes, "
                           "bound to the branch atoms; the default of a tree from --mesh or --segmentation, "
-                          "there marched to the input's wall)"},
+                          "there fitted to the input's wall)"},
                  {.name = "no-blend",
                   .help = "a tree from --mesh or --segmentation: one open tube per branch (the skeleton's "
                           "circles) instead of the watertight surface"},

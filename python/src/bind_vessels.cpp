@@ -295,6 +295,9 @@ void bind_vessels(py::module_& m) {
         d["mean_distance_mm"] = r.mean_distance_mm;
         d["to_input_max_mm"] = r.to_input_max_mm;
         d["to_input_mean_mm"] = r.to_input_mean_mm;
+        d["away_hausdorff_mm"] = r.away.hausdorff_mm;  // away from the cut ends (docs/vessels.md)
+        d["away_mean_mm"] = r.away.mean_mm;
+        d["away_nodes_over_2mm"] = r.away.nodes_over_2mm;
         d["blended"] = r.blended;
         d["surface_closed"] = r.surface_closed;
         d["build_seconds"] = r.seconds;
@@ -308,7 +311,7 @@ void bind_vessels(py::module_& m) {
       "(label: the "
       "vessel's, default the only non-zero one), as `medspring build vessel --branches all` "
       "(docs/vessels.md): the tree skeleton of every endpoint (ends extended to the input's caps), and by "
-      "default the watertight surface marched to the input's wall (blend=False: one open tube per branch, "
+      "default the watertight surface fitted to the input's wall (blend=False: one open tube per branch, "
       "the skeleton's circles). Returns (tree, summary, input_surface): summary is a dict (atoms, branches, "
       "junctions, rest_error_mm, hausdorff_mm, mean_distance_mm, to_input_max_mm, to_input_mean_mm, "
       "blended, notes, ...); input_surface the mesh the distances are measured to. Raises InvalidInput "

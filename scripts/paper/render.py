@@ -18,6 +18,7 @@ JOBS.json = {"width": W, "height": H, "jobs": [job, ...]} where a job is
 
 Debian's VTK renders through X only: run this under `xvfb-run -a -s "-screen 0 1280x960x24"`.
 """
+import faulthandler
 import json
 import math
 import sys
@@ -218,6 +219,7 @@ def render(job, width, height):
 
 
 def main():
+    faulthandler.enable()  # SIGABRT / SIGSEGV in VTK or the GL driver: the Python traceback goes to the log
     if len(sys.argv) != 2:
         print(__doc__, file=sys.stderr)
         return 2
@@ -226,8 +228,9 @@ def main():
     width = int(spec.get("width", 1000))
     height = int(spec.get("height", 750))
     for job in spec["jobs"]:
+        print(f"rendering {job['png']}", flush=True)  # an abort inside VTK names its job in the log
         render(job, width, height)
-        print(f"rendered {job['png']}")
+        print(f"rendered {job['png']}", flush=True)
     return 0
 
 

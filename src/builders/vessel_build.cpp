@@ -125,6 +125,12 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   MaskVolume mask;
   if (organ.from_mask) {
     mask = organ.mask;
+    Index holes = 0;  // enclosed holes: the skeleton would bend around them, the wall get an inner surface
+    if (const Index filled = builders_detail::fill_enclosed_holes(mask, &holes); filled > 0) {
+      organ.surface = isosurface(mask);
+      s.notes.push_back(cat(organ.name, ": ", filled, " voxels in ", holes,
+                            " enclosed hole(s) of the label filled (a vessel's lumen has none)"));
+    }
   } else {
     SurfaceMesh closed = organ.surface;
     const std::vector<BoundaryCap> caps = close_boundary_loops(closed);  // open ends of a tube mesh
@@ -144,7 +150,12 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   s.input_branches = sk.endpoints;
   SmrmTreeSettings ts;
   ts.vessel = st.smrm;
-  const CenterlineTree ct = merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min));
+  builders_detail::Recentring rc;
+  const CenterlineTree ct = builders_detail::recentre_tree(
+      merge_centerlines(sk.lines, std::max(st.merge_tolerance, 1e-3 * sk.h_min)), organ.surface, rc);
+  s.notes.push_back(cat("tree skeleton re-centred in its cross-sections: ", rc.points, " of ", rc.total,
+                        " points moved to their wall section's centroid, by ", rc.mean_shift_mm,
+                        " mm on average (max ", rc.max_shift_mm, " mm); radii from there to the wall"));
   // the watertight surface marched to the wall is the default here (docs/vessels.md: the plain tubes are
   // open, a radius short of the input's caps, and circles); no_blend keeps the tubes
   const bool blend = !st.no_blend;
@@ -157,6 +168,14 @@ VesselBuild tree_from_organ(const VesselBuildSettings& st, std::chrono::steady_c
   VesselSummary& r = out.summary;
   const SmrmTree& t = *out.tree;
   measure_distance_to_input(SurfaceMesh{t.rest_surface(), t.faces()}, organ.surface, r);
+  std::vector<builders_detail::CutEnd> cuts{{0, false}};  // the root's start and every leaf's end
+  for (Index b = 0; b < t.num_branches(); ++b) {
+    bool leaf = true;
+    for (Index c = 0; c < t.num_branches(); ++c) leaf = leaf && t.parent(c) != b;
+    if (leaf) cuts.push_back({b, true});
+  }
+  builders_detail::measure_away_from_ends(SurfaceMesh{t.rest_surface(), t.faces()}, organ.surface,
+                                          out.centerlines, cuts, r);
   out.input = std::move(organ.surface);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
@@ -367,6 +386,9 @@ VesselBuild build_vessel(const VesselBuildSettings& st) {
   atoms_line.points = C;
   atoms_line.radii = v.atom_radius();
   out.centerlines.push_back(std::move(atoms_line));
+  if (out.input.num_faces() > 0)
+    builders_detail::measure_away_from_ends(SurfaceMesh{v.rest_surface(), v.faces()}, out.input,
+                                            out.centerlines, {{0, false}, {0, true}}, s);
   out.vessel = std::move(vessel);
   s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return out;
@@ -385,6 +407,18 @@ std::string VesselSummary::text() const {
              " mm (both count the input's end caps, which the open tube lacks); surface nodes to the input: "
              "max ",
              to_input_max_mm, " mm, mean ", to_input_mean_mm, " mm\n");
+  if (away.measured) {
+    t +=
+        cat("  away from the cut ends (samples whose axis point is more than an end radius of arc from a cut "
+            "end): Hausdorff ",
+            away.hausdorff_mm, " mm, mean ", away.mean_mm, " mm; ", away.samples_over_2mm, " of ",
+            away.samples, " samples and ", away.nodes_over_2mm, " of ", away.nodes,
+            " surface nodes farther than 2 mm (nodes max ", away.node_max_mm, " mm)\n");
+    if (away.worst_branch >= 0)
+      t += cat("    largest at branch ", away.worst_branch, " atom ", away.worst_atom, ", ",
+               away.worst_from_cut_mm, " mm of arc from the nearest cut end, (", away.worst_point.x(), ", ",
+               away.worst_point.y(), ", ", away.worst_point.z(), ") mm, ", away.worst_direction, "\n");
+  }
   if (blended)
     t += cat("  watertight surface: union of ", path_tubes, " closed path tubes, ",
              surface_closed ? "closed and manifold" : "NOT closed", ", ", surface_components,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <vector>
 
 #include "medspring/core/check.hpp"
@@ -22,7 +23,8 @@ namespace medspring::builders_detail {
 // the axis) and misses stay. Null when the marched surface would intersect itself (then the circles
 // stay, with a warning).
 std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeSettings& ts,
-                                       const SmrmTree& tree, const SurfaceMesh& input, VesselSummary& s) {
+                                       const SmrmTree& tree, const SurfaceMesh& input, VesselSummary& s,
+                                       bool refine) {
   SurfaceMesh m{tree.rest_surface(), tree.faces()};
   Index moved = 0, missed = 0, caps = 0;
   for (Index k = 0; k < m.num_vertices(); ++k) {
@@ -188,6 +190,30 @@ std::shared_ptr<SmrmTree> marched_tree(const CenterlineTree& ct, const SmrmTreeS
                         "surface crossed itself ",
                         to_nearest, " took the input's nearest point, ", halved, " went part of the way, ",
                         kept, " kept the circle"));
+  // the nodes evened out along the wall and put on it (the marched rays of an off-centre axis leave the
+  // wall between them uncovered at a bulge, and the nodes that stopped part of the way off it)
+  const WallFit fit = fit_to_wall(m, input, 8);
+  s.notes.push_back(cat("watertight surface fitted to the input's wall: ", fit.rounds,
+                        " rounds of a tangential umbrella step and the closest wall point; ", fit.held,
+                        " nodes held back in the last round (their faces would cross or fold); ", fit.pulled,
+                        " nodes pulled onto input vertices the surface missed by more than 0.5 mm"));
+  // then finer where the rings are far apart (the wall bulges between them): every edge longer than the
+  // spoke spacing at the mean atom radius, x 1.5, split and fitted again
+  if (refine) {
+    double rsum = 0.0;
+    Index ra = 0;
+    for (Index b = 0; b < tree.num_branches(); ++b) {
+      rsum += tree.branch_vessel(b).atom_radius().sum();
+      ra += static_cast<Index>(tree.branch_vessel(b).atom_radius().size());
+    }
+    const double max_edge = 1.5 * 2.0 * std::numbers::pi * (rsum / static_cast<double>(ra)) /
+                            static_cast<double>(ts.vessel.spokes);
+    const Index added = refine_long_edges(m, max_edge);
+    const WallFit fine = fit_to_wall(m, input, 8);
+    s.notes.push_back(cat("edges longer than ", max_edge, " mm split (", added,
+                          " nodes added) and fitted again: ", fine.rounds, " rounds, ", fine.held,
+                          " nodes held back, ", fine.pulled, " pulled onto input vertices"));
+  }
   s.surface_volume_mm3 = signed_volume(m.V, m.F);
   return std::make_shared<SmrmTree>(ct, ts, m);
 }

@@ -104,6 +104,19 @@ MatX3 closest_points_on_surface(const MatX3& points, const SurfaceMesh& surface)
   return c;
 }
 
+MatX3 surface_samples(const SurfaceMesh& s, double spacing, VecX* weights) {
+  require_triangles(s, "surface_samples: mesh");
+  require_positive(spacing, "surface_samples: spacing");
+  std::vector<Point> pts;
+  std::vector<double> w;
+  sample_surface(s, spacing, pts, w);
+  MatX3 P(static_cast<Index>(pts.size()), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    P.row(static_cast<Index>(i)) << pts[i].x(), pts[i].y(), pts[i].z();
+  if (weights) *weights = Eigen::Map<const VecX>(w.data(), static_cast<Index>(w.size()));
+  return P;
+}
+
 double hausdorff_distance(const SurfaceMesh& a, const SurfaceMesh& b,
                           const SurfaceDistanceSettings& settings) {
   return surface_distance(a, b, settings).hausdorff;

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
+#include <vector>
 
 #include "internal.hpp"
 #include "medspring/core/check.hpp"
@@ -12,12 +13,21 @@ namespace medspring::paper {
 
 namespace {
 
-std::string last_line(const std::filesystem::path& file) {
+// The last `count` non-blank lines of a log, joined by " | " (the log itself goes with the staging folder
+// when the run fails, so the error message carries what it said: which job, and the traceback that
+// render.py's faulthandler prints on an abort).
+std::string last_lines(const std::filesystem::path& file, std::size_t count) {
   std::ifstream in(file);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-  return last;
+  std::string line;
+  std::vector<std::string> last;
+  while (std::getline(in, line)) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    last.push_back(line);
+    if (last.size() > count) last.erase(last.begin());
+  }
+  std::string out;
+  for (const std::string& l : last) out += (out.empty() ? "" : " | ") + l;
+  return out;
 }
 
 }  // namespace
@@ -32,7 +42,8 @@ void run_logged(const std::string& what, const std::string& command, const std::
   const int rc = std::system((command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
   const int status = rc == -1 ? -1 : (WIFEXITED(rc) ? WEXITSTATUS(rc) : 128);
   if (status != 0)
-    throw Error(cat(what, " failed (exit ", status, "): ", last_line(log), " [log: ", log.string(), "]"));
+    throw Error(cat(what, " failed (exit ", status, status == 134 ? ", an abort" : "",
+                    "): ", last_lines(log, 12), " [log: ", log.string(), "]"));
 }
 
 void render_report(const std::filesystem::path& results_json, const std::filesystem::path& report_md,

@@ -36,11 +36,30 @@ struct VesselBuildSettings {
   double merge_tolerance = 0.05;  // mm: points of two polylines closer than this are one
   bool blend = false;             // tree: one watertight surface (union of the closed path tubes, CGAL)
                                   // instead of one open tube per branch; always for a mesh / mask tree
-                                  // (there marched to the input's wall) unless no_blend
+                                  // (there fitted to the input's wall) unless no_blend
   bool no_blend = false;          // mesh / mask tree: one open tube per branch (the skeleton's circles)
   double blend_spacing = 0.0;     // mm between the rings of the path tubes; 0 = the atom spacing
   OrganSource source{};           // a mesh or a segmentation (exactly one source in all)
   SmrmSettings smrm{};            // atoms (40), spokes (30), bending, chain
+};
+
+/// The rebuilt surface against the input away from the cut ends (docs/vessels.md, "Distance to the input"):
+/// sample points of both surfaces (surface_distance's grid) whose closest point on the atoms' polylines
+/// lies at least one end radius of arc from a cut end (the root's start and every leaf's end; both ends of
+/// a single vessel), each to the other surface. Distances in mm.
+struct AwayFromEnds {
+  bool measured = false;
+  double hausdorff_mm = 0.0;  // symmetric, over the samples away from the cut ends
+  double mean_mm = 0.0;       // average of the two one-sided area-weighted means
+  Index samples = 0, samples_over_2mm = 0;
+  Index nodes = 0, nodes_over_2mm = 0;  // rebuilt surface nodes away from the cut ends
+  double node_max_mm = 0.0;             // their largest distance to the input
+  // where the largest distance sits: branch, atom (nearer atom of the closest axis segment), arc to the
+  // nearest cut end of that branch (-1: the branch has none), the sample point, and which way
+  Index worst_branch = -1, worst_atom = -1;
+  double worst_from_cut_mm = 0.0;
+  Vec3 worst_point = Vec3::Zero();
+  std::string worst_direction;
 };
 
 /// What build_vessel made. Distances in mm, times in seconds.
@@ -63,6 +82,7 @@ struct VesselSummary {
   double to_input_max_mm = 0.0;   // rebuilt surface nodes -> input surface, max
   double to_input_mean_mm = 0.0;  // rebuilt surface nodes -> input surface, mean
   Index spokes_without_hit = 0;   // spoke marching found no boundary (rho = r_i used)
+  AwayFromEnds away;              // the same away from the cut ends
   // tree with blend: the watertight junction surface
   bool blended = false;
   Index path_tubes = 0;             // closed tubes united

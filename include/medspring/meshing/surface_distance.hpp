@@ -32,6 +32,11 @@ VecX distances_to_surface(const MatX3& points, const SurfaceMesh& surface);
 /// The nearest point of `surface`'s triangles to each point (#P x 3), mm.
 MatX3 closest_points_on_surface(const MatX3& points, const SurfaceMesh& surface);
 
+/// The sample points surface_distance uses on `s` (every triangle's barycentric grid of `spacing` mm,
+/// corners included), with each sample's share of its triangle's area in *weights (if given). Throws
+/// InvalidInput for an empty or invalid mesh or a spacing <= 0.
+MatX3 surface_samples(const SurfaceMesh& s, double spacing, VecX* weights = nullptr);
+
 /// surface_distance(a, b, settings).hausdorff: the symmetric Hausdorff distance, mm.
 double hausdorff_distance(const SurfaceMesh& a, const SurfaceMesh& b,
                           const SurfaceDistanceSettings& settings = {});
