@@ -58,6 +58,14 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
   }
 }
 
+// Compression stiffening (issue 23, compression_terms.hpp): its forces, and its stiffening added to the
+// others' (the term is an addition to the rest stiffness: Weyl).
+double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff) {
+  if (m.compression.size() == 0) return stiff;
+  const double s = add_compression_forces(m.compression, x, f, stiffening);
+  return stiffening ? stiff + (s - 1.0) : stiff;
+}
+
 }  // namespace
 
 namespace detail {
@@ -78,7 +86,7 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
     else
       stiff = stiffening ? fused_forces<false, true>(m, X, Fo) : fused_forces<false, false>(m, X, Fo);
     if (m.bending.size() > 0) bending_forces(m.bending, x, f);
-    return stiff;
+    return with_compression(m, X, Fo, stiffening, stiff);
   }
   if (m.has_soft_springs)
     stiff = stiffening ? spring_forces<true, true>(m, X, Fo) : spring_forces<true, false>(m, X, Fo);
@@ -94,12 +102,12 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
       // rule max(s_springs, s_terms).
       double row_max = 0;
       const double sv = add_volume_forces_local(m.volume, X, Fo, rows, m.num_nodes(), row_max);
-      return std::min(std::max(stiff, sv), stiff + row_max / w2);
+      return with_compression(m, X, Fo, stiffening, std::min(std::max(stiff, sv), stiff + row_max / w2));
     }
     const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
     if (stiffening) stiff = std::max(stiff, sv);
   }
-  return stiff;
+  return with_compression(m, X, Fo, stiffening, stiff);
 }
 
 }  // namespace detail
@@ -123,6 +131,7 @@ double potential_energy(const Model& m, const MatX3& x) {
     e += 0.5 * B.kb[t] * (D - B.D0.row(t).transpose()).squaredNorm();
   }
   if (m.volume.size() > 0) e += volume_energy(m.volume, x);
+  if (m.compression.size() > 0) e += compression_energy(m.compression, x);
   return e;
 }
 
@@ -170,6 +179,7 @@ Eigen::SparseMatrix<double> tangent_stiffness(const Model& m, const MatX3& x, co
       for (int q = 0; q < 3; ++q) block(idx[p], idx[q], B.kb[t] * w[p] * w[q] * Mat3::Identity());
   }
   if (m.volume.size() > 0) add_volume_stiffness_triplets(m.volume, x, T);
+  if (m.compression.size() > 0) add_compression_stiffness_triplets(m.compression, x, T);
   Eigen::SparseMatrix<double> K(3 * n, 3 * n);
   K.setFromTriplets(T.begin(), T.end());
   return K;

@@ -255,6 +255,7 @@ void apply_stiffness(const Model& m, const State& st, const VecX& p, VecX& y) {
   }
   // volume terms (issue 23): Gauss-Newton part only, so the CG system stays positive definite
   if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, st.x, p, y, true);
+  if (m.compression.size() > 0) add_compression_stiffness_product(m.compression, st.x, p, y, true);
 }
 
 // y = (M + h D + h^2 K) p on free DOFs, 0 on fixed DOFs.
@@ -425,7 +426,7 @@ Substep implicit_substep(const Model& m, State& st, const StepSettings& s, doubl
 
 int effective_threads(const Model& m, const StepSettings& s) {
   if (!threads_supported() || s.threads <= 1 || s.integrator != Integrator::SymplecticEuler ||
-      m.bending.size() > 0 || m.volume.size() > 0)
+      m.bending.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0)
     return 1;
   const Index by_size = m.num_springs() / kMinSpringsPerThread;
   return static_cast<int>(std::max<Index>(1, std::min<Index>(std::min(s.threads, kMaxThreads), by_size)));
@@ -557,7 +558,10 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   }
   st.t = t0 + T;
   ++st.frames;
-  if (m.volume.size() > 0) st.warnings.inverted_elements += count_inverted(m.volume, st.x);
+  if (m.volume.size() > 0)
+    st.warnings.inverted_elements += count_inverted(m.volume, st.x);
+  else if (m.compression.size() > 0)  // the same tetrahedra: counted once
+    st.warnings.inverted_elements += count_inverted(m.compression, st.x);
   return status;
 }
 

@@ -28,7 +28,7 @@ void build_spring_gather(Model& m) {
   m.gather = SpringGather{};
   const Index n = m.num_nodes(), ns = m.num_springs();
   if (ns == 0 || ns > kSpringGatherMaxSprings || m.has_soft_springs || m.bending.size() > 0 ||
-      m.volume.size() > 0)
+      m.volume.size() > 0 || m.compression.size() > 0)
     return;
   const auto un = static_cast<std::size_t>(n);
   std::vector<Index> degree(un + 1, 0);

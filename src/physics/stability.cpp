@@ -39,6 +39,7 @@ double gershgorin_omega(const Model& m, const MatX3& x) {
     off[B.c[t]] += 3 * B.kb[t] / m.mass[B.c[t]];
   }
   if (m.volume.size() > 0) add_volume_gershgorin(m.volume, x, m.mass, m.fixed, diag, off);
+  if (m.compression.size() > 0) add_compression_gershgorin(m.compression, x, m.mass, m.fixed, diag, off);
   double w2 = 0;
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) w2 = std::max(w2, diag[a] / m.mass[a] + off[a]);
@@ -74,7 +75,7 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
   const Index* SJ = S.j.data();
   VecX sc(n);  // M^-1/2 per node, zero on fixed DOFs (removed from the system, §1.5)
   for (Index a = 0; a < n; ++a) sc[a] = m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]);
-  const bool extra_terms = m.bending.size() > 0 || m.volume.size() > 0;
+  const bool extra_terms = m.bending.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0;
   VecX w(extra_terms ? 3 * n : 0);  // M^-1/2 q, for the bending and volume terms only
   // y = M^-1/2 K_t M^-1/2 q: springs read M^-1/2 q on the fly (no vector of it for spring models)
   auto apply_A = [&](const VecX& qv, VecX& y) {
@@ -109,6 +110,7 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
         y.segment<3>(3 * B.c[t]) += g;
       }
       if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, w, y);
+      if (m.compression.size() > 0) add_compression_stiffness_product(m.compression, x, w, y);
     }
     for (Index a = 0; a < n; ++a)
       for (int c = 0; c < 3; ++c) Y[3 * a + c] *= sc[a];

@@ -213,6 +213,7 @@ void parse_parameters(const Ctx& c, const json& j, const std::string& path, Scen
       if (o.has("k_r")) v.return_k = o.nonnegative("k_r", 0.0);
       v.spring_scale = o.positive("spring_scale", v.spring_scale);
       v.volume_scale = o.nonnegative("volume_scale", v.volume_scale);
+      v.compression = o.nonnegative("compression", v.compression);
       v.mass_scaling_dt = o.nonnegative("mass_scaling_dt", v.mass_scaling_dt);
       if (const json* d = o.get("duffing"))  // declared in physics/spring_law.hpp
         with_origin(c, [&] { params_from_json(*d, o.at("duffing"), v.duffing); });

@@ -80,6 +80,7 @@ std::string scene_to_json(const Scene& s) {
               {"beta", v.beta},
               {"spring_scale", v.spring_scale},
               {"volume_scale", v.volume_scale},
+              {"compression", v.compression},
               {"mass_scaling_dt", v.mass_scaling_dt},
               {"duffing", params_to_json(v.duffing)},
               {"fixed", v.fixed}};

@@ -36,6 +36,9 @@ struct VolumetricMesh {
   Index surface_nodes = 0;
 };
 
+/// VolumetricSettings::compression by default (docs/accuracy.md, "Compression stiffening").
+inline constexpr double kDefaultVolumetricCompression = 0.0;
+
 struct VolumetricSettings {
   double E_kPa = 10.0;             // Young's modulus, kPa (> 0)
   double nu = 0.45;                // Poisson ratio, (-1, 0.5)
@@ -54,6 +57,11 @@ struct VolumetricSettings {
   // spring_scale and volume_scale so that they match (mu, lambda). The body then stores the corrected scales
   // and this flag off (settings()), so a model package rebuilds the same model. ~1 s per 2,000 nodes.
   bool moduli_correction = false;
+  // Compression stiffening (physics/compression_terms.hpp, docs/volumetric.md): a term kc V0 h(J) per
+  // tetrahedron with kc = compression * mu * spring_scale, zero with its first two derivatives at rest (the
+  // small-strain moduli are unchanged) and stiffening as the tetrahedron is squeezed, like the Neo-Hookean
+  // solid. Dimensionless, >= 0 (0 = off); the default is the measured choice of docs/accuracy.md.
+  double compression = kDefaultVolumetricCompression;
   DuffingSettings duffing{DuffingMode::Linear};  // Duffing term of the springs (off by default)
   std::vector<Index> fixed;                      // pinned surface nodes
 };
@@ -61,6 +69,7 @@ struct VolumetricSettings {
 struct VolumetricStats {
   Index nodes = 0, surface_nodes = 0, interior_nodes = 0, tetrahedra = 0, springs = 0;
   double volume_mm3 = 0, mu = 0, lambda = 0, kv = 0;  // moduli in N/mm^2
+  double kc = 0;  // compression-stiffening modulus (N/mm^2; 0: off)
   double min_tet_volume = 0;
   double mass_g = 0;               // total mass of the nodes, after the floor and the mass scaling
   double added_mass_fraction = 0;  // mass added by min_mass_fraction and mass_scaling_dt / lumped mass
