@@ -191,7 +191,7 @@ TEST(Compression, CubeStiffensUnderLargeCompressionOnly) {
     if (m.X(i, 2) < 1e-9) base.push_back(i);
     if (m.X(i, 2) > L - 1e-9) top.push_back(i);
   }
-  auto top_disp = [&](double c, double F) {
+  auto top_disp = [&](double c, double F, double* jmin_out = nullptr) {
     VolumetricSettings st = cube_settings(0.3, c);
     st.fixed = base;
     const VolumetricBody body(m, st, "cube");
@@ -201,17 +201,29 @@ TEST(Compression, CubeStiffensUnderLargeCompressionOnly) {
     EXPECT_TRUE(r.x.allFinite());
     double u = 0;
     for (Index i : top) u += (m.X(i, 2) - r.x(i, 2)) / static_cast<double>(top.size());
+    double jmin = 1e9;
+    for (Index t = 0; t < m.T.rows(); ++t) {
+      const double V =
+          signed_tet_volume(r.x.row(m.T(t, 0)), r.x.row(m.T(t, 1)), r.x.row(m.T(t, 2)), r.x.row(m.T(t, 3)));
+      const double V0 =
+          signed_tet_volume(m.X.row(m.T(t, 0)), m.X.row(m.T(t, 1)), m.X.row(m.T(t, 2)), m.X.row(m.T(t, 3)));
+      jmin = std::min(jmin, V / V0);
+    }
+    if (jmin_out) *jmin_out = jmin;
     return u;
   };
   // E = 10 kPa on 400 mm^2: 0.04 N is 1 % strain, 1.2 N about 30 %
+  // E = 10 kPa on 400 mm^2: 0.04 N is 1 % strain. At 0.6 N (1.5 kPa, ~15 %) the plain spring cube gives way
+  // (measured: the top moves 38 mm, sideways 24 mm, tetrahedra inverted); with c = 4 it holds (3.4 mm).
   const double small0 = top_disp(0, 0.04), small4 = top_disp(4, 0.04);
-  EXPECT_NEAR(small4 / small0, 1.0, 2e-3);
-  const double big0 = top_disp(0, 1.2), big1 = top_disp(1, 1.2), big4 = top_disp(4, 1.2);
-  EXPECT_LT(big1, big0);
-  EXPECT_LT(big4, big1);
-  EXPECT_LT(big4, 0.97 * big0);
-  std::cout << "cube 20 mm, nu 0.3, 1.2 N: top moves " << big0 << " mm (off), " << big1 << " (1 mu), " << big4
-            << " (4 mu); 0.04 N: " << small0 << " / " << small4 << "\n";
+  EXPECT_NEAR(small4 / small0, 1.0, 5e-3);  // third order: 0.35 % at 1 % strain
+  double jmin4 = 0;
+  const double big0 = top_disp(0, 0.6), big4 = top_disp(4, 0.6, &jmin4);
+  EXPECT_LT(big4, 0.9 * big0);
+  EXPECT_LT(big4, 1.5 * 15 * small4);  // within 1.5x of the linear response: no collapse
+  EXPECT_GT(jmin4, 0.5);
+  std::cout << "cube 20 mm, nu 0.3, 0.6 N: top moves " << big0 << " mm (off), " << big4 << " (c = 4, J_min "
+            << jmin4 << "); 0.04 N: " << small0 << " / " << small4 << "\n";
 }
 
 // An inverted tetrahedron during a run is counted in the step's warnings; the state stays finite, with the
