@@ -10,6 +10,7 @@
 #include <random>
 
 #include "medspring/fem/volumetric.hpp"
+#include "medspring/models/model_package.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/models/volumetric_moduli.hpp"
 #include "medspring/physics/forces.hpp"
@@ -246,6 +247,22 @@ TEST(Compression, InversionDuringARunIsCountedNotNaN) {
     EXPECT_GT(s.warnings.inverted_elements, 0u) << nu;
     EXPECT_EQ(s.warnings.nonfinite, 0u) << nu;
   }
+}
+
+// A model package (version 6) carries the coefficient: the rebuilt body has the same terms and fingerprint.
+TEST(Compression, ModelPackageCarriesTheCoefficient) {
+  VolumetricSettings st;
+  st.fixed = {0, 1, 2};
+  st.compression = 3.5;
+  const VolumetricBody body(one_tet(irregular_tet()), st, "tet");
+  const ModelPackage p = decode_model_package(encode_model_package(package_of(body)));
+  EXPECT_EQ(p.volumetric.compression, 3.5);
+  const BodyPtr again = make_body(p);
+  EXPECT_EQ(again->model().compression.size(), 1);
+  EXPECT_TRUE(check_fingerprint(p, *again));
+  st.compression = 0;
+  const VolumetricBody plain(one_tet(irregular_tet()), st, "tet");
+  EXPECT_NE(model_fingerprint(plain.model()), model_fingerprint(body.model()));
 }
 
 // Bad input: a negative or non-finite coefficient is refused naming it; so is a bad term at the physics
