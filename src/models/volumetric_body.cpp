@@ -248,10 +248,9 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
   }
   if (kv * volume_scale > 0)
     for (Index t = 0; t < nt; ++t) b.add_volume(T(t, 0), T(t, 1), T(t, 2), T(t, 3), kv * volume_scale);
-  if (s.compression > 0) {  // compression stiffening; the rest bulk modulus of a tetrahedron is exact
+  if (s.compression > 0) {  // compression stiffening (physics/compression_terms.hpp)
     stats_.kc = s.compression * mu * spring_scale;
-    const double K = spring_scale * 5.0 * mu / 3.0 + kv * volume_scale;
-    for (Index t = 0; t < nt; ++t) b.add_compression(T(t, 0), T(t, 1), T(t, 2), T(t, 3), stats_.kc, K);
+    for (Index t = 0; t < nt; ++t) b.add_compression(T(t, 0), T(t, 1), T(t, 2), T(t, 3), stats_.kc);
   }
   model_ = b.build();
   if (!surf_k.empty()) {

@@ -95,11 +95,9 @@ CompressionH compression_h(double J) {
 
 void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std::string& w) {
   const auto nt = static_cast<std::size_t>(T.size());
-  require(
-      T.b.size() == nt && T.c.size() == nt && T.d.size() == nt && T.kc.size() == nt && T.kref.size() == nt, w,
-      ": compression terms arrays have inconsistent sizes");
+  require(T.b.size() == nt && T.c.size() == nt && T.d.size() == nt && T.kc.size() == nt, w,
+          ": compression terms arrays have inconsistent sizes");
   T.V0.resize(nt);
-  T.iref.resize(nt);
   const Index n = static_cast<Index>(x0.rows());
   for (Index t = 0; t < T.size(); ++t) {
     const Index id[4] = {T.a[t], T.b[t], T.c[t], T.d[t]};
@@ -113,8 +111,6 @@ void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std:
     const auto s = static_cast<std::size_t>(t);
     require(std::isfinite(T.kc[s]) && T.kc[s] >= 0, w, ": compression[", t, "].kc: must be >= 0 (got ",
             T.kc[s], ")");
-    require(std::isfinite(T.kref[s]) && T.kref[s] > 0, w, ": compression[", t, "].kref: must be > 0 (got ",
-            T.kref[s], ")");
     const At r = term_at(T, x0.data(), t);
     const double L = longest_edge(r);
     require(std::abs(r.V) > 1e-12 * L * L * L, w, ": compression[", t, "]: degenerate tetrahedron (nodes ",
@@ -122,15 +118,14 @@ void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std:
     require(r.V > 0, w, ": compression[", t, "]: inverted tetrahedron (nodes ", id[0], " ", id[1], " ", id[2],
             " ", id[3], ", volume ", r.V, " mm^3)");
     T.V0[s] = r.V;
-    const Vec3 c = (r.e[0] + r.e[1] + r.e[2]) / 4.0;  // centroid relative to corner a
-    const double R2 = c.squaredNorm() + (r.e[0] - c).squaredNorm() + (r.e[1] - c).squaredNorm() +
-                      (r.e[2] - c).squaredNorm();
-    T.iref[s] = R2 / (9.0 * T.kref[s] * r.V);
   }
 }
 
-double add_compression_forces(const CompressionTerms& T, const double* x, double* f, bool stiffening) {
-  double s = 0;
+double add_compression_forces(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                              const std::uint8_t* fixed, double* rows, Index nodes) {
+  const bool bound = mass && fixed && rows;
+  if (bound) std::fill(rows, rows + nodes, 0.0);
+  bool any = false;
   for (Index t = 0; t < T.size(); ++t) {
     const auto i = static_cast<std::size_t>(t);
     const At r = term_at(T, x, t);
@@ -144,14 +139,24 @@ double add_compression_forces(const CompressionTerms& T, const double* x, double
       o[1] += c * r.g[k].y();
       o[2] += c * r.g[k].z();
     }
-    if (stiffening) {
-      double gg = 0;
-      for (const Vec3& g : r.g) gg += g.squaredNorm();
-      const double cur = T.kc[i] * (hj.d2 * gg / T.V0[i] + std::abs(hj.d1) * longest_edge(r) / 2.0);
-      s = std::max(s, cur * T.iref[i]);
+    if (bound) {
+      any = true;
+      const double a = T.kc[i] / T.V0[i] * hj.d2;
+      const double hb = std::abs(T.kc[i] * hj.d1) * longest_edge(r) / 3.0;  // a d^2V block, off the diagonal
+      double gn[4], is[4];
+      for (int k = 0; k < 4; ++k) {
+        gn[k] = r.g[k].norm();
+        is[k] = fixed[r.id[k]] ? 0.0 : 1.0 / std::sqrt(mass[r.id[k]]);
+      }
+      for (int k = 0; k < 4; ++k)
+        for (int l = 0; l < 4; ++l)
+          rows[r.id[k]] += (a * gn[k] * gn[l] + (l == k ? 0.0 : hb)) * is[k] * is[l];
     }
   }
-  return 1.0 + s;
+  if (!any) return 0.0;
+  double row_max = 0;
+  for (Index n = 0; n < nodes; ++n) row_max = std::max(row_max, rows[n]);
+  return row_max;
 }
 
 double compression_energy(const CompressionTerms& T, const MatX3& x) {

@@ -58,12 +58,25 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
   }
 }
 
-// Compression stiffening (issue 23, compression_terms.hpp): its forces, and its stiffening added to the
-// others' (the term is an addition to the rest stiffness: Weyl).
-double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff) {
+// Compression stiffening (issue 23, compression_terms.hpp): its forces and, for the stable step, the
+// Gershgorin bound of its mass-scaled Hessian at x added to the others' bound (Weyl: omega^2 <= stiff
+// omega_rest^2 + that bound). `rows`: scratch of #N doubles (a local one when the caller has none).
+double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff,
+                        double* rows) {
   if (m.compression.size() == 0) return stiff;
-  const double s = add_compression_forces(m.compression, x, f, stiffening);
-  return stiffening ? stiff + (s - 1.0) : stiff;
+  if (!stiffening) {
+    add_compression_forces(m.compression, x, f);
+    return stiff;
+  }
+  VecX local;
+  if (!rows) {
+    local.resize(m.num_nodes());
+    rows = local.data();
+  }
+  const double w2 = m.omega_rest * m.omega_rest;
+  const double b =
+      add_compression_forces(m.compression, x, f, m.mass.data(), m.fixed.data(), rows, m.num_nodes());
+  return w2 > 0 ? stiff + b / w2 : stiff;
 }
 
 }  // namespace
@@ -86,7 +99,7 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
     else
       stiff = stiffening ? fused_forces<false, true>(m, X, Fo) : fused_forces<false, false>(m, X, Fo);
     if (m.bending.size() > 0) bending_forces(m.bending, x, f);
-    return with_compression(m, X, Fo, stiffening, stiff);
+    return with_compression(m, X, Fo, stiffening, stiff, rows);
   }
   if (m.has_soft_springs)
     stiff = stiffening ? spring_forces<true, true>(m, X, Fo) : spring_forces<true, false>(m, X, Fo);
@@ -102,12 +115,13 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
       // rule max(s_springs, s_terms).
       double row_max = 0;
       const double sv = add_volume_forces_local(m.volume, X, Fo, rows, m.num_nodes(), row_max);
-      return with_compression(m, X, Fo, stiffening, std::min(std::max(stiff, sv), stiff + row_max / w2));
+      return with_compression(m, X, Fo, stiffening, std::min(std::max(stiff, sv), stiff + row_max / w2),
+                              rows);
     }
     const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
     if (stiffening) stiff = std::max(stiff, sv);
   }
-  return with_compression(m, X, Fo, stiffening, stiff);
+  return with_compression(m, X, Fo, stiffening, stiff, rows);
 }
 
 }  // namespace detail

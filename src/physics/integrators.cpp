@@ -453,7 +453,8 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
     st.spring_n.setZero(ns, 3);
   }
   if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
-  if (m.volume.size() > 0 && st.stiff_rows.size() != m.num_nodes()) st.stiff_rows.setZero(m.num_nodes());
+  if ((m.volume.size() > 0 || m.compression.size() > 0) && st.stiff_rows.size() != m.num_nodes())
+    st.stiff_rows.setZero(m.num_nodes());
   const int T = effective_threads(m, s);
   if (T <= 1) return;
   if (!st.threaded.p || st.threaded.p->pool.size() != T) st.threaded.p = std::make_shared<ThreadedStep>(T);

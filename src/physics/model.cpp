@@ -246,7 +246,8 @@ State make_state(const Model& m) {
   s.v_save.setZero(n, 3);
   s.x_trial.setZero(n, 3);
   s.step_coef.setZero(n);
-  if (m.volume.size() > 0) s.stiff_rows.setZero(n);  // the stable step's local stiffening (issue 23)
+  if (m.volume.size() > 0 || m.compression.size() > 0)
+    s.stiff_rows.setZero(n);  // the stable step's local stiffening (issue 23)
   for (VecX* b : {&s.cg_r, &s.cg_z, &s.cg_p, &s.cg_q, &s.dv, &s.rhs, &s.jacobi}) b->setZero(3 * n);
   s.spring_a.setZero(ns);
   s.spring_b.setZero(ns);
@@ -309,7 +310,6 @@ std::uint64_t model_fingerprint(const Model& m) {
     const CompressionTerms& C = m.compression;
     for (const auto* v : {&C.a, &C.b, &C.c, &C.d}) h = hash_vector(*v, h);
     h = hash_vector(C.kc, h);
-    h = hash_vector(C.kref, h);
   }
   return h;
 }

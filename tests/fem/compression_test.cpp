@@ -21,6 +21,8 @@
 
 namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
+                       double* rows);
 }  // namespace medspring::detail
 
 using namespace medspring;
@@ -35,11 +37,11 @@ MatX3 irregular_tet() {
   return X;
 }
 
-// A model of one tetrahedron with a compression term only (kc = 0.7 N/mm^2, kref = 1).
+// A model of one tetrahedron with a compression term only (kc = 0.7 N/mm^2, unit masses).
 Model one_term(const MatX3& X) {
   ModelBuilder b("tet");
   for (Index a = 0; a < 4; ++a) b.add_node(X.row(a).transpose(), 1.0, 0.0, 0.0);
-  b.add_compression(0, 1, 2, 3, 0.7, 1.0);
+  b.add_compression(0, 1, 2, 3, 0.7);
   return b.build();
 }
 
@@ -119,8 +121,8 @@ TEST(Compression, ForcesAndHessianMatchFiniteDifferences) {
 }
 
 // The stable step's bound: the largest eigenvalue of the term's exact Hessian is at most
-// kc (h'' |dV/dx|^2 / V0 + |h'| L_max / 2) (compression_terms.hpp), so the stiffening it reports is an
-// upper bound of the term's curvature against the rest bulk stiffness 9 kref V0 / sum |x - x_c|^2.
+// kc (h'' |dV/dx|^2 / V0 + |h'| L_max / 2), and the Gershgorin row bound the force pass returns (unit masses
+// here) is at least the largest eigenvalue.
 TEST(Compression, CurvatureBoundHoldsForTheExactHessian) {
   const Model m = one_term(irregular_tet());
   std::mt19937 rng(11);
@@ -144,10 +146,11 @@ TEST(Compression, CurvatureBoundHoldsForTheExactHessian) {
     const CompressionH hj = compression_h(J);
     const double bound = 0.7 * (hj.d2 * gg / V0 + std::abs(hj.d1) * L / 2);
     EXPECT_LE(lmax, bound * (1 + 1e-12)) << "trial " << trial << " J " << J;
-    // the returned stiffening is that bound over the rest reference
-    VecX f = VecX::Zero(12);
-    const double s = add_compression_forces(m.compression, x.data(), f.data(), true);
-    EXPECT_NEAR(s - 1, bound * m.compression.iref[0], 1e-9 * (s + 1));
+    VecX f = VecX::Zero(12), rows(4);
+    const double g = add_compression_forces(m.compression, x.data(), f.data(), m.mass.data(), m.fixed.data(),
+                                            rows.data(), 4);
+    EXPECT_GE(g, lmax * (1 - 1e-12)) << "trial " << trial << " J " << J;
+    EXPECT_LE(g, 4 * bound) << "trial " << trial << " J " << J;  // and not far above it
   }
 }
 
@@ -227,6 +230,48 @@ TEST(Compression, CubeStiffensUnderLargeCompressionOnly) {
             << jmin4 << "); 0.04 N: " << small0 << " / " << small4 << "\n";
 }
 
+// The stable step: at the compressed equilibrium of the cube (c = 16, 0.6 N), the true omega_max^2 of the
+// exact Hessian (dense, free DOFs, M^-1/2 K M^-1/2) stays below the stiffening the force pass reports times
+// omega_rest^2, with the global rule and with the local one (rows) the integrator uses.
+TEST(Compression, StableStepBoundsTheCompressedCubesOmegaMax) {
+  const double L = 20;
+  const VolumetricMesh m = fem::volumetric_mesh(box_surface(4, L), {.target_nodes = 250});
+  VolumetricSettings st = cube_settings(0.3, 16.0);
+  for (Index i = 0; i < m.surface_nodes; ++i)
+    if (m.X(i, 2) < 1e-9) st.fixed.push_back(i);
+  const VolumetricBody body(m, st, "cube");
+  const Model& M = body.model();
+  MatX3 f = MatX3::Zero(m.X.rows(), 3);
+  Index ntop = 0;
+  for (Index i = 0; i < m.surface_nodes; ++i) ntop += m.X(i, 2) > L - 1e-9 ? 1 : 0;
+  for (Index i = 0; i < m.surface_nodes; ++i)
+    if (m.X(i, 2) > L - 1e-9) f(i, 2) = -0.6 / static_cast<double>(ntop);
+  const MatX3 x = static_equilibrium(M, f).x;
+  const Eigen::MatrixXd K = Eigen::MatrixXd(tangent_stiffness(M, x));
+  std::vector<Index> dof;
+  for (Index a = 0; a < M.num_nodes(); ++a)
+    if (!M.fixed[static_cast<std::size_t>(a)])
+      for (int c = 0; c < 3; ++c) dof.push_back(3 * a + c);
+  const auto nd = static_cast<Index>(dof.size());
+  Eigen::MatrixXd A(nd, nd);
+  for (Index r = 0; r < nd; ++r)
+    for (Index c = 0; c < nd; ++c)
+      A(r, c) = K(dof[r], dof[c]) / std::sqrt(M.mass[dof[r] / 3] * M.mass[dof[c] / 3]);
+  const double w2 = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues().maxCoeff();
+  MatX3 fo(M.num_nodes(), 3);
+  fo.setZero();
+  const double s_global = detail::internal_forces(M, x, MatX3::Zero(M.num_nodes(), 3), fo, true);
+  VecX rows = VecX::Zero(M.num_nodes());
+  fo.setZero();
+  const double s_local = detail::internal_forces(M, x, MatX3::Zero(M.num_nodes(), 3), fo, true, rows.data());
+  const double w2r = M.omega_rest * M.omega_rest;
+  std::cout << "cube c = 16, 0.6 N: omega_max^2 / omega_rest^2 = " << w2 / w2r << ", stiffening global "
+            << s_global << ", local " << s_local << "\n";
+  EXPECT_GT(w2, w2r / 1.05 / 1.05);  // compressed: stiffer than at rest
+  EXPECT_LE(w2, s_global * w2r);
+  EXPECT_LE(w2, s_local * w2r);
+}
+
 // An inverted tetrahedron during a run is counted in the step's warnings; the state stays finite, with the
 // compression term alone (no volume term: nu < 1/4) and with both.
 TEST(Compression, InversionDuringARunIsCountedNotNaN) {
@@ -280,7 +325,7 @@ TEST(Compression, BadInputIsRefused) {
   ModelBuilder b("m");
   const MatX3 X = irregular_tet();
   for (Index a = 0; a < 4; ++a) b.add_node(X.row(a).transpose(), 1.0, 0.0, 0.0);
-  b.add_compression(0, 2, 1, 3, 1.0, 1.0);  // inverted orientation
+  b.add_compression(0, 2, 1, 3, 1.0);  // inverted orientation
   try {
     b.build();
     FAIL() << "accepted an inverted compression term";

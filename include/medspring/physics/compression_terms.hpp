@@ -34,35 +34,32 @@ CompressionH compression_h(double J);
 /// positive rest volume.
 struct CompressionTerms {
   std::vector<Index> a, b, c, d;
-  std::vector<double> kc;    // (#T) modulus, N/mm^2 (>= 0)
-  std::vector<double> kref;  // (#T) the tetrahedron's rest bulk modulus, N/mm^2 (> 0), for the stable step
-  std::vector<double> V0;    // (#T) rest volume, mm^3 (set by finalize)
-  std::vector<double> iref;  // (#T) 1 / (9 kref V0 / sum_k |x_k - x_c|^2) at rest (set by finalize)
+  std::vector<double> kc;  // (#T) modulus, N/mm^2 (>= 0)
+  std::vector<double> V0;  // (#T) rest volume, mm^3 (set by finalize)
 
   Index size() const { return static_cast<Index>(a.size()); }
-  void add(Index na, Index nb, Index nc, Index nd, double modulus, double rest_bulk_modulus) {
+  void add(Index na, Index nb, Index nc, Index nd, double modulus) {
     a.push_back(na);
     b.push_back(nb);
     c.push_back(nc);
     d.push_back(nd);
     kc.push_back(modulus);
-    kref.push_back(rest_bulk_modulus);
     V0.push_back(0.0);
-    iref.push_back(0.0);
   }
 };
 
-/// Sets V0 and iref from the rest positions; throws InvalidInput naming `what` and the term when a corner
-/// is out of range or repeated, kc is negative or not finite, kref is not positive, or the rest
-/// tetrahedron is inverted or degenerate.
+/// Sets V0 from the rest positions; throws InvalidInput naming `what` and the term when a corner is out of
+/// range or repeated, kc is negative or not finite, or the rest tetrahedron is inverted or degenerate.
 void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std::string& what);
 
-/// Adds the forces -dE/dx to f (flat 3N). Returns the terms' stiffening for the stable step: 1 + max over
-/// the compressed terms of ||d^2E_t|| / ||K_t(x0)||, with ||d^2E_t|| <= kc (h'' |dV/dx|^2 / V0 + |h'| L_max /
-/// 2) and ||K_t(x0)|| >= 9 kref V0 / sum_k |x_k - x_c|^2 (the rest energy of the tetrahedron's uniform
-/// dilatation, whose bulk modulus is exact; docs/volumetric.md). The caller adds (s - 1) to the springs'
-/// and volume terms' stiffening (Weyl: the term is an addition to the rest stiffness).
-double add_compression_forces(const CompressionTerms& T, const double* x, double* f, bool stiffening = true);
+/// Adds the forces -dE/dx to f (flat 3N). With `mass` (#N), `fixed` (#N) and `rows` (scratch of #N doubles,
+/// overwritten), returns the Gershgorin bound of the terms' mass-scaled Hessian at x, max over free nodes i
+/// of sum over the compressed terms t at i and their free corners l of ||d^2E_t / dx_i dx_l|| / sqrt(m_i m_l)
+/// ((rad/ms)^2), each block bounded by kc (h'' |g_i| |g_l| / V0 + |h'| L_max / 3) (g = dV/dx); by Weyl the
+/// caller adds it to the others' omega^2 bound. Without them returns 0.
+double add_compression_forces(const CompressionTerms& T, const double* x, double* f,
+                              const double* mass = nullptr, const std::uint8_t* fixed = nullptr,
+                              double* rows = nullptr, Index nodes = 0);
 /// Sum of the energies (mJ).
 double compression_energy(const CompressionTerms& T, const MatX3& x);
 /// Number of terms whose tetrahedron is inverted or flat (V <= 0) at x.

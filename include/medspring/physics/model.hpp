@@ -112,11 +112,8 @@ class ModelBuilder {
   void add_bending(Index a, Index b, Index c, double kb);
   /// Adds a volume term on the tetrahedron (a, b, c, d) (positive rest volume) of modulus kv (N/mm^2).
   void add_volume(Index a, Index b, Index c, Index d, double kv) { volume_.add(a, b, c, d, kv); }
-  /// Adds a compression-stiffening term (compression_terms.hpp) of modulus kc on the tetrahedron, whose rest
-  /// bulk modulus is kref (N/mm^2; for the stable step).
-  void add_compression(Index a, Index b, Index c, Index d, double kc, double kref) {
-    compression_.add(a, b, c, d, kc, kref);
-  }
+  /// Adds a compression-stiffening term (compression_terms.hpp) of modulus kc (N/mm^2) on the tetrahedron.
+  void add_compression(Index a, Index b, Index c, Index d, double kc) { compression_.add(a, b, c, d, kc); }
   Index num_nodes() const { return static_cast<Index>(nodes_.size()); }
   const Vec3& position(Index i) const { return nodes_[i]; }
   /// Validates and returns the finished model.
