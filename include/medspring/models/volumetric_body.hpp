@@ -37,7 +37,7 @@ struct VolumetricMesh {
 };
 
 /// VolumetricSettings::compression by default (docs/accuracy.md, "Compression stiffening").
-inline constexpr double kDefaultVolumetricCompression = 0.0;
+inline constexpr double kDefaultVolumetricCompression = 32.0;
 
 struct VolumetricSettings {
   double E_kPa = 10.0;             // Young's modulus, kPa (> 0)
