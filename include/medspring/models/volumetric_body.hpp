@@ -69,7 +69,8 @@ struct VolumetricSettings {
 struct VolumetricStats {
   Index nodes = 0, surface_nodes = 0, interior_nodes = 0, tetrahedra = 0, springs = 0;
   double volume_mm3 = 0, mu = 0, lambda = 0, kv = 0;  // moduli in N/mm^2
-  double kc = 0;  // compression-stiffening modulus (N/mm^2; 0: off)
+  // compression-stiffening modulus (N/mm^2; 0: off)
+  double kc = 0;
   double min_tet_volume = 0;
   double mass_g = 0;               // total mass of the nodes, after the floor and the mass scaling
   double added_mass_fraction = 0;  // mass added by min_mass_fraction and mass_scaling_dt / lumped mass

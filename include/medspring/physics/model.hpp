@@ -7,8 +7,8 @@
 
 #include "medspring/core/types.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
-#include "medspring/physics/spring_law.hpp"
 #include "medspring/physics/compression_terms.hpp"
+#include "medspring/physics/spring_law.hpp"
 #include "medspring/physics/volume_terms.hpp"
 
 namespace medspring {
@@ -66,7 +66,7 @@ struct Model {
   std::vector<std::uint8_t> fixed;  // (#N) 1 = pinned at x0
   Springs springs;
   BendingTerms bending;
-  VolumeTerms volume;  // volumetric spring models (issue 23): one term per tetrahedron
+  VolumeTerms volume;            // volumetric spring models (issue 23): one term per tetrahedron
   CompressionTerms compression;  // their optional compression stiffening (issue 23), one per tetrahedron
 
   // Derived by finalize():
