@@ -66,8 +66,9 @@ struct Model {
   std::vector<std::uint8_t> fixed;  // (#N) 1 = pinned at x0
   Springs springs;
   BendingTerms bending;
-  VolumeTerms volume;            // volumetric spring models (issue 23): one term per tetrahedron
-  CompressionTerms compression;  // their optional compression stiffening (issue 23), one per tetrahedron
+  VolumeTerms volume;  // volumetric spring models (issue 23): one term per tetrahedron
+  // their optional compression stiffening (issue 23, compression_terms.hpp), one term per tetrahedron
+  CompressionTerms compression;
 
   // Derived by finalize():
   VecX inv_k;  // (#S) 1/k (0 when k = 0), for the run-time stability estimate
