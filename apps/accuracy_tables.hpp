@@ -35,6 +35,8 @@ struct Organ {
   mutable std::shared_ptr<const VolumetricMesh> vmesh;
   mutable double E_kPa = 10, nu = 0.45;
   mutable Index target_nodes = 2000;
+  // VolumetricSettings::compression
+  mutable double compression = kDefaultVolumetricCompression;
 };
 
 // A model kind of the tables: "surface", "hybrid" or "volumetric", linear or Duffing, with or without the
@@ -68,7 +70,9 @@ struct Settings {
   bool quick = false;
   std::vector<std::string> kinds;  // --kinds: the bases to run (empty: all)
   Index volumetric_nodes = 2000;   // --nodes
-  std::vector<double> forces;      // --forces (N; default 0.2, 0.5, 1.0)
+  // --compression (volumetric kinds)
+  double compression = kDefaultVolumetricCompression;
+  std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;
 };

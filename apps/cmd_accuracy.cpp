@@ -43,11 +43,28 @@ using json = nlohmann::json;
 using namespace accuracy;
 
 int cmd_accuracy(const Args& args) {
-  args.require_known({"out",           "force",      "quick",         "quiet",       "json",
-                      "E-kPa",         "nu",         "radius",        "level",       "scenes",
-                      "kinds",         "nodes",      "no-validation", "forces",      "organs",
-                      "vessel-E-kPa",  "wall-ratio", "no-vessel",     "vessel-only", "indentation-only",
-                      "no-indentation"});
+  args.require_known({"out",
+                      "force",
+                      "quick",
+                      "quiet",
+                      "json",
+                      "E-kPa",
+                      "nu",
+                      "radius",
+                      "level",
+                      "scenes",
+                      "kinds",
+                      "nodes",
+                      "no-validation",
+                      "forces",
+                      "organs",
+                      "vessel-E-kPa",
+                      "wall-ratio",
+                      "no-vessel",
+                      "vessel-only",
+                      "indentation-only",
+                      "no-indentation",
+                      "compression"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -206,8 +223,8 @@ int cmd_accuracy(const Args& args) {
 }
 
 int cmd_calibrate(const Args& args) {
-  args.require_known(
-      {"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes"});
+  args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
+                      "compression"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));

@@ -64,6 +64,7 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.spring_scale = m(0);
     s.volume_scale = m(1);
     s.moduli_correction = k.corrected;
+    s.compression = o.compression;
     if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
     s.fixed = support;
     return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
@@ -171,6 +172,9 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   const long long nodes = args.integer("nodes", 2000);
   require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
   st.volumetric_nodes = static_cast<Index>(nodes);
+  st.compression = args.number("compression", st.compression);
+  require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
+          st.compression, ")");
 }
 
 void note(const Settings& s, const std::string& line) {
@@ -308,12 +312,14 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   o.E_kPa = st.material.E * 1e3;
   o.nu = st.material.nu;
   o.target_nodes = st.volumetric_nodes;
+  o.compression = st.compression;
   if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
     const VolumetricMesh& vm = volumetric_mesh_of(o);
     out["volumetric"] = {{"nodes", vm.X.rows()},
                          {"surface_nodes", vm.surface_nodes},
                          {"tetrahedra", vm.T.rows()},
-                         {"target_nodes", st.volumetric_nodes}};
+                         {"target_nodes", st.volumetric_nodes},
+                         {"compression", st.compression}};
     // the mesh's effective moduli from E and nu (docs/volumetric.md, "Effective moduli of the mesh")
     for (const auto& [label, sv] : std::vector<std::pair<std::string, std::pair<double, double>>>{
              {"springs+volume", {1.0, 1.0}}, {"springs", {1.0, 0.0}}}) {

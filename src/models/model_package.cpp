@@ -262,6 +262,7 @@ std::string encode_model_package(const ModelPackage& p) {
     put_duffing(w, s.duffing);
     put_indices(w, s.fixed);
     w.f64(s.mass_scaling_dt);  // version 4
+    w.f64(s.compression);      // version 6
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -374,6 +375,7 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     s.duffing = get_duffing(r);
     s.fixed = get_indices(r, "fixed", nv);
     s.mass_scaling_dt = version >= 4 ? r.f64() : 0.0;  // earlier packages were built without it
+    s.compression = version >= 6 ? r.f64() : 0.0;      // nor without compression stiffening
   } else {                                             // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));

@@ -48,6 +48,8 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
   require(std::isfinite(s.beta) && s.beta >= 0, w, ": beta must be >= 0 (got ", s.beta, ")");
   require(std::isfinite(s.spring_scale) && s.spring_scale > 0, w, ": spring_scale must be > 0");
   require(std::isfinite(s.volume_scale) && s.volume_scale >= 0, w, ": volume_scale must be >= 0");
+  require(std::isfinite(s.compression) && s.compression >= 0, w, ": compression must be >= 0 (got ",
+          s.compression, ")");
   const Index n = static_cast<Index>(mesh.X.rows()), ns = mesh.surface_nodes,
               nt = static_cast<Index>(mesh.T.rows());
   require(ns >= 4 && ns <= n, w, ": surface_nodes ", ns, " must be in [4, ", n, "]");
@@ -246,6 +248,10 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
   }
   if (kv * volume_scale > 0)
     for (Index t = 0; t < nt; ++t) b.add_volume(T(t, 0), T(t, 1), T(t, 2), T(t, 3), kv * volume_scale);
+  if (s.compression > 0) {  // compression stiffening (physics/compression_terms.hpp)
+    stats_.kc = s.compression * mu * spring_scale;
+    for (Index t = 0; t < nt; ++t) b.add_compression(T(t, 0), T(t, 1), T(t, 2), T(t, 3), stats_.kc);
+  }
   model_ = b.build();
   if (!surf_k.empty()) {
     std::nth_element(surf_k.begin(), surf_k.begin() + static_cast<long>(surf_k.size() / 2), surf_k.end());

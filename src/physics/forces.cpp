@@ -59,12 +59,37 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
   }
 }
 
+// Compression stiffening (issue 23, compression_terms.hpp): its forces and, for the stable step, the
+// Gershgorin bound of its mass-scaled Hessian at x added to the others' bound (Weyl: omega^2 <= stiff
+// omega_rest^2 + that bound). `rows`: scratch of #N doubles (a local one when the caller has none).
+double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff,
+                        double* rows) {
+  if (m.compression.size() == 0) return stiff;
+  if (!stiffening) {
+    add_compression_forces(m.compression, x, f);
+    return stiff;
+  }
+  VecX local;
+  if (!rows) {
+    local.resize(m.num_nodes());
+    rows = local.data();
+  }
+  const double w2 = m.omega_rest * m.omega_rest;
+  const double b =
+      add_compression_forces(m.compression, x, f, m.mass.data(), m.fixed.data(), rows, m.num_nodes());
+  return w2 > 0 ? stiff + b / w2 : stiff;
+}
+
 }  // namespace
 
 namespace detail {
 
-double volume_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
-                     const LocalStiffening* local) {
+namespace {
+
+// The volume terms' forces (and stiffening): volume_forces without the compression terms.
+double volume_term_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
+                          const LocalStiffening* local) {
+  if (m.volume.size() == 0) return stiff;
   const double w2 = m.omega_rest * m.omega_rest;
   if (stiffening && local && m.volume.rest_rows.size() == 4 * m.volume.packed.size() && w2 > 0) {
     // Local stiffening (docs/volumetric.md "Stable step"): with K_t(x) <= s_t K_t(x0) per term (the
@@ -85,6 +110,15 @@ double volume_forces(const Model& m, const double* X, double* Fo, bool stiffenin
   return stiffening ? std::max(stiff, sv) : stiff;
 }
 
+}  // namespace
+
+double volume_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
+                     const LocalStiffening* local) {
+  // then the compression stiffening's forces and bound (its scratch: the local rule's, free again here)
+  return with_compression(m, X, Fo, stiffening, volume_term_forces(m, X, Fo, stiffening, stiff, local),
+                          local ? local->scratch : nullptr);
+}
+
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening) {
   return internal_forces(m, x, f_ext, f, stiffening, nullptr);
 }
@@ -101,14 +135,15 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
     else
       stiff = stiffening ? fused_forces<false, true>(m, X, Fo) : fused_forces<false, false>(m, X, Fo);
     if (m.bending.size() > 0) bending_forces(m.bending, x, f);
-    return stiff;
+    return with_compression(m, X, Fo, stiffening, stiff, local ? local->scratch : nullptr);
   }
   if (m.has_soft_springs)
     stiff = stiffening ? spring_forces<true, true>(m, X, Fo) : spring_forces<true, false>(m, X, Fo);
   else
     stiff = stiffening ? spring_forces<false, true>(m, X, Fo) : spring_forces<false, false>(m, X, Fo);
   if (m.bending.size() > 0) bending_forces(m.bending, x, f);
-  if (m.volume.size() > 0) stiff = volume_forces(m, X, Fo, stiffening, stiff, local);
+  if (m.volume.size() > 0 || m.compression.size() > 0)
+    stiff = volume_forces(m, X, Fo, stiffening, stiff, local);
   return stiff;
 }
 
@@ -133,6 +168,7 @@ double potential_energy(const Model& m, const MatX3& x) {
     e += 0.5 * B.kb[t] * (D - B.D0.row(t).transpose()).squaredNorm();
   }
   if (m.volume.size() > 0) e += volume_energy(m.volume, x);
+  if (m.compression.size() > 0) e += compression_energy(m.compression, x);
   return e;
 }
 
@@ -180,6 +216,7 @@ Eigen::SparseMatrix<double> tangent_stiffness(const Model& m, const MatX3& x, co
       for (int q = 0; q < 3; ++q) block(idx[p], idx[q], B.kb[t] * w[p] * w[q] * Mat3::Identity());
   }
   if (m.volume.size() > 0) add_volume_stiffness_triplets(m.volume, x, T);
+  if (m.compression.size() > 0) add_compression_stiffness_triplets(m.compression, x, T);
   Eigen::SparseMatrix<double> K(3 * n, 3 * n);
   K.setFromTriplets(T.begin(), T.end());
   return K;

@@ -286,7 +286,7 @@ Substep implicit_substep(const Model& m, State& st, const StepSettings& s, doubl
 
 int effective_threads(const Model& m, const StepSettings& s) {
   if (!threads_supported() || s.threads <= 1 || s.integrator != Integrator::SymplecticEuler ||
-      m.bending.size() > 0 || m.volume.size() > 0)
+      m.bending.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0)
     return 1;
   const Index by_size = m.num_springs() / kMinSpringsPerThread;
   return static_cast<int>(std::max<Index>(1, std::min<Index>(std::min(s.threads, kMaxThreads), by_size)));
@@ -320,7 +320,8 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
     st.spring_n.setZero(ns, 3);
   }
   if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
-  if (m.volume.size() > 0 && st.stiff_rows.size() != m.num_nodes() + m.volume.size())
+  if ((m.volume.size() > 0 || m.compression.size() > 0) &&
+      st.stiff_rows.size() != m.num_nodes() + m.volume.size())
     st.stiff_rows.setZero(m.num_nodes() + m.volume.size());
   const int T = effective_threads(m, s);
   // one thread: the fused node-range step (threaded_step.hpp) for models beyond the gather pass
@@ -373,8 +374,10 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   // volume terms: the local stiffening (scratch sized by prepare_step; a state without it gets the global
   // rule)
   const detail::LocalStiffening local{st.stiff_rows.data(), T, s.safety};
-  const detail::LocalStiffening* local_rule =
-      m.volume.size() > 0 && st.stiff_rows.size() == m.num_nodes() + m.volume.size() ? &local : nullptr;
+  const detail::LocalStiffening* local_rule = (m.volume.size() > 0 || m.compression.size() > 0) &&
+                                                      st.stiff_rows.size() == m.num_nodes() + m.volume.size()
+                                                  ? &local
+                                                  : nullptr;
   const double t0 = st.t;
   double h = T / static_cast<double>(subs);
   double t = t0;
@@ -430,7 +433,10 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   }
   st.t = t0 + T;
   ++st.frames;
-  if (m.volume.size() > 0) st.warnings.inverted_elements += count_inverted(m.volume, st.x);
+  if (m.volume.size() > 0)
+    st.warnings.inverted_elements += count_inverted(m.volume, st.x);
+  else if (m.compression.size() > 0)  // the same tetrahedra: counted once
+    st.warnings.inverted_elements += count_inverted(m.compression, st.x);
   return status;
 }
 

@@ -123,6 +123,7 @@ void finalize(Model& m) {
     finalize_volume_terms(m.volume, m.x0, w);
     set_volume_rest_rows(m.volume, m.x0, m.mass, m.fixed);  // the stable step's local stiffening
   }
+  if (m.compression.size() > 0) finalize_compression_terms(m.compression, m.x0, w);
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) m.free_nodes.push_back(a);
@@ -200,10 +201,12 @@ Model ModelBuilder::build() {
   m.springs = std::move(springs_);
   m.bending = std::move(bending_);
   m.volume = std::move(volume_);
+  m.compression = std::move(compression_);
   fixed_.clear();
   springs_ = Springs{};
   bending_ = BendingTerms{};
   volume_ = VolumeTerms{};
+  compression_ = CompressionTerms{};
   finalize(m);
   return m;
 }
@@ -243,7 +246,7 @@ State make_state(const Model& m) {
   s.v_save.setZero(n, 3);
   s.x_trial.setZero(n, 3);
   s.step_coef.setZero(n);
-  if (m.volume.size() > 0)
+  if (m.volume.size() > 0 || m.compression.size() > 0)
     s.stiff_rows.setZero(n + m.volume.size());  // the stable step's local stiffening (issue 23)
   for (VecX* b : {&s.cg_r, &s.cg_z, &s.cg_p, &s.cg_q, &s.dv, &s.rhs, &s.jacobi}) b->setZero(3 * n);
   s.spring_a.setZero(ns);
@@ -302,6 +305,11 @@ std::uint64_t model_fingerprint(const Model& m) {
     h = hash_vector(T.c, h);
     h = hash_vector(T.d, h);
     h = hash_vector(T.kv, h);
+  }
+  if (m.compression.size() > 0) {  // appended only when present (issue 23, compression stiffening)
+    const CompressionTerms& C = m.compression;
+    for (const auto* v : {&C.a, &C.b, &C.c, &C.d}) h = hash_vector(*v, h);
+    h = hash_vector(C.kc, h);
   }
   return h;
 }

@@ -364,7 +364,8 @@ int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard
                    const LocalStiffening* local) {
   double* F = st.spring_force.data();
   const double ss = stiffening ? slot_forces<true>(m, st.x.data(), F) : slot_forces<false>(m, st.x.data(), F);
-  if (m.volume.size() > 0) {  // the volume terms' forces into st.f first, read by the node pass
+  if (m.volume.size() > 0 || m.compression.size() > 0) {  // the volume (and compression) terms' forces
+                                                          // into st.f first, read by the node pass
     st.f.setZero();
     const double s = volume_forces(m, st.x.data(), st.f.data(), stiffening, ss, local);
     if (stiffening) st.stiffening = s;

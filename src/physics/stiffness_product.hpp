@@ -10,6 +10,7 @@
 // terms k_b w w^T (w = (1, -2, 1)) + the volume terms at x (Gauss-Newton part only when `gauss_newton`).
 #pragma once
 
+#include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/volume_terms.hpp"
 
@@ -47,7 +48,7 @@ void stiffness_product(const Model& m, const MatX3& x, const double* scale, cons
     Y[j + 2] -= k.z();
   }
   const BendingTerms& B = m.bending;
-  if (B.size() > 0 || m.volume.size() > 0) {
+  if (B.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0) {
     const VecX* sp = &p;  // S p
     if constexpr (Scaled) {
       w->resize(3 * n);
@@ -62,6 +63,7 @@ void stiffness_product(const Model& m, const MatX3& x, const double* scale, cons
       y.segment<3>(3 * B.c[t]) += g;
     }
     if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, *sp, y, gauss_newton);
+    if (m.compression.size() > 0) add_compression_stiffness_product(m.compression, x, *sp, y, gauss_newton);
   }
   if constexpr (Scaled)
     for (Index a = 0; a < n; ++a)

@@ -36,6 +36,9 @@ struct VolumetricMesh {
   Index surface_nodes = 0;
 };
 
+/// VolumetricSettings::compression by default (docs/accuracy.md, "Compression stiffening").
+inline constexpr double kDefaultVolumetricCompression = 32.0;
+
 struct VolumetricSettings {
   double E_kPa = 10.0;             // Young's modulus, kPa (> 0)
   double nu = 0.45;                // Poisson ratio, (-1, 0.5)
@@ -54,6 +57,11 @@ struct VolumetricSettings {
   // spring_scale and volume_scale so that they match (mu, lambda). The body then stores the corrected scales
   // and this flag off (settings()), so a model package rebuilds the same model. ~1 s per 2,000 nodes.
   bool moduli_correction = false;
+  // Compression stiffening (physics/compression_terms.hpp, docs/volumetric.md): a term kc V0 h(J) per
+  // tetrahedron with kc = compression * mu * spring_scale, zero with its first two derivatives at rest (the
+  // small-strain moduli are unchanged) and stiffening as the tetrahedron is squeezed, like the Neo-Hookean
+  // solid. Dimensionless, >= 0 (0 = off); the default is the measured choice of docs/accuracy.md.
+  double compression = kDefaultVolumetricCompression;
   DuffingSettings duffing{DuffingMode::Linear};  // Duffing term of the springs (off by default)
   std::vector<Index> fixed;                      // pinned surface nodes
   Index mesh_nodes = 2000;  // node count aimed at when a scene build tetrahedralises the surface (TetGen)
@@ -77,6 +85,9 @@ void for_each_field(S& s, V&& v) {
   v(ParamSpec{"spring_scale", "", "calibration multiplier of the edge springs"}.positive(), s.spring_scale);
   v(ParamSpec{"volume_scale", "", "calibration multiplier of the volume terms"}.nonnegative(),
     s.volume_scale);
+  v(ParamSpec{"compression", "", "compression stiffening c: kc = c mu spring_scale per tetrahedron (0 = off)"}
+        .nonnegative(),
+    s.compression);
   v(ParamSpec{"mass_scaling_dt", "ms", "selective mass scaling for this sub-step (0 = off)"}.nonnegative(),
     s.mass_scaling_dt);
   v(ParamSpec{"min_mass_fraction", "", "every node weighs at least this fraction of the mean node mass"}
@@ -101,6 +112,8 @@ void for_each_field(S& s, V&& v) {
 struct VolumetricStats {
   Index nodes = 0, surface_nodes = 0, interior_nodes = 0, tetrahedra = 0, springs = 0;
   double volume_mm3 = 0, mu = 0, lambda = 0, kv = 0;  // moduli in N/mm^2
+  // compression-stiffening modulus (N/mm^2; 0: off)
+  double kc = 0;
   double min_tet_volume = 0;
   double mass_g = 0;               // total mass of the nodes, after the floor and the mass scaling
   double added_mass_fraction = 0;  // mass added by min_mass_fraction and mass_scaling_dt / lumped mass

@@ -7,6 +7,7 @@
 
 #include "medspring/core/types.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
+#include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/spring_law.hpp"
 #include "medspring/physics/volume_terms.hpp"
 
@@ -66,6 +67,8 @@ struct Model {
   Springs springs;
   BendingTerms bending;
   VolumeTerms volume;  // volumetric spring models (issue 23): one term per tetrahedron
+  // their optional compression stiffening (issue 23, compression_terms.hpp), one term per tetrahedron
+  CompressionTerms compression;
 
   // Derived by finalize():
   VecX inv_k;  // (#S) 1/k (0 when k = 0), for the run-time stability estimate
@@ -110,6 +113,8 @@ class ModelBuilder {
   void add_bending(Index a, Index b, Index c, double kb);
   /// Adds a volume term on the tetrahedron (a, b, c, d) (positive rest volume) of modulus kv (N/mm^2).
   void add_volume(Index a, Index b, Index c, Index d, double kv) { volume_.add(a, b, c, d, kv); }
+  /// Adds a compression-stiffening term (compression_terms.hpp) of modulus kc (N/mm^2) on the tetrahedron.
+  void add_compression(Index a, Index b, Index c, Index d, double kc) { compression_.add(a, b, c, d, kc); }
   Index num_nodes() const { return static_cast<Index>(nodes_.size()); }
   const Vec3& position(Index i) const { return nodes_[i]; }
   /// Validates and returns the finished model.
@@ -123,6 +128,7 @@ class ModelBuilder {
   Springs springs_;
   BendingTerms bending_;
   VolumeTerms volume_;
+  CompressionTerms compression_;
 };
 
 /// A surface mass-spring body from a triangle mesh: one spring per unique edge (D-1), uniform nodes.

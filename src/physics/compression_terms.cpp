@@ -1,0 +1,232 @@
+#include "medspring/physics/compression_terms.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "medspring/core/check.hpp"
+
+namespace medspring {
+
+namespace {
+
+// One term at x: corners, edges from corner a, volume gradient g (dV/dx per corner), V.
+struct At {
+  Index id[4];
+  Vec3 e[3];
+  Vec3 g[4];
+  double V;
+};
+
+inline Vec3 row(const double* x, Index i) {
+  return {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
+}
+
+inline At term_at(const CompressionTerms& T, const double* x, Index t) {
+  At r;
+  r.id[0] = T.a[t];
+  r.id[1] = T.b[t];
+  r.id[2] = T.c[t];
+  r.id[3] = T.d[t];
+  const Vec3 xa = row(x, r.id[0]);
+  for (int k = 0; k < 3; ++k) r.e[k] = row(x, r.id[k + 1]) - xa;
+  r.g[1] = r.e[1].cross(r.e[2]) / 6.0;
+  r.g[2] = r.e[2].cross(r.e[0]) / 6.0;
+  r.g[3] = r.e[0].cross(r.e[1]) / 6.0;
+  r.g[0] = -(r.g[1] + r.g[2] + r.g[3]);
+  r.V = r.e[0].dot(r.g[1]);
+  return r;
+}
+
+inline double longest_edge(const At& r) {
+  return std::max({r.e[0].norm(), r.e[1].norm(), r.e[2].norm(), (r.e[1] - r.e[0]).norm(),
+                   (r.e[2] - r.e[0]).norm(), (r.e[2] - r.e[1]).norm()});
+}
+
+inline Mat3 skew(const Vec3& v) {
+  Mat3 S;
+  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return S;
+}
+
+// The 12 x 12 Hessian of the term at r: kc / V0 h'' g g^T + kc h' d^2V. d^2V: d g_1 / d x_2 = -[e3]x / 6,
+// d g_1 / d x_3 = [e2]x / 6, and cyclically (e_k = x_k - x_0); corner a's rows and columns follow from the
+// translation invariance (each block row sums to zero).
+Eigen::Matrix<double, 12, 12> hessian(const At& r, double kc, double V0, const CompressionH& hj,
+                                      bool gauss_newton) {
+  Eigen::Matrix<double, 12, 12> H;
+  H.setZero();
+  const double a = kc / V0 * hj.d2;
+  for (int k = 0; k < 4; ++k)
+    for (int l = 0; l < 4; ++l) H.block<3, 3>(3 * k, 3 * l) = a * r.g[k] * r.g[l].transpose();
+  if (gauss_newton || hj.d1 == 0.0) return H;
+  Mat3 D[4][4];
+  for (auto& rowb : D)
+    for (auto& b : rowb) b.setZero();
+  // corners 1..3 = b, c, d (edges e[0..2])
+  D[1][2] = -skew(r.e[2]) / 6.0;
+  D[1][3] = skew(r.e[1]) / 6.0;
+  D[2][3] = -skew(r.e[0]) / 6.0;
+  D[2][1] = D[1][2].transpose();
+  D[3][1] = D[1][3].transpose();
+  D[3][2] = D[2][3].transpose();
+  for (int k = 1; k < 4; ++k) {
+    D[k][0] = -(D[k][1] + D[k][2] + D[k][3]);
+    D[0][k] = D[k][0].transpose();
+  }
+  D[0][0] = -(D[0][1] + D[0][2] + D[0][3]);
+  const double b = kc * hj.d1;
+  for (int k = 0; k < 4; ++k)
+    for (int l = 0; l < 4; ++l) H.block<3, 3>(3 * k, 3 * l) += b * D[k][l];
+  return H;
+}
+
+}  // namespace
+
+CompressionH compression_h(double J) {
+  if (J >= 1.0) return {};
+  if (J >= kCompressionJMin) {
+    const double u = J - 1.0;
+    return {u - std::log(J) - 0.5 * u * u, 1.0 - 1.0 / J - u, 1.0 / (J * J) - 1.0};
+  }
+  const CompressionH m = compression_h(kCompressionJMin);
+  const double t = J - kCompressionJMin;
+  return {m.h + m.d1 * t + 0.5 * m.d2 * t * t, m.d1 + m.d2 * t, m.d2};
+}
+
+void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std::string& w) {
+  const auto nt = static_cast<std::size_t>(T.size());
+  require(T.b.size() == nt && T.c.size() == nt && T.d.size() == nt && T.kc.size() == nt, w,
+          ": compression terms arrays have inconsistent sizes");
+  T.V0.resize(nt);
+  const Index n = static_cast<Index>(x0.rows());
+  for (Index t = 0; t < T.size(); ++t) {
+    const Index id[4] = {T.a[t], T.b[t], T.c[t], T.d[t]};
+    for (int k = 0; k < 4; ++k) {
+      require(id[k] >= 0 && id[k] < n, w, ": compression[", t, "]: node ", id[k], " out of range [0, ", n,
+              ")");
+      for (int l = 0; l < k; ++l)
+        require(id[k] != id[l], w, ": compression[", t, "]: node ", id[k],
+                " repeated (degenerate tetrahedron)");
+    }
+    const auto s = static_cast<std::size_t>(t);
+    require(std::isfinite(T.kc[s]) && T.kc[s] >= 0, w, ": compression[", t, "].kc: must be >= 0 (got ",
+            T.kc[s], ")");
+    const At r = term_at(T, x0.data(), t);
+    const double L = longest_edge(r);
+    require(std::abs(r.V) > 1e-12 * L * L * L, w, ": compression[", t, "]: degenerate tetrahedron (nodes ",
+            id[0], " ", id[1], " ", id[2], " ", id[3], ", volume ", r.V, " mm^3)");
+    require(r.V > 0, w, ": compression[", t, "]: inverted tetrahedron (nodes ", id[0], " ", id[1], " ", id[2],
+            " ", id[3], ", volume ", r.V, " mm^3)");
+    T.V0[s] = r.V;
+  }
+}
+
+double add_compression_forces(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                              const std::uint8_t* fixed, double* rows, Index nodes) {
+  const bool bound = mass && fixed && rows;
+  if (bound) std::fill(rows, rows + nodes, 0.0);
+  bool any = false;
+  for (Index t = 0; t < T.size(); ++t) {
+    const auto i = static_cast<std::size_t>(t);
+    const At r = term_at(T, x, t);
+    const double J = r.V / T.V0[i];
+    if (J >= 1.0) continue;
+    const CompressionH hj = compression_h(J);
+    const double c = -T.kc[i] * hj.d1;
+    for (int k = 0; k < 4; ++k) {
+      double* o = f + 3 * r.id[k];
+      o[0] += c * r.g[k].x();
+      o[1] += c * r.g[k].y();
+      o[2] += c * r.g[k].z();
+    }
+    if (bound) {
+      any = true;
+      const double a = T.kc[i] / T.V0[i] * hj.d2;
+      const double hb = std::abs(T.kc[i] * hj.d1) * longest_edge(r) / 3.0;  // a d^2V block, off the diagonal
+      double gn[4], is[4];
+      for (int k = 0; k < 4; ++k) {
+        gn[k] = r.g[k].norm();
+        is[k] = fixed[r.id[k]] ? 0.0 : 1.0 / std::sqrt(mass[r.id[k]]);
+      }
+      for (int k = 0; k < 4; ++k)
+        for (int l = 0; l < 4; ++l)
+          rows[r.id[k]] += (a * gn[k] * gn[l] + (l == k ? 0.0 : hb)) * is[k] * is[l];
+    }
+  }
+  if (!any) return 0.0;
+  double row_max = 0;
+  for (Index n = 0; n < nodes; ++n) row_max = std::max(row_max, rows[n]);
+  return row_max;
+}
+
+double compression_energy(const CompressionTerms& T, const MatX3& x) {
+  double e = 0;
+  for (Index t = 0; t < T.size(); ++t) {
+    const auto i = static_cast<std::size_t>(t);
+    const double J = term_at(T, x.data(), t).V / T.V0[i];
+    e += T.kc[i] * T.V0[i] * compression_h(J).h;
+  }
+  return e;
+}
+
+std::uint64_t count_inverted(const CompressionTerms& T, const MatX3& x) {
+  std::uint64_t n = 0;
+  for (Index t = 0; t < T.size(); ++t) n += term_at(T, x.data(), t).V <= 0.0 ? 1 : 0;
+  return n;
+}
+
+void add_compression_stiffness_product(const CompressionTerms& T, const MatX3& x, const VecX& p, VecX& y,
+                                       bool gauss_newton) {
+  for (Index t = 0; t < T.size(); ++t) {
+    const auto i = static_cast<std::size_t>(t);
+    const At r = term_at(T, x.data(), t);
+    const double J = r.V / T.V0[i];
+    if (J >= 1.0) continue;
+    const auto H = hessian(r, T.kc[i], T.V0[i], compression_h(J), gauss_newton);
+    Eigen::Matrix<double, 12, 1> q;
+    for (int k = 0; k < 4; ++k) q.segment<3>(3 * k) = p.segment<3>(3 * r.id[k]);
+    const Eigen::Matrix<double, 12, 1> hq = H * q;
+    for (int k = 0; k < 4; ++k) y.segment<3>(3 * r.id[k]) += hq.segment<3>(3 * k);
+  }
+}
+
+void add_compression_stiffness_triplets(const CompressionTerms& T, const MatX3& x,
+                                        std::vector<Eigen::Triplet<double>>& out) {
+  for (Index t = 0; t < T.size(); ++t) {
+    const auto i = static_cast<std::size_t>(t);
+    const At r = term_at(T, x.data(), t);
+    const double J = r.V / T.V0[i];
+    if (J >= 1.0) continue;
+    const auto H = hessian(r, T.kc[i], T.V0[i], compression_h(J), false);
+    for (int k = 0; k < 4; ++k)
+      for (int l = 0; l < 4; ++l)
+        for (int u = 0; u < 3; ++u)
+          for (int v = 0; v < 3; ++v)
+            out.emplace_back(3 * r.id[k] + u, 3 * r.id[l] + v, H(3 * k + u, 3 * l + v));
+  }
+}
+
+void add_compression_gershgorin(const CompressionTerms& T, const MatX3& x, const VecX& mass,
+                                const std::vector<std::uint8_t>& fixed, VecX& diag, VecX& off) {
+  for (Index t = 0; t < T.size(); ++t) {
+    const auto i = static_cast<std::size_t>(t);
+    const At r = term_at(T, x.data(), t);
+    const double J = r.V / T.V0[i];
+    if (J >= 1.0) continue;
+    const CompressionH hj = compression_h(J);
+    const double a = T.kc[i] / T.V0[i] * hj.d2;
+    const double hb = std::abs(T.kc[i] * hj.d1) * longest_edge(r) / 3.0;  // bound of a d^2V block
+    for (int k = 0; k < 4; ++k) {
+      const Index n = r.id[k];
+      diag[n] += a * r.g[k].squaredNorm() + hb;
+      for (int l = 0; l < 4; ++l) {
+        if (l == k) continue;
+        const Index m = r.id[l];
+        if (fixed[static_cast<std::size_t>(m)]) continue;
+        off[n] += (a * r.g[k].norm() * r.g[l].norm() + hb) / std::sqrt(mass[n] * mass[m]);
+      }
+    }
+  }
+}
+
+}  // namespace medspring

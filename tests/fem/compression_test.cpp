@@ -1,0 +1,338 @@
+// Compression stiffening of the volumetric kind (issue 23, physics/compression_terms.hpp, docs/volumetric.md
+// "Compression stiffening"): h(J) and its continuation, forces and Hessian against finite differences, the
+// curvature bound of the stable step, the small-strain moduli unchanged, stiffening under compression, and
+// an inverted tetrahedron counted, never a NaN.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "medspring/fem/volumetric.hpp"
+#include "medspring/models/model_package.hpp"
+#include "medspring/models/volumetric_body.hpp"
+#include "medspring/models/volumetric_moduli.hpp"
+#include "medspring/physics/forces.hpp"
+#include "medspring/physics/integrators.hpp"
+#include "medspring/physics/stability.hpp"
+#include "medspring/physics/static_solve.hpp"
+#include "volumetric_fixtures.hpp"
+
+namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
+double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
+                       double* rows);
+}  // namespace medspring::detail
+
+using namespace medspring;
+using medspring::testing::box_surface;
+using medspring::testing::one_tet;
+
+namespace {
+
+MatX3 irregular_tet() {
+  MatX3 X(4, 3);
+  X << 0, 0, 0, 4.2, 0.3, -0.2, 0.7, 3.6, 0.4, 1.1, 0.9, 3.3;
+  return X;
+}
+
+// A model of one tetrahedron with a compression term only (kc = 0.7 N/mm^2, unit masses).
+Model one_term(const MatX3& X) {
+  ModelBuilder b("tet");
+  for (Index a = 0; a < 4; ++a) b.add_node(X.row(a).transpose(), 1.0, 0.0, 0.0);
+  b.add_compression(0, 1, 2, 3, 0.7);
+  return b.build();
+}
+
+TEST(Compression, HIsZeroToSecondOrderAtRestAndContinuousAtItsContinuation) {
+  const CompressionH r = compression_h(1.0);
+  EXPECT_EQ(r.h, 0.0);
+  EXPECT_EQ(r.d1, 0.0);
+  EXPECT_EQ(r.d2, 0.0);
+  EXPECT_EQ(compression_h(1.3).h, 0.0);  // nothing in tension
+  // just below 1: h ~ -(J-1)^3 / 3 > 0, the third-order onset
+  const double u = -1e-3;
+  EXPECT_NEAR(compression_h(1 + u).h / (-u * u * u / 3), 1.0, 2e-3);
+  const double Jm = kCompressionJMin, e = 1e-9;
+  const CompressionH a = compression_h(Jm - e), b = compression_h(Jm + e);
+  EXPECT_NEAR(a.h, b.h, 1e-8);
+  EXPECT_NEAR(a.d1, b.d1, 1e-7);
+  EXPECT_NEAR(a.d2, b.d2, 1e-6);
+  EXPECT_NEAR(b.d2, 1 / (Jm * Jm) - 1, 1e-6);
+  // derivatives against finite differences, on both branches
+  for (double J : {0.9, 0.5, 0.3, 0.2, 0.0, -0.4}) {
+    const double d = 1e-6;
+    EXPECT_NEAR(compression_h(J).d1, (compression_h(J + d).h - compression_h(J - d).h) / (2 * d), 1e-6) << J;
+    EXPECT_NEAR(compression_h(J).d2, (compression_h(J + d).d1 - compression_h(J - d).d1) / (2 * d), 1e-5)
+        << J;
+    EXPECT_TRUE(std::isfinite(compression_h(J).h));
+  }
+  // stiffens as the tetrahedron is squeezed
+  EXPECT_GT(compression_h(0.5).d2, compression_h(0.8).d2);
+  EXPECT_GT(compression_h(0.8).d2, 0.0);
+}
+
+// Forces are -dE/dx and the tangent stiffness is d(-f)/dx, by central differences, at compressed, mildly
+// stretched and inverted states.
+TEST(Compression, ForcesAndHessianMatchFiniteDifferences) {
+  const Model m = one_term(irregular_tet());
+  std::mt19937 rng(3);
+  std::normal_distribution<double> N(0.0, 1.0);
+  const MatX3 zero = MatX3::Zero(4, 3);
+  int compressed = 0, inverted = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    MatX3 x = m.x0;
+    // squeeze along z towards the base (factor 0.15 .. 1.1), then shuffle a little; a few pushed through
+    const double sz = trial % 8 == 7 ? -0.3 : 0.15 + 0.95 * (trial % 7) / 6.0;
+    x.col(2) *= sz;
+    for (Index a = 0; a < 4; ++a) x.row(a) += 0.1 * Vec3(N(rng), N(rng), N(rng)).transpose();
+    const double J = signed_tet_volume(x.row(0), x.row(1), x.row(2), x.row(3)) / m.compression.V0[0];
+    compressed += J < 1 ? 1 : 0;
+    inverted += J <= 0 ? 1 : 0;
+    MatX3 f(4, 3);
+    f.setZero();
+    detail::internal_forces(m, x, zero, f, false);
+    const Eigen::MatrixXd K = Eigen::MatrixXd(tangent_stiffness(m, x));
+    const double h = 1e-6;
+    double fscale = 1e-12, kscale = 1e-12;
+    for (Index a = 0; a < 4; ++a) fscale = std::max(fscale, f.row(a).norm());
+    kscale = std::max(kscale, K.cwiseAbs().maxCoeff());
+    for (Index a = 0; a < 4; ++a)
+      for (int c = 0; c < 3; ++c) {
+        MatX3 xp = x, xm = x;
+        xp(a, c) += h;
+        xm(a, c) -= h;
+        const double dE = (potential_energy(m, xp) - potential_energy(m, xm)) / (2 * h);
+        EXPECT_NEAR(f(a, c), -dE, 1e-6 * (1 + fscale)) << "trial " << trial << " J " << J;
+        MatX3 fp(4, 3), fm(4, 3);
+        fp.setZero();
+        fm.setZero();
+        detail::internal_forces(m, xp, zero, fp, false);
+        detail::internal_forces(m, xm, zero, fm, false);
+        for (Index b = 0; b < 4; ++b)
+          for (int d = 0; d < 3; ++d)
+            EXPECT_NEAR(K(3 * b + d, 3 * a + c), -(fp(b, d) - fm(b, d)) / (2 * h), 1e-5 * (1 + kscale))
+                << "trial " << trial << " J " << J;
+      }
+  }
+  EXPECT_GE(compressed, 25);
+  EXPECT_GE(inverted, 3);
+}
+
+// The stable step's bound: the largest eigenvalue of the term's exact Hessian is at most
+// kc (h'' |dV/dx|^2 / V0 + |h'| L_max / 2), and the Gershgorin row bound the force pass returns (unit masses
+// here) is at least the largest eigenvalue.
+TEST(Compression, CurvatureBoundHoldsForTheExactHessian) {
+  const Model m = one_term(irregular_tet());
+  std::mt19937 rng(11);
+  std::normal_distribution<double> N(0.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    MatX3 x = m.x0;
+    x.col(2) *= 0.1 + 0.9 * (trial % 10) / 10.0;
+    for (Index a = 0; a < 4; ++a) x.row(a) += 0.3 * Vec3(N(rng), N(rng), N(rng)).transpose();
+    const double V = signed_tet_volume(x.row(0), x.row(1), x.row(2), x.row(3));
+    const double V0 = m.compression.V0[0], J = V / V0;
+    if (J >= 1) continue;
+    const Eigen::MatrixXd K = Eigen::MatrixXd(tangent_stiffness(m, x));
+    const double lmax = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(K).eigenvalues().cwiseAbs().maxCoeff();
+    const Vec3 e1 = (x.row(1) - x.row(0)).transpose(), e2 = (x.row(2) - x.row(0)).transpose(),
+               e3 = (x.row(3) - x.row(0)).transpose();
+    const Vec3 g1 = e2.cross(e3) / 6, g2 = e3.cross(e1) / 6, g3 = e1.cross(e2) / 6, g0 = -(g1 + g2 + g3);
+    const double gg = g0.squaredNorm() + g1.squaredNorm() + g2.squaredNorm() + g3.squaredNorm();
+    double L = 0;
+    for (Index a = 0; a < 4; ++a)
+      for (Index c = 0; c < a; ++c) L = std::max(L, (x.row(a) - x.row(c)).norm());
+    const CompressionH hj = compression_h(J);
+    const double bound = 0.7 * (hj.d2 * gg / V0 + std::abs(hj.d1) * L / 2);
+    EXPECT_LE(lmax, bound * (1 + 1e-12)) << "trial " << trial << " J " << J;
+    VecX f = VecX::Zero(12), rows(4);
+    const double g = add_compression_forces(m.compression, x.data(), f.data(), m.mass.data(), m.fixed.data(),
+                                            rows.data(), 4);
+    EXPECT_GE(g, lmax * (1 - 1e-12)) << "trial " << trial << " J " << J;
+    EXPECT_LE(g, 4 * bound) << "trial " << trial << " J " << J;  // and not far above it
+  }
+}
+
+VolumetricSettings cube_settings(double nu, double compression) {
+  VolumetricSettings st;
+  st.nu = nu;
+  st.return_k = 0.0;
+  st.compression = compression;
+  return st;
+}
+
+// The term is zero to second order at rest: the measured small-strain moduli (volumetric_moduli.hpp) and
+// the rest stable step are those of the model without it, exactly.
+TEST(Compression, SmallStrainModuliAndRestStepAreUnchanged) {
+  const double L = 20;
+  const VolumetricMesh m = fem::volumetric_mesh(box_surface(5, L), {.target_nodes = 400});
+  for (double nu : {0.3, 0.45}) {
+    VolumetricSettings a = cube_settings(nu, 0.0), b = cube_settings(nu, 4.0);
+    a.fixed = b.fixed = {0, 1, 2, 3};
+    const VolumetricBody off(m, a, "cube"), on(m, b, "cube");
+    EXPECT_EQ(on.model().compression.size(), m.T.rows());
+    EXPECT_EQ(off.model().compression.size(), 0);
+    EXPECT_NEAR(on.stats().kc, 4.0 * on.stats().mu, 1e-15);
+    const MeshModuli mo = mesh_moduli(off.model(), m.surface_nodes, 0, &m.F);
+    const MeshModuli mn = mesh_moduli(on.model(), m.surface_nodes, 0, &m.F);
+    EXPECT_NEAR(mn.mu / mo.mu, 1.0, 1e-12) << nu;
+    EXPECT_NEAR(mn.K / mo.K, 1.0, 1e-12) << nu;
+    EXPECT_NEAR(mn.mu_traction / mo.mu_traction, 1.0, 1e-9) << nu;
+    EXPECT_NEAR(mn.K_traction / mo.K_traction, 1.0, 1e-9) << nu;
+    EXPECT_NEAR(on.model().omega_rest / off.model().omega_rest, 1.0, 1e-12) << nu;
+    EXPECT_NE(on.model().compression.size(), 0);
+  }
+}
+
+// A cube on its base pressed by a uniform load on its top: equal displacements at a small load (to third
+// order), a stiffer response at a large one, and the stiffening grows with the coefficient.
+TEST(Compression, CubeStiffensUnderLargeCompressionOnly) {
+  const double L = 20;
+  const VolumetricMesh m = fem::volumetric_mesh(box_surface(5, L), {.target_nodes = 400});
+  std::vector<Index> base, top;
+  for (Index i = 0; i < m.surface_nodes; ++i) {
+    if (m.X(i, 2) < 1e-9) base.push_back(i);
+    if (m.X(i, 2) > L - 1e-9) top.push_back(i);
+  }
+  auto top_disp = [&](double c, double F, double* jmin_out = nullptr) {
+    VolumetricSettings st = cube_settings(0.3, c);
+    st.fixed = base;
+    const VolumetricBody body(m, st, "cube");
+    MatX3 f = MatX3::Zero(m.X.rows(), 3);
+    for (Index i : top) f(i, 2) = -F / static_cast<double>(top.size());
+    const StaticResult r = static_equilibrium(body.model(), f);
+    EXPECT_TRUE(r.x.allFinite());
+    double u = 0;
+    for (Index i : top) u += (m.X(i, 2) - r.x(i, 2)) / static_cast<double>(top.size());
+    double jmin = 1e9;
+    for (Index t = 0; t < m.T.rows(); ++t) {
+      const double V =
+          signed_tet_volume(r.x.row(m.T(t, 0)), r.x.row(m.T(t, 1)), r.x.row(m.T(t, 2)), r.x.row(m.T(t, 3)));
+      const double V0 =
+          signed_tet_volume(m.X.row(m.T(t, 0)), m.X.row(m.T(t, 1)), m.X.row(m.T(t, 2)), m.X.row(m.T(t, 3)));
+      jmin = std::min(jmin, V / V0);
+    }
+    if (jmin_out) *jmin_out = jmin;
+    return u;
+  };
+  // E = 10 kPa on 400 mm^2: 0.04 N is 1 % strain, 1.2 N about 30 %
+  // E = 10 kPa on 400 mm^2: 0.04 N is 1 % strain. At 0.6 N (1.5 kPa, ~15 %) the plain spring cube gives way
+  // (measured: the top moves 38 mm, sideways 24 mm, tetrahedra inverted); with c = 4 it holds (3.4 mm).
+  const double small0 = top_disp(0, 0.04), small4 = top_disp(4, 0.04);
+  EXPECT_NEAR(small4 / small0, 1.0, 5e-3);  // third order: 0.35 % at 1 % strain
+  double jmin4 = 0;
+  const double big0 = top_disp(0, 0.6), big4 = top_disp(4, 0.6, &jmin4);
+  EXPECT_LT(big4, 0.9 * big0);
+  EXPECT_LT(big4, 1.5 * 15 * small4);  // within 1.5x of the linear response: no collapse
+  EXPECT_GT(jmin4, 0.5);
+  std::cout << "cube 20 mm, nu 0.3, 0.6 N: top moves " << big0 << " mm (off), " << big4 << " (c = 4, J_min "
+            << jmin4 << "); 0.04 N: " << small0 << " / " << small4 << "\n";
+}
+
+// The stable step: at the compressed equilibrium of the cube (c = 16, 0.6 N), the true omega_max^2 of the
+// exact Hessian (dense, free DOFs, M^-1/2 K M^-1/2) stays below the stiffening the force pass reports times
+// omega_rest^2, with the global rule and with the local one (rows) the integrator uses.
+TEST(Compression, StableStepBoundsTheCompressedCubesOmegaMax) {
+  const double L = 20;
+  const VolumetricMesh m = fem::volumetric_mesh(box_surface(4, L), {.target_nodes = 250});
+  VolumetricSettings st = cube_settings(0.3, 16.0);
+  for (Index i = 0; i < m.surface_nodes; ++i)
+    if (m.X(i, 2) < 1e-9) st.fixed.push_back(i);
+  const VolumetricBody body(m, st, "cube");
+  const Model& M = body.model();
+  MatX3 f = MatX3::Zero(m.X.rows(), 3);
+  Index ntop = 0;
+  for (Index i = 0; i < m.surface_nodes; ++i) ntop += m.X(i, 2) > L - 1e-9 ? 1 : 0;
+  for (Index i = 0; i < m.surface_nodes; ++i)
+    if (m.X(i, 2) > L - 1e-9) f(i, 2) = -0.6 / static_cast<double>(ntop);
+  const MatX3 x = static_equilibrium(M, f).x;
+  const Eigen::MatrixXd K = Eigen::MatrixXd(tangent_stiffness(M, x));
+  std::vector<Index> dof;
+  for (Index a = 0; a < M.num_nodes(); ++a)
+    if (!M.fixed[static_cast<std::size_t>(a)])
+      for (int c = 0; c < 3; ++c) dof.push_back(3 * a + c);
+  const auto nd = static_cast<Index>(dof.size());
+  Eigen::MatrixXd A(nd, nd);
+  for (Index r = 0; r < nd; ++r)
+    for (Index c = 0; c < nd; ++c)
+      A(r, c) = K(dof[r], dof[c]) / std::sqrt(M.mass[dof[r] / 3] * M.mass[dof[c] / 3]);
+  const double w2 = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues().maxCoeff();
+  MatX3 fo(M.num_nodes(), 3);
+  fo.setZero();
+  const double s_global = detail::internal_forces(M, x, MatX3::Zero(M.num_nodes(), 3), fo, true);
+  VecX rows = VecX::Zero(M.num_nodes());
+  fo.setZero();
+  const double s_local = detail::internal_forces(M, x, MatX3::Zero(M.num_nodes(), 3), fo, true, rows.data());
+  const double w2r = M.omega_rest * M.omega_rest;
+  std::cout << "cube c = 16, 0.6 N: omega_max^2 / omega_rest^2 = " << w2 / w2r << ", stiffening global "
+            << s_global << ", local " << s_local << "\n";
+  EXPECT_GT(w2, w2r / 1.05 / 1.05);  // compressed: stiffer than at rest
+  EXPECT_LE(w2, s_global * w2r);
+  EXPECT_LE(w2, s_local * w2r);
+}
+
+// An inverted tetrahedron during a run is counted in the step's warnings; the state stays finite, with the
+// compression term alone (no volume term: nu < 1/4) and with both.
+TEST(Compression, InversionDuringARunIsCountedNotNaN) {
+  for (double nu : {0.2, 0.45}) {
+    VolumetricSettings st;
+    st.nu = nu;
+    st.compression = 4.0;
+    st.fixed = {0, 1, 2};
+    const MatX3 X = irregular_tet();
+    const VolumetricBody body(one_tet(X), st, "tet");
+    EXPECT_EQ(body.model().volume.size(), nu < 0.25 ? 0 : 1);
+    State s = make_state(body.model());
+    const Vec3 c = (X.row(0) + X.row(1) + X.row(2)).transpose() / 3;
+    const Vec3 dir = (c - X.row(3).transpose()).normalized();
+    body.transfer_force(3, 20.0 * dir, s.f_ext);
+    for (int i = 0; i < 400; ++i) step(body.model(), s, {.dt = 0.5});
+    EXPECT_TRUE(s.x.allFinite()) << nu;
+    EXPECT_GT(s.warnings.inverted_elements, 0u) << nu;
+    EXPECT_EQ(s.warnings.nonfinite, 0u) << nu;
+  }
+}
+
+// A model package (version 6) carries the coefficient: the rebuilt body has the same terms and fingerprint.
+TEST(Compression, ModelPackageCarriesTheCoefficient) {
+  VolumetricSettings st;
+  st.fixed = {0, 1, 2};
+  st.compression = 3.5;
+  const VolumetricBody body(one_tet(irregular_tet()), st, "tet");
+  const ModelPackage p = decode_model_package(encode_model_package(package_of(body)));
+  EXPECT_EQ(p.volumetric.compression, 3.5);
+  const BodyPtr again = make_body(p);
+  EXPECT_EQ(again->model().compression.size(), 1);
+  EXPECT_TRUE(check_fingerprint(p, *again));
+  st.compression = 0;
+  const VolumetricBody plain(one_tet(irregular_tet()), st, "tet");
+  EXPECT_NE(model_fingerprint(plain.model()), model_fingerprint(body.model()));
+}
+
+// Bad input: a negative or non-finite coefficient is refused naming it; so is a bad term at the physics
+// level.
+TEST(Compression, BadInputIsRefused) {
+  VolumetricSettings st;
+  st.fixed = {0, 1, 2};
+  st.compression = -1;
+  try {
+    const VolumetricBody body(one_tet(irregular_tet()), st, "tet");
+    FAIL() << "accepted compression = -1";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("compression must be >= 0"), std::string::npos) << e.what();
+  }
+  ModelBuilder b("m");
+  const MatX3 X = irregular_tet();
+  for (Index a = 0; a < 4; ++a) b.add_node(X.row(a).transpose(), 1.0, 0.0, 0.0);
+  b.add_compression(0, 2, 1, 3, 1.0);  // inverted orientation
+  try {
+    b.build();
+    FAIL() << "accepted an inverted compression term";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("compression[0]: inverted tetrahedron"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
