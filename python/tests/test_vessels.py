@@ -1,6 +1,7 @@
 """Vessels that bend like vessels (issue 17, docs/vessels.md): the bending stiffness of the wall, the
 paper-literal chain (k_b = 0), and the per-update validity rho kappa < 1 from Python."""
 
+import json
 import math
 
 import numpy as np
@@ -190,6 +191,82 @@ def test_tree_from_a_segmentation_is_the_y_watertight_and_on_the_wall(tmp_path):
         ms.smrm_tree_from_organ()
     with pytest.raises(ms.InvalidInput, match="label applies to a segmentation"):
         ms.smrm_tree_from_organ(mesh=path, label=1)
+
+
+def y_mesh():
+    """The Y as a closed mesh: the union of its path tubes, 1.5 mm rings (the C++ test's y_mesh)."""
+    atoms = np.array([[0, 0, 0], [15, 0, 0], [30, 0, 0], [42.5, 9, 2], [55, 18, 4], [41.5, -8.5, -1.5],
+                      [53, -17, -3]], dtype=float)
+    radii = np.array([4, 4, 4, 3, 3, 3, 3], dtype=float)
+    t = ms.smrm_tree_from_parents(atoms, [-1, 0, 1, 2, 3, 2, 5], radii, ms.SmrmSettings(spokes=24), blend=True,
+                                  blend_spacing=1.5)
+    return ms.SurfaceMesh(np.ascontiguousarray(t.rest_surface), np.ascontiguousarray(t.faces))
+
+
+def scene_model(source, atoms):
+    """The rest surface of a scene's smrm model ("branches": "all" in `source`), built by the scene loader."""
+    doc = {"name": "tree", "model": {"kind": "smrm", "atoms": atoms, "source": source},
+           "loads": [{"node": 0, "direction": "inward_normal", "magnitude": 0.1, "t_ramp": 20}], "duration": 10}
+    return ms._medspring.SceneRunner().model(json.dumps(doc))
+
+
+def canonical_surface(V, F):
+    """Nodes in lexicographic order of their coordinates, faces renumbered, each starting at its smallest
+    node (orientation kept), sorted: equal for two numberings of one surface."""
+    V, F = np.asarray(V), np.asarray(F)
+    order = np.lexsort(V.T[::-1])
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    G = rank[F]
+    shift = np.argmin(G, axis=1)
+    G = np.stack([G[np.arange(len(G)), (shift + k) % 3] for k in range(3)], axis=1)
+    return V[order], G[np.lexsort(G.T[::-1])]
+
+
+def assert_same_tree(model, tree):
+    # The same surface to 1e-9 mm. The numbering of a few junction nodes of build_vessel's watertight
+    # surface varies from call to call within one process (4 nodes of the Y; not yet traced, see
+    # docs/vessels.md), so the nodes are compared in coordinate order with the faces renumbered.
+    assert model["num_surface_nodes"] == tree.num_surface_nodes
+    V1, F1 = canonical_surface(model["rest_surface"], model["faces"])
+    V2, F2 = canonical_surface(tree.rest_surface, tree.faces)
+    np.testing.assert_allclose(V1, V2, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(F1, F2)
+
+
+@pytest.mark.skipif(not (ms._medspring.has_builders and ms._medspring.has_io and ms._medspring.has_scene),
+                    reason="needs the builders, io and scene layers")
+def test_scene_tree_from_a_mask_or_mesh_is_the_build_vessel_tree(tmp_path):
+    # A scene's tree from a segmentation or a mesh is `medspring build vessel --branches all`'s
+    # (smrm_tree_from_organ): holes filled, skeleton re-centred, watertight surface fitted to the wall by
+    # default, and "blend": false the open tubes, as blend=False.
+    mask = tmp_path / "y.mha"
+    ms.write_label_volume(str(mask), y_label_volume())
+    mesh = tmp_path / "y.obj"
+    ms.write_mesh(str(mesh), y_mesh())
+    settings = ms.SmrmSettings(atoms=16)
+    for key, path in (("segmentation", mask), ("mesh", mesh)):
+        src = {"file": str(path), "branches": "all", **({"unit": "mm"} if key == "mesh" else {})}
+        model = scene_model({key: src}, 16)
+        tree, summary, _ = ms.smrm_tree_from_organ(**{key: path}, settings=settings)
+        assert tree.blended and summary["branches"] == 3
+        assert_same_tree(model, tree)
+        assert any("re-centred" in n for n in model["notes"]), model["notes"]
+        tubes, _, _ = ms.smrm_tree_from_organ(**{key: path}, settings=settings, blend=False)
+        assert not tubes.blended
+        assert_same_tree(scene_model({key: dict(src, blend=False)}, 16), tubes)
+
+
+@pytest.mark.skipif(not (ms._medspring.has_builders and ms._medspring.has_io and ms._medspring.has_scene),
+                    reason="needs the builders, io and scene layers")
+def test_scene_tree_from_the_real_aorta_mesh_is_the_build_vessel_tree():
+    from conftest import data_file
+
+    path = data_file("aorta_totalseg_ct.obj")
+    model = scene_model({"mesh": {"file": str(path), "unit": "mm", "branches": "all"}}, 40)
+    tree, summary, _ = ms.smrm_tree_from_organ(mesh=path, settings=ms.SmrmSettings(atoms=40))
+    assert_same_tree(model, tree)
+    assert summary["away_hausdorff_mm"] < 2.0  # the fitted surface: measured 1.69 mm (docs/vessels.md)
 
 
 @pytest.mark.skipif(not (ms._medspring.has_builders and ms._medspring.has_io),

@@ -36,6 +36,12 @@ SurfaceMesh SceneLoader::tree_surface(const CenterlineTree&, const SmrmTree&, do
       "command or of the Python module");
 }
 
+std::shared_ptr<const SmrmTree> SceneLoader::organ_tree(const OrganTreeRequest&, std::vector<std::string>&) {
+  throw InvalidInput(
+      "a vessel tree from a mesh or a segmentation needs the builders layer (CGAL, build_vessel): the loader "
+      "of the medspring command or of the Python module");
+}
+
 namespace {
 
 struct Builder {
@@ -219,16 +225,32 @@ struct Builder {
     return p;
   }
 
-  // A vessel tree from the skeleton of every endpoint of a mask (a segmentation, or a voxelised mesh).
-  BodyPtr tree_from_mask(const MaskVolume& mask, const std::string& where) {
-    TreeSkeleton sk;
+  // A vessel tree from a mesh or a segmentation: the loader builds it as `medspring build vessel
+  // --branches all` does (builders' build_vessel; holes filled, skeleton re-centred, surface fitted).
+  BodyPtr tree_from_organ(const std::string& where) {
+    const ModelSource& s = scene.model.source;
+    OrganTreeRequest r;
+    if (s.type == ModelSource::Type::Mesh) {
+      r.mesh = s.mesh;
+      r.mesh_unit = s.mesh_unit;
+    } else {
+      r.segmentation = s.segmentation;
+      r.label = s.label;
+    }
+    r.smrm = scene.model.smrm;
+    r.blend = s.blend;
+    r.blend_spacing = s.blend_spacing;
+    std::vector<std::string> notes;
+    std::shared_ptr<const SmrmTree> t;
     try {
-      sk = extract_centerline_tree(mask);
+      t = files(where).organ_tree(r, notes);
     } catch (const InvalidInput& e) {
       fail(where, e.what());
     }
-    for (const auto& n : sk.notes) out.notes.push_back("tree skeleton: " + n);
-    return tree_body(sk.lines, std::max(0.05, 1e-3 * sk.h_min));
+    for (const std::string& n : notes) out.notes.push_back("vessel tree: " + n);
+    return adopt_tree(std::move(t), "the skeleton of " + (s.type == ModelSource::Type::Mesh
+                                                              ? s.mesh.filename().string()
+                                                              : s.segmentation.filename().string()));
   }
 
   BodyPtr tree_body() {
@@ -253,9 +275,13 @@ struct Builder {
       t = std::make_shared<SmrmTree>(ct, SmrmTreeSettings{scene.model.smrm}, u);
       for (const std::string& n : notes) out.notes.push_back("smrm tree surface: " + n);
     }
-    out.notes.push_back(cat("smrm tree: ", lines.size(), " polylines -> ", t->num_branches(), " branches, ",
-                            t->num_junctions(), " junctions, ", t->num_atoms(), " atoms, ",
-                            t->num_surface_nodes(), " surface nodes (",
+    return adopt_tree(std::move(t), cat(lines.size(), " polylines"));
+  }
+
+  BodyPtr adopt_tree(std::shared_ptr<const SmrmTree> t, const std::string& from) {
+    out.notes.push_back(cat("smrm tree: ", from, " -> ", t->num_branches(), " branches, ", t->num_junctions(),
+                            " junctions, ", t->num_atoms(), " atoms, ", t->num_surface_nodes(),
+                            " surface nodes (",
                             t->blended() ? "one watertight surface" : "one tube per branch", ")"));
     num_atoms = t->num_atoms();
     atoms_rest = t->model().x0;
@@ -283,13 +309,9 @@ struct Builder {
         }
         return smrm_body(smrm_phantom(s.path, s.cross_section, m.smrm));
       case ModelSource::Type::Mesh: {
+        if (m.kind == ModelKind::Smrm && s.all_branches)  // a tree: as `medspring build vessel` builds it
+          return tree_from_organ("model.source.mesh");
         const SurfaceMesh organ = read_organ_mesh();
-        if (m.kind == ModelKind::Smrm && s.all_branches) {  // a tree: the skeleton of the voxelised mesh
-          const Vec3 ext = (organ.V.colwise().maxCoeff() - organ.V.colwise().minCoeff()).transpose();
-          VoxelizeSettings vset;  // about 2 million voxels in the bounding box (as build vessel)
-          vset.voxel_size = std::cbrt(std::max(ext.prod(), 1e-9) / 2e6);
-          return tree_from_mask(voxelize(organ, vset), "model.source.mesh");
-        }
         if (m.kind == ModelKind::Surface) return surface_body(maybe_balloon(organ), name);
         if (m.kind == ModelKind::Volumetric) return volumetric_body(maybe_balloon(organ), name);
         SkeletonSettings sk;
@@ -303,11 +325,11 @@ struct Builder {
         return smrm_body(smrm_from_marched_spokes(mc.skeleton.centerline(), organ, m.smrm));
       }
       case ModelSource::Type::Segmentation: {
+        if (m.kind == ModelKind::Smrm && s.all_branches)  // a tree: as `medspring build vessel` builds it
+          return tree_from_organ("model.source.segmentation");
         const MaskVolume mask = read_mask();
         SkeletonSettings sk;
         sk.atom_count = m.atoms > 0 ? m.atoms : 40;
-        if (m.kind == ModelKind::Smrm && s.all_branches)
-          return tree_from_mask(mask, "model.source.segmentation");
         if (m.kind == ModelKind::Smrm) {
           const SkeletonResult r = extract_centerline(mask, sk);
           skeleton_atoms(r);

@@ -63,4 +63,10 @@ SurfaceMesh CachingSceneLoader::tree_surface(const CenterlineTree& tree, const S
   return access_.tree_surface(tree, plain, spacing, notes);
 }
 
+std::shared_ptr<const SmrmTree> CachingSceneLoader::organ_tree(const OrganTreeRequest& request,
+                                                               std::vector<std::string>& notes) {
+  if (!access_.organ_tree) return SceneLoader::organ_tree(request, notes);  // refuses
+  return access_.organ_tree(request, notes);
+}
+
 }  // namespace medspring

@@ -121,7 +121,9 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
   }
   // "branches": "all" (a vessel tree: every polyline of a centerline file, or the skeleton of every
   // endpoint of a mesh or segmentation) and its watertight surface ("blend", "blend_spacing_mm")
-  auto tree_keys = [&](Obj& p) {
+  // A tree from a mesh or a segmentation takes the watertight surface fitted to the wall by default, as
+  // `medspring build vessel` does ("blend": false: one open tube per branch); from centerlines the tubes.
+  auto tree_keys = [&](Obj& p, bool organ) {
     if (const json* all = p.get("branches")) {
       if (!all->is_string() || all->get<std::string>() != "all")
         fail(c, p.at("branches"), "must be \"all\" (one branch: \"branch\": N)");
@@ -130,7 +132,7 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
         fail(c, p.at("branches"), cat("a vessel tree is an smrm model, not ", to_string(m.kind)));
       s.all_branches = true;
     }
-    s.blend = p.boolean("blend", false);
+    s.blend = p.boolean("blend", organ && s.all_branches);
     if (const json* bs = p.get("blend_spacing_mm")) {
       s.blend_spacing = as_number(c, *bs, p.at("blend_spacing_mm"));
       if (!(s.blend_spacing > 0) || !std::isfinite(s.blend_spacing))
@@ -146,7 +148,7 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
     if (!f) fail(c, p.at("file"), "is required");
     s.mesh = resolve_file(c, *f, p.at("file"));
     s.mesh_unit = parse_unit(p, "unit");
-    if (!line) tree_keys(p);  // a tree from the mesh's skeleton (not for the boundary of a centerline)
+    if (!line) tree_keys(p, true);  // a tree from the mesh's skeleton (not for the boundary of a centerline)
     p.finish();
     if (!line) s.type = ModelSource::Type::Mesh;
   }
@@ -158,7 +160,7 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
     s.segmentation = resolve_file(c, *f, p.at("file"));
     const Index label = p.index("label", 1, 1);
     s.label = static_cast<std::int32_t>(label);
-    tree_keys(p);
+    tree_keys(p, true);
     p.finish();
   }
   if (line) {
@@ -169,7 +171,7 @@ void parse_source(const Ctx& c, const json& j, const std::string& path, SceneMod
     s.centerline = resolve_file(c, *f, p.at("file"));
     s.centerline_unit = parse_unit(p, "unit");
     s.branch = p.index("branch", 0, 0);
-    tree_keys(p);
+    tree_keys(p, false);
     s.radius_array = p.string("radius_array", s.radius_array);
     if (const json* r = p.get("range_mm")) {
       const std::string rp = p.at("range_mm");

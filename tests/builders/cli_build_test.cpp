@@ -257,7 +257,8 @@ TEST(CliBuildVessel, SceneWithABlendedTreeRunsTheWatertightSurfaceAndExportsIt) 
 
 TEST(CliBuildVessel, TreeFromTheAortaSegmentationAndItsScene) {
   // --branches all from a segmentation: the tree skeleton of every endpoint. The TotalSegmentator aorta
-  // is one arch + descending tube (no branch stubs): 1 branch, 0 junctions. A scene takes the same source.
+  // is one arch + descending tube (no branch stubs): 1 branch, 0 junctions. A scene takes the same source
+  // and builds the same tree.
   const fs::path tmp = testing::temp_dir("cli-vessel-mask-tree");
   const fs::path mask = testing::require_data_file("aorta_totalseg_mask.nii.gz");
   const CliRun r = run_cli("build vessel --segmentation \"" + mask.string() +
@@ -291,7 +292,7 @@ TEST(CliBuildVessel, TreeFromTheAortaSegmentationAndItsScene) {
   }
 
   std::ofstream(tmp / "tree.json")
-      << R"({"name": "tree", "model": {"kind": "smrm", "atoms": 20, "source": {"segmentation": {"file": ")"
+      << R"({"name": "tree", "model": {"kind": "smrm", "source": {"segmentation": {"file": ")"
       << mask.string() << R"(", "label": 1, "branches": "all"}}},
     "loads": [{"node": 300, "direction": "inward_normal", "magnitude": 0.5, "t_ramp": 20, "t_release": 100}],
     "duration": 200})";
@@ -300,6 +301,11 @@ TEST(CliBuildVessel, TreeFromTheAortaSegmentationAndItsScene) {
       tmp);
   ASSERT_EQ(s.code, 0) << s.err;
   EXPECT_NE(s.out.find("\"kind\": \"smrm_tree\""), std::string::npos) << s.out;
+  // the scene's tree is build vessel's: re-centred, holes filled, fitted watertight surface (same nodes;
+  // the surfaces themselves are compared to 1e-9 mm in python/tests/test_vessels.py)
+  EXPECT_EQ(json_number(s.out, "surface_nodes"), json_number(r.out, "surface_nodes"));
+  EXPECT_NE(s.out.find("re-centred in its cross-sections"), std::string::npos) << s.out;
+  EXPECT_NE(s.out.find("enclosed hole(s) of the label filled"), std::string::npos) << s.out;
   std::ifstream back(tmp / "run" / "scene.json");
   std::stringstream text;
   text << back.rdbuf();

@@ -244,6 +244,62 @@ TEST(SceneBuild, FileSourcesWithAnImplausibleSizeAreReportedAsAWrongUnit) {
   EXPECT_NE(build_error(surface, nullptr, dir).find("needs the file loader"), std::string::npos);
 }
 
+TEST(SceneBuild, TreesFromAMaskOrMeshGoToTheLoadersOrganTreeWithBuildVesselDefaults) {
+  // A scene's tree from a segmentation or a mesh is the loader's organ_tree (build_vessel in the
+  // medspring command and the Python module): the request carries the file, label / unit, the smrm
+  // settings and "blend" (default true, as `build vessel`; false = --no-blend). A loader without it refuses.
+  struct Recorder : SceneLoader {
+    OrganTreeRequest seen;
+    SurfaceMesh read_mesh(const std::filesystem::path&, LengthUnit) override { return {}; }
+    std::vector<Centerline> read_centerlines(const std::filesystem::path&, LengthUnit,
+                                             const std::string&) override {
+      return {};
+    }
+    LabelVolume read_label_volume(const std::filesystem::path&) override { return {}; }
+    SurfaceMesh isosurface(const MaskVolume&) override { return {}; }
+    SurfaceMesh balloon(const SurfaceMesh& organ, Index, std::vector<std::string>&) override { return organ; }
+    std::shared_ptr<const SmrmTree> organ_tree(const OrganTreeRequest& r,
+                                               std::vector<std::string>&) override {
+      seen = r;
+      throw InvalidInput("recorded");
+    }
+  } loader;
+  struct NoBuilders : Recorder {
+    std::shared_ptr<const SmrmTree> organ_tree(const OrganTreeRequest& r,
+                                               std::vector<std::string>& n) override {
+      return SceneLoader::organ_tree(r, n);
+    }
+  } bare;
+  const auto dir = testing::temp_dir("scene-organ-tree");
+  std::ofstream(dir / "y.mha") << "# placeholder\n";
+  std::ofstream(dir / "y.obj") << "# placeholder\n";
+  const std::string mask =
+      R"({"model": {"kind": "smrm", "atoms": 16, "source": {"segmentation": {"file": "y.mha", "label": 3,
+         "branches": "all"}}}, "loads": [{"node": 0, "direction": "inward_normal", "magnitude": 0.1}]})";
+  std::string e = build_error(mask, &loader, dir);
+  EXPECT_NE(e.find("model.source.segmentation: recorded"), std::string::npos) << e;
+  EXPECT_EQ(loader.seen.segmentation, dir / "y.mha");
+  EXPECT_TRUE(loader.seen.mesh.empty());
+  EXPECT_EQ(loader.seen.label, 3);
+  EXPECT_EQ(loader.seen.smrm.atoms, 16);
+  EXPECT_TRUE(loader.seen.blend);
+  EXPECT_EQ(loader.seen.blend_spacing, 0.0);
+  build_error(with("\"branches\": \"all\"", "\"branches\": \"all\", \"blend\": false", mask), &loader, dir);
+  EXPECT_FALSE(loader.seen.blend);
+  const std::string mesh = with(R"("segmentation": {"file": "y.mha", "label": 3,)",
+                                R"("mesh": {"file": "y.obj", "unit": "cm",)", mask);
+  e = build_error(mesh, &loader, dir);
+  EXPECT_NE(e.find("model.source.mesh: recorded"), std::string::npos) << e;
+  EXPECT_EQ(loader.seen.mesh, dir / "y.obj");
+  EXPECT_EQ(loader.seen.mesh_unit, LengthUnit::Centimetre);
+  EXPECT_TRUE(loader.seen.blend);
+  e = build_error(mask, &bare, dir);
+  EXPECT_NE(
+      e.find("model.source.segmentation: a vessel tree from a mesh or a segmentation needs the builders"),
+      std::string::npos)
+      << e;
+}
+
 TEST(SceneRun, KidneyPhantomReproducesThePrototypeValuesOfSection7_1) {
   const BuiltScene b = build_scene(parse_scene(kKidney, ".", "t.json"), nullptr);
   const SceneResult r = run_scene(b);

@@ -6,7 +6,9 @@
 //   BuiltScene built = build_scene(scene, &loader);   // body, resolved loads, simulation settings
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,18 @@
 #include "medspring/scene/scene.hpp"
 
 namespace medspring {
+
+/// A vessel tree from a mesh or a segmentation ("kind": "smrm", "branches": "all"): what the loader's
+/// organ_tree builds, as `medspring build vessel --mesh F | --segmentation F --branches all` does.
+struct OrganTreeRequest {
+  std::filesystem::path mesh;  // a closed (or open-ended tube) surface mesh, or
+  LengthUnit mesh_unit = LengthUnit::Millimetre;
+  std::filesystem::path segmentation;  // a label volume (world mm) and its label
+  std::int32_t label = 1;
+  SmrmSettings smrm{};         // atoms, spokes, bending, chain
+  bool blend = true;           // the watertight surface fitted to the wall; false: one open tube per branch
+  double blend_spacing = 0.0;  // mm between the rings of its path tubes (0 = the atom spacing)
+};
 
 /// File access and surface meshing needed by file-based sources. Every function throws (IoError,
 /// InvalidInput) naming the file at fault.
@@ -45,6 +59,13 @@ class SceneLoader {
   /// and the Python module's unite the tubes.
   virtual SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
                                    std::vector<std::string>& notes);
+  /// The vessel tree of a mesh or a segmentation, built as `medspring build vessel --branches all` builds
+  /// it (builders' build_vessel: holes of a mask filled, the skeleton re-centred in its wall sections, the
+  /// watertight surface fitted to the wall; docs/vessels.md); `notes` receives the build's notes and
+  /// warnings. This default refuses (a loader without the builders layer); the medspring command's and
+  /// the Python module's call build_vessel.
+  virtual std::shared_ptr<const SmrmTree> organ_tree(const OrganTreeRequest& request,
+                                                     std::vector<std::string>& notes);
 };
 
 /// A scene whose model is built and whose loads are resolved on surface nodes.

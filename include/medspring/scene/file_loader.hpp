@@ -37,6 +37,8 @@ struct SceneFileAccess {
   std::function<VolumetricMesh(const SurfaceMesh&, Index)> tetrahedralize;     // fem
   std::function<SurfaceMesh(const CenterlineTree&, const SmrmTree&, double, std::vector<std::string>&)>
       tree_surface;  // builders (CGAL union of the path tubes)
+  std::function<std::shared_ptr<const SmrmTree>(const OrganTreeRequest&, std::vector<std::string>&)>
+      organ_tree;  // builders (build_vessel of a mesh / segmentation, all branches)
 };
 
 class CachingSceneLoader : public SceneLoader {
@@ -52,6 +54,8 @@ class CachingSceneLoader : public SceneLoader {
   VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override;
   SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
                            std::vector<std::string>& notes) override;
+  std::shared_ptr<const SmrmTree> organ_tree(const OrganTreeRequest& request,
+                                             std::vector<std::string>& notes) override;
 
  private:
   SceneFileAccess access_;
