@@ -6,6 +6,7 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <numbers>
@@ -24,6 +25,42 @@ using cgal_detail::FD;
 using cgal_detail::from_cgal;
 using cgal_detail::Mesh;
 using cgal_detail::to_cgal;
+
+// The mesh in a canonical numbering: vertices in lexicographic (x, y, z) order, each face rotated to start
+// at its smallest vertex (orientation kept), faces in lexicographic order. The corefinement's output order
+// can change from one call to the next for the same inputs (seen on the Y phantoms and the VMR tree), which
+// would make a scene's load on a node index press a different point from run to run; the geometry does
+// not change, so this order is reproducible.
+void canonical_order(SurfaceMesh& s) {
+  const Index n = s.V.rows(), nf = s.F.rows();
+  std::vector<Index> order(static_cast<std::size_t>(n));
+  for (Index a = 0; a < n; ++a) order[static_cast<std::size_t>(a)] = a;
+  std::sort(order.begin(), order.end(), [&](Index a, Index b) {
+    for (int c = 0; c < 3; ++c)
+      if (s.V(a, c) != s.V(b, c)) return s.V(a, c) < s.V(b, c);
+    return a < b;
+  });
+  std::vector<Index> rank(static_cast<std::size_t>(n));
+  decltype(s.V) V(n, 3);
+  for (Index r = 0; r < n; ++r) {
+    rank[static_cast<std::size_t>(order[static_cast<std::size_t>(r)])] = r;
+    V.row(r) = s.V.row(order[static_cast<std::size_t>(r)]);
+  }
+  std::vector<std::array<Index, 3>> faces(static_cast<std::size_t>(nf));
+  for (Index f = 0; f < nf; ++f) {
+    std::array<Index, 3> t{rank[static_cast<std::size_t>(s.F(f, 0))],
+                           rank[static_cast<std::size_t>(s.F(f, 1))],
+                           rank[static_cast<std::size_t>(s.F(f, 2))]};
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};  // rotate: orientation kept
+    faces[static_cast<std::size_t>(f)] = t;
+  }
+  std::sort(faces.begin(), faces.end());
+  s.V = std::move(V);
+  for (Index f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c)
+      s.F(f, c) =
+          static_cast<MatX3i::Scalar>(faces[static_cast<std::size_t>(f)][static_cast<std::size_t>(c)]);
+}
 
 }  // namespace
 
@@ -63,6 +100,7 @@ SurfaceMesh union_of_closed_meshes(const std::vector<SurfaceMesh>& parts, const 
             ")");
   }
   if (signed_volume(s.V, s.F) < 0.0) s.F.col(1).swap(s.F.col(2));
+  canonical_order(s);
   return s;
 }
 

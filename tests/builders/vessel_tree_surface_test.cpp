@@ -7,6 +7,7 @@
 
 #include "medspring/builders/vessel_build.hpp"
 #include "medspring/core/error.hpp"
+#include "medspring/geometry/phantoms.hpp"
 #include "medspring/meshing/mesh_repair.hpp"
 #include "medspring/meshing/mesh_union.hpp"
 #include "medspring/models/model_package.hpp"
@@ -107,6 +108,30 @@ TEST(VesselTreeSurface, SurfaceFollowsTheLoadedTreeAndSurvivesAPackage) {
   MatX3 S2;
   back->map_to_surface(st, S2);
   EXPECT_LE((S2 - S).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// The union's numbering is canonical (vertices in coordinate order, faces sorted): the same solids give
+// the same mesh, node for node, whatever the parts' own numbering -- a scene's load on a node index of a
+// watertight tree presses the same point in every run.
+TEST(VesselTreeSurface, UnionNumberingIsCanonical) {
+  SurfaceMesh a = icosphere(2, 10.0), b = icosphere(2, 8.0);
+  for (Index v = 0; v < b.num_vertices(); ++v) b.V.row(v) += Vec3(9.0, 1.0, 0.5).transpose();
+  const SurfaceMesh u = union_of_closed_meshes({a, b}, "two balls");
+  SurfaceMesh c = b;  // b with its vertices numbered backwards
+  const Index n = b.num_vertices();
+  for (Index v = 0; v < n; ++v) c.V.row(n - 1 - v) = b.V.row(v);
+  for (Index f = 0; f < b.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) c.F(f, k) = static_cast<int>(n - 1 - b.F(f, k));
+  const SurfaceMesh again = union_of_closed_meshes({a, b}, "two balls"),
+                    relabelled = union_of_closed_meshes({a, c}, "two balls");
+  ASSERT_EQ(again.V.rows(), u.V.rows());
+  EXPECT_EQ(again.V, u.V);
+  EXPECT_EQ(again.F, u.F);
+  ASSERT_EQ(relabelled.V.rows(), u.V.rows());
+  EXPECT_EQ(relabelled.V, u.V);
+  EXPECT_EQ(relabelled.F, u.F);
+  for (Index v = 1; v < u.num_vertices(); ++v) EXPECT_LE(u.V(v - 1, 0), u.V(v, 0));  // coordinate order
+  EXPECT_GT(signed_volume(u.V, u.F), 0.0);
 }
 
 TEST(VesselTreeSurface, BlendNeedsATree) {

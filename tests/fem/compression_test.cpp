@@ -17,13 +17,8 @@
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/static_solve.hpp"
+#include "spring_kernel.hpp"  // the force pass with the stiffening optional (src/physics)
 #include "volumetric_fixtures.hpp"
-
-namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
-double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
-double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
-                       double* rows);
-}  // namespace medspring::detail
 
 using namespace medspring;
 using medspring::testing::box_surface;
@@ -261,9 +256,10 @@ TEST(Compression, StableStepBoundsTheCompressedCubesOmegaMax) {
   MatX3 fo(M.num_nodes(), 3);
   fo.setZero();
   const double s_global = detail::internal_forces(M, x, MatX3::Zero(M.num_nodes(), 3), fo, true);
-  VecX rows = VecX::Zero(M.num_nodes());
+  VecX rows = VecX::Zero(M.num_nodes() + M.volume.size());  // the local rule's scratch (State::stiff_rows)
+  const detail::LocalStiffening local{rows.data(), StepSettings{}.dt, StepSettings{}.safety};
   fo.setZero();
-  const double s_local = detail::internal_forces(M, x, MatX3::Zero(M.num_nodes(), 3), fo, true, rows.data());
+  const double s_local = detail::internal_forces(M, x, MatX3::Zero(M.num_nodes(), 3), fo, true, &local);
   const double w2r = M.omega_rest * M.omega_rest;
   std::cout << "cube c = 16, 0.6 N: omega_max^2 / omega_rest^2 = " << w2 / w2r << ", stiffening global "
             << s_global << ", local " << s_local << "\n";

@@ -228,8 +228,9 @@ TEST(DeclaredParameters, EveryLoadAndToolKeyRoundTripsThroughASceneFile) {
     EXPECT_NE(loads.find(cat("|", p.json_name(), "|")), std::string::npos) << p.name << " in " << loads;
   });
   for_each_field(kConstToolEntry, [&](const ParamSpec& p, const auto&) {
-    if (p.name != "path_file")
+    if (p.name != "path_file") {
       EXPECT_NE(tools.find(cat("|", p.json_name(), "|")), std::string::npos) << p.name << " in " << tools;
+    }
   });
   for_each_field(kConstToolKeyframeEntry, [&](const ParamSpec& p, const auto&) {
     EXPECT_NE(tools.find(cat("|", p.json_name(), "|")), std::string::npos) << p.name << " in " << tools;
