@@ -32,7 +32,7 @@ using cgal_detail::to_cgal;
 // would make a scene's load on a node index press a different point from run to run; the geometry does
 // not change, so this order is reproducible.
 void canonical_order(SurfaceMesh& s) {
-  const Index n = s.V.rows(), nf = s.F.rows();
+  const Index n = s.num_vertices(), nf = s.num_faces();
   std::vector<Index> order(static_cast<std::size_t>(n));
   for (Index a = 0; a < n; ++a) order[static_cast<std::size_t>(a)] = a;
   std::sort(order.begin(), order.end(), [&](Index a, Index b) {
