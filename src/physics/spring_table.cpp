@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cstdint>
+#include <cstring>
 #include <map>
 #include <type_traits>
 
@@ -343,8 +343,10 @@ bool classify(const std::vector<R>& a, const std::vector<R>& b, const std::vecto
   std::vector<unsigned short> out(a.size());
   std::vector<R> va, vb, vc;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    const std::array<Bits, 3> key{std::bit_cast<Bits>(a[i]), std::bit_cast<Bits>(b[i]),
-                                  std::bit_cast<Bits>(c[i])};
+    std::array<Bits, 3> key;  // the bit patterns (memcpy: the wasm toolchain's libc++ has no std::bit_cast)
+    std::memcpy(&key[0], &a[i], sizeof(Bits));
+    std::memcpy(&key[1], &b[i], sizeof(Bits));
+    std::memcpy(&key[2], &c[i], sizeof(Bits));
     auto [it, fresh] = index.try_emplace(key, static_cast<int>(va.size()));
     if (fresh) {
       if (static_cast<int>(va.size()) == max_classes) return false;
