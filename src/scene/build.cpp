@@ -201,8 +201,8 @@ struct Builder {
     const SceneModel& m = scene.model;
     std::shared_ptr<VolumetricBody> b;
     try {
-      b = std::make_shared<VolumetricBody>(loader->tetrahedralize(surface, m.volumetric.mesh_nodes), m.volumetric,
-                                           name);
+      b = std::make_shared<VolumetricBody>(loader->tetrahedralize(surface, m.volumetric.mesh_nodes),
+                                           m.volumetric, name);
     } catch (const InvalidInput& e) {
       fail("model", e.what());
     }
