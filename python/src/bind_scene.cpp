@@ -40,7 +40,7 @@
 #include "medspring/meshing/isosurface.hpp"
 #endif
 #ifdef MEDSPRING_PYTHON_WITH_BUILDERS
-#include "medspring/builders/vessel_build.hpp"
+#include "medspring/builders/scene_organ_tree.hpp"
 #endif
 
 namespace medspring::python {
@@ -53,31 +53,6 @@ namespace {
 // built, the meshing layer's balloon surfaces and isosurfaces and the fem layer's TetGen. Meshes and
 // balloons are cached for the life of the runner, so a worker builds the real kidney's 458-node balloon
 // once for a whole study.
-#ifdef MEDSPRING_PYTHON_WITH_BUILDERS
-// A scene's vessel tree from a mesh or a segmentation: build_vessel with the settings of
-// `medspring build vessel --branches all` (docs/vessels.md), its notes and warnings into `notes`.
-std::shared_ptr<const SmrmTree> organ_tree_of(const OrganTreeRequest& r, std::vector<std::string>& notes) {
-  VesselBuildSettings st;
-  if (!r.mesh.empty()) {
-    st.source.mesh = r.mesh;
-    st.source.unit = r.mesh_unit;
-  } else {
-    st.source.mask = r.segmentation;
-    st.source.label = r.label;
-  }
-  st.all_branches = true;
-  st.no_blend = !r.blend;
-  st.blend_spacing = r.blend_spacing;
-  st.smrm = r.smrm;
-  VesselBuild v = build_vessel(st);
-  for (const auto& n : v.summary.notes) notes.push_back(n);
-  for (const auto& w : v.summary.warnings) notes.push_back("warning: " + w);
-  notes.push_back(cat("rebuilt surface vs input: Hausdorff ", v.summary.hausdorff_mm, " mm, mean ",
-                      v.summary.mean_distance_mm, " mm; away from the cut ends ", v.summary.away.hausdorff_mm,
-                      " mm"));
-  return v.tree;
-}
-#endif
 
 SceneFileAccess file_access() {
   SceneFileAccess a;
@@ -112,7 +87,7 @@ SceneFileAccess file_access() {
     return std::move(r.mesh);
   };
   a.organ_tree = [](const OrganTreeRequest& r, std::vector<std::string>& notes) {
-    return organ_tree_of(r, notes);  // `medspring build vessel --mesh F | --segmentation F --branches all`
+    return scene_organ_tree(r, notes);  // `medspring build vessel --mesh F | --segmentation F --branches all`
   };
 #endif
   return a;

@@ -42,6 +42,8 @@ namespace {
 
 // Outcome of one guarded substep (§2.5).
 enum class Substep { Ok, TooFast, NonFinite };
+static_assert(static_cast<int>(Substep::TooFast) == 1 &&
+              static_cast<int>(Substep::NonFinite) == 2);  // advance_nodes
 
 // 1 / (m + h d) per node for the substep h (cached while h stays the same).
 void refresh_step_coefficients(const Model& m, State& st, double h) {
@@ -54,32 +56,10 @@ void refresh_step_coefficients(const Model& m, State& st, double h) {
 
 using detail::undo_symplectic;
 
-// One symplectic Euler substep with implicit diagonal damping (§2.1) of the free nodes fr[0 .. nf), forces
-// in st.f, coefficients refreshed for h. Returns TooFast / NonFinite (and restores the previous positions
-// and velocities of the nodes already advanced) if a velocity exceeded v_max or became non-finite.
+// One symplectic Euler substep of the free nodes fr[0 .. nf) (detail::advance_nodes, spring_kernel.hpp).
 template <bool Guard>
 Substep symplectic_range(const Model& m, State& st, double h, double vmax2, const Index* fr, Index nf) {
-  const double* G = st.f.data();
-  const double* Mv = m.mass.data();
-  const double* C = st.step_coef.data();
-  double* X = st.x.data();
-  double* V = st.v.data();
-  for (Index k = 0; k < nf; ++k) {
-    const Index a = fr[k], q = 3 * a;
-    double vn[3];
-    const double v2 = hd::symplectic_velocity(Mv[a], C[a], h, V + q, G + q, vn);
-    if constexpr (Guard) {
-      if (!hd::velocity_ok(v2, vmax2)) {  // also catches NaN
-        undo_symplectic(m, st, h, fr, k);
-        return std::isfinite(v2) ? Substep::TooFast : Substep::NonFinite;
-      }
-    }
-    V[q] = vn[0];
-    V[q + 1] = vn[1];
-    V[q + 2] = vn[2];
-    hd::symplectic_position(h, X + q, vn, X + q);
-  }
-  return Substep::Ok;
+  return static_cast<Substep>(detail::advance_nodes<Guard>(m, st, h, vmax2, fr, nf));
 }
 
 template <bool Guard>

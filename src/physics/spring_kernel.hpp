@@ -2,6 +2,8 @@
 // threaded step (integrators.cpp) so that both evaluate every spring with the same arithmetic.
 #pragma once
 
+#include <cmath>
+
 #include "medspring/physics/kernels.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/state.hpp"
@@ -79,6 +81,34 @@ inline void undo_symplectic(const Model& m, State& st, double h, const Index* fr
       V[p + d] = (V[p + d] / C[b] - h * G[p + d]) / Mv[b];
     }
   }
+}
+
+/// One symplectic Euler substep with implicit diagonal damping (§2.1) of the free nodes fr[0 .. nf), forces
+/// in st.f, coefficients st.step_coef refreshed for h. Returns 0 (ok), or 1 (a velocity over v_max) / 2
+/// (non-finite) with Guard, after restoring the nodes already advanced (undo_symplectic).
+template <bool Guard>
+int advance_nodes(const Model& m, State& st, double h, double vmax2, const Index* fr, Index nf) {
+  const double* G = st.f.data();
+  const double* Mv = m.mass.data();
+  const double* C = st.step_coef.data();
+  double* X = st.x.data();
+  double* V = st.v.data();
+  for (Index k = 0; k < nf; ++k) {
+    const Index a = fr[k], q = 3 * a;
+    double vn[3];
+    const double v2 = hd::symplectic_velocity(Mv[a], C[a], h, V + q, G + q, vn);
+    if constexpr (Guard) {
+      if (!hd::velocity_ok(v2, vmax2)) {  // also catches NaN
+        undo_symplectic(m, st, h, fr, k);
+        return std::isfinite(v2) ? 1 : 2;
+      }
+    }
+    V[q] = vn[0];
+    V[q + 1] = vn[1];
+    V[q + 2] = vn[2];
+    hd::symplectic_position(h, X + q, vn, X + q);
+  }
+  return 0;
 }
 
 /// internal_forces (forces.hpp) with the stiffening max computed only when `stiffening` (else 1 is

@@ -128,32 +128,6 @@ int advance_range(const Model& m, State& st, double h, double vmax2, const std::
   return kOk;
 }
 
-// The same for the nodes fr[0 .. nf) (the boundary nodes of a thread).
-template <bool Guard>
-int advance_list(const Model& m, State& st, double h, double vmax2, const Index* fr, Index nf) {
-  const double* G = st.f.data();
-  const double* Mv = m.mass.data();
-  const double* C = st.step_coef.data();
-  double* X = st.x.data();
-  double* V = st.v.data();
-  for (Index k = 0; k < nf; ++k) {
-    const Index a = fr[k], q = 3 * a;
-    double vn[3];
-    const double v2 = hd::symplectic_velocity(Mv[a], C[a], h, V + q, G + q, vn);
-    if constexpr (Guard) {
-      if (!hd::velocity_ok(v2, vmax2)) {
-        undo_symplectic(m, st, h, fr, k);
-        return std::isfinite(v2) ? kTooFast : kNonFinite;
-      }
-    }
-    V[q] = vn[0];
-    V[q + 1] = vn[1];
-    V[q + 2] = vn[2];
-    hd::symplectic_position(h, X + q, vn, X + q);
-  }
-  return kOk;
-}
-
 // f_i += t e, f_j -= t e for the springs [0, nb) of a chunk, in spring order. The force of the end i of a
 // run of springs with the same end i stays in registers over the run (loaded at its start, stored at its
 // end, every other update of that node made to the registers too): the same additions in the same order
@@ -291,8 +265,8 @@ int threaded_substep(const Model& m, State& st, ThreadedStep& P, double h, doubl
     auto boundary = [&](int t) {
       ThreadedStep::Part& p = P.part[static_cast<std::size_t>(t)];
       const auto nb = static_cast<Index>(p.boundary.size());
-      p.code2 = guard ? advance_list<true>(m, st, h, vmax2, p.boundary.data(), nb)
-                      : advance_list<false>(m, st, h, vmax2, p.boundary.data(), nb);
+      p.code2 = guard ? advance_nodes<true>(m, st, h, vmax2, p.boundary.data(), nb)
+                      : advance_nodes<false>(m, st, h, vmax2, p.boundary.data(), nb);
     };
     P.pool.run(boundary);
     phase2 = true;
