@@ -25,6 +25,9 @@ Engine::Engine(const std::vector<const Model*>& models, const StepSettings& sett
     if (models[b]->bending.size() > 0)
       throw GpuError(cat("GPU: model '", models[b]->name, "' has bending terms (", models[b]->bending.size(),
                          "), which the GPU path does not have; use ", kCpuAlternative));
+    if (models[b]->volume.size() > 0)
+      throw GpuError(cat("GPU: model '", models[b]->name, "' has volume terms (", models[b]->volume.size(),
+                         " tetrahedra), which the GPU path does not have; use ", kCpuAlternative));
     if (models[b]->compression.size() > 0)
       throw GpuError(cat("GPU: model '", models[b]->name, "' has compression-stiffening terms (",
                          models[b]->compression.size(), "), which the GPU path does not have; use ",

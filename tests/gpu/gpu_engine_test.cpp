@@ -94,6 +94,21 @@ TEST(GpuErrors, BendingTermsAndTheImplicitIntegratorAreRefusedBeforeAnyDeviceWor
   b.add_bending(0, 1, 2, 0.01);
   const Model bent = b.build();
   EXPECT_THROW(gpu::Engine({&bent}, StepSettings{}), gpu::GpuError);
+  ModelBuilder v("tet");  // a volume term (the volumetric kind): refused, never silently dropped
+  v.add_node(Vec3(0, 0, 0), 0.3, 0.15, 0.02, true);
+  v.add_node(Vec3(3, 0, 0), 0.3, 0.15, 0.02);
+  v.add_node(Vec3(0, 3, 0), 0.3, 0.15, 0.02);
+  v.add_node(Vec3(0, 0, 3), 0.3, 0.15, 0.02);
+  for (Index i = 0; i < 4; ++i)
+    for (Index j = i + 1; j < 4; ++j) v.add_spring(i, j, 0.05, 0.0, 3.0);
+  v.add_volume(0, 1, 2, 3, 0.1);
+  const Model tet = v.build();
+  try {
+    gpu::Engine e({&tet}, StepSettings{});
+    ADD_FAILURE() << "a model with volume terms was accepted";
+  } catch (const gpu::GpuError& e) {
+    EXPECT_NE(std::string(e.what()).find("volume terms"), std::string::npos) << e.what();
+  }
   const Model m = tube_model(6, 8);
   StepSettings implicit;
   implicit.integrator = Integrator::ImplicitEuler;
