@@ -61,6 +61,15 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
       o.torch = false;
     } else if (a == "--compact") {
       o.compact = true;
+    } else if (a == "--gather") {
+      o.gathers.clear();
+      std::stringstream ss(value(i));
+      for (std::string item; std::getline(ss, item, ',');) {
+        const long g = number(item, "--gather");
+        require(g == 1 || g == 2 || g == 4, "bench --gpu: --gather: each value must be 1, 2 or 4 (got ", g,
+                ")");
+        o.gathers.push_back(static_cast<int>(g));
+      }
     } else if (a == "--out") {
       o.out = value(i);
     } else if (a == "--kidney") {
@@ -70,7 +79,8 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
     } else {
       throw InvalidInput(
           cat("bench --gpu: unknown argument '", a,
-              "' (expected --sizes, --batch, --kidney, --cpu-max, --no-torch, --compact, --out, --device)"));
+              "' (expected --sizes, --batch, --kidney, --cpu-max, --no-torch, --compact, --gather, --out, "
+              "--device)"));
     }
   }
   return o;
@@ -259,6 +269,29 @@ double torch_step(const Model& m, const std::vector<PointLoad>& loads, double h,
 
 }  // namespace
 
+namespace {
+
+// The batch case's kernels: grid and one block per model; with --compact the same with compact parameters
+// (as many classes as the kidney needs), the grid kernel for each gather batch of --gather.
+struct KidneyVariant {
+  gpu::Options::Kernel kernel;
+  bool compact;
+  int gather;
+  std::string name;
+};
+
+std::vector<KidneyVariant> kidney_variants(const GpuBenchOptions& o) {
+  using K = gpu::Options::Kernel;
+  std::vector<KidneyVariant> v{{K::Grid, false, 1, "grid"}, {K::PerBlock, false, 1, "block"}};
+  if (!o.compact) return v;
+  for (const int g : o.gathers)
+    v.push_back({K::Grid, true, g, g > 1 ? cat("grid-compact-g", g) : "grid-compact"});
+  v.push_back({K::PerBlock, true, 1, "block-compact"});
+  return v;
+}
+
+}  // namespace
+
 int run_gpu_bench(const GpuBenchOptions& o) {
   const gpu::DeviceInfo dev = gpu::require_device(o.device);  // throws: no silent fallback
   std::cout << "GPU: " << dev.name << " (compute " << dev.major << "." << dev.minor << ", "
@@ -305,43 +338,50 @@ int run_gpu_bench(const GpuBenchOptions& o) {
       cpu_us = time_frames([&] { step(m, st, s, &loads); }, 2.0);
       cpu_subs = static_cast<double>(st.substeps - before) / static_cast<double>(st.frames - frames_before);
     }
-    for (const int variant : {0, 1, 2, 3}) {
-      const bool compact = variant >= 2;  // variants 2, 3: compact parameters (--compact), same precisions
-      if (compact && !o.compact) break;
-      const gpu::Precision p = variant % 2 == 0 ? gpu::Precision::Double : gpu::Precision::Float;
-      gpu::Options go;
-      go.precision = p;
-      go.device = o.device;
-      go.compact_params = compact;
-      gpu::Engine e({&m}, s, go);
-      e.set_loads(0, loads);
-      for (int f = 0; f < 20; ++f) e.step();
-      const std::uint64_t sub0 = e.substeps(), fr0 = e.frames();
-      const double frame_us = time_frames([&] { e.step(); }, 2.0);
-      const double subs = static_cast<double>(e.substeps() - sub0) / static_cast<double>(e.frames() - fr0);
-      const double substep_us = e.time_substeps(m.num_nodes() <= 200000 ? 200 : 20, 10);
-      const double gbs = static_cast<double>(e.device_bytes()) / (substep_us * 1e-6) / 1e9;
-      double torch_us = -1;
-      std::string why = torch_why;
-      if (torch_ok && !compact)
-        torch_us = torch_step(m, loads, s.dt / subs, gpu::to_string(p), work / "torch_step", why);
-      const double cpu_sub_us = cpu_us > 0 ? cpu_us / cpu_subs : -1;
-      const std::string key = gpu::to_string(p) + (compact ? "c" : "");  // fp64c: compact parameters
-      std::printf("%-10s %-5s %12.2f %12.2f %10.0f %7.0f%% %12s %12s\n", size_name(m.num_nodes()).c_str(),
-                  key.c_str(), substep_us, frame_us, gbs, 100.0 * gbs / copy_gbs,
-                  torch_us > 0 ? cat(torch_us).c_str() : "-", cpu_sub_us > 0 ? cat(cpu_sub_us).c_str() : "-");
-      std::fflush(stdout);
-      js << (first ? "\n" : ",\n") << "    {\"name\": \"" << size_name(m.num_nodes())
-         << "\", \"nodes\": " << m.num_nodes() << ", \"springs\": " << m.num_springs()
-         << ", \"precision\": \"" << key << "\", \"build_s\": " << build_s
-         << ", \"substeps_per_frame\": " << subs << ", \"gpu_" << key << "_substep_us\": " << substep_us
-         << ", \"gpu_frame_us\": " << frame_us << ", \"device_bytes\": " << e.device_bytes()
-         << ", \"bandwidth_gbs\": " << gbs << ", \"fraction_of_copy\": " << gbs / copy_gbs;
-      if (torch_us > 0) js << ", \"torch_" << key << "_substep_us\": " << torch_us;
-      if (cpu_sub_us > 0) js << ", \"cpu_substep_us\": " << cpu_sub_us << ", \"cpu_frame_us\": " << cpu_us;
-      js << "}";
-      first = false;
-    }
+    // Variants: full parameter arrays (fp64, fp32), then with --compact compact parameters for each gather
+    // batch of --gather (fp64c, fp32c; fp64c-g4: four entries gathered at a time).
+    std::vector<std::pair<bool, int> > variants{{false, 1}};
+    if (o.compact)
+      for (const int g : o.gathers) variants.emplace_back(true, g);
+    for (const auto& [compact, gather] : variants)
+      for (const gpu::Precision p : {gpu::Precision::Double, gpu::Precision::Float}) {
+        gpu::Options go;
+        go.precision = p;
+        go.device = o.device;
+        go.compact_params = compact;
+        go.gather_batch = gather;
+        gpu::Engine e({&m}, s, go);
+        e.set_loads(0, loads);
+        for (int f = 0; f < 20; ++f) e.step();
+        const std::uint64_t sub0 = e.substeps(), fr0 = e.frames();
+        const double frame_us = time_frames([&] { e.step(); }, compact ? 0.5 : 2.0);
+        const double subs = static_cast<double>(e.substeps() - sub0) / static_cast<double>(e.frames() - fr0);
+        const double substep_us = e.time_substeps(m.num_nodes() <= 200000 ? 200 : 20, 10);
+        const double gbs = static_cast<double>(e.device_bytes()) / (substep_us * 1e-6) / 1e9;
+        double torch_us = -1;
+        std::string why = torch_why;
+        if (torch_ok && !compact)
+          torch_us = torch_step(m, loads, s.dt / subs, gpu::to_string(p), work / "torch_step", why);
+        const double cpu_sub_us = cpu_us > 0 ? cpu_us / cpu_subs : -1;
+        // fp64c: compact parameters; fp64c-g4: and four entries gathered at a time.
+        const std::string key =
+            gpu::to_string(p) + (compact ? "c" : "") + (gather > 1 ? cat("-g", gather) : "");
+        std::printf("%-10s %-5s %12.2f %12.2f %10.0f %7.0f%% %12s %12s\n", size_name(m.num_nodes()).c_str(),
+                    key.c_str(), substep_us, frame_us, gbs, 100.0 * gbs / copy_gbs,
+                    torch_us > 0 ? cat(torch_us).c_str() : "-",
+                    cpu_sub_us > 0 ? cat(cpu_sub_us).c_str() : "-");
+        std::fflush(stdout);
+        js << (first ? "\n" : ",\n") << "    {\"name\": \"" << size_name(m.num_nodes())
+           << "\", \"nodes\": " << m.num_nodes() << ", \"springs\": " << m.num_springs()
+           << ", \"precision\": \"" << key << "\", \"build_s\": " << build_s
+           << ", \"substeps_per_frame\": " << subs << ", \"gpu_" << key << "_substep_us\": " << substep_us
+           << ", \"gpu_frame_us\": " << frame_us << ", \"device_bytes\": " << e.device_bytes()
+           << ", \"bandwidth_gbs\": " << gbs << ", \"fraction_of_copy\": " << gbs / copy_gbs;
+        if (torch_us > 0) js << ", \"torch_" << key << "_substep_us\": " << torch_us;
+        if (cpu_sub_us > 0) js << ", \"cpu_substep_us\": " << cpu_sub_us << ", \"cpu_frame_us\": " << cpu_us;
+        js << "}";
+        first = false;
+      }
   }
   js << "\n  ]";
   if (o.batch > 0) {
@@ -358,13 +398,16 @@ int run_gpu_bench(const GpuBenchOptions& o) {
     // One kidney (the latency of a single organ: the haptic case) and the whole batch (the throughput).
     for (const int batch : {1, o.batch})
       for (const gpu::Precision p : {gpu::Precision::Double, gpu::Precision::Float})
-        for (const gpu::Options::Kernel kern : {gpu::Options::Kernel::Grid, gpu::Options::Kernel::PerBlock}) {
+        for (const KidneyVariant& kv : kidney_variants(o)) {
           const std::vector<const Model*> models(static_cast<std::size_t>(batch), &km);
           gpu::Options go;
           go.precision = p;
           go.device = o.device;
-          go.kernel = kern;
-          const char* kname = kern == gpu::Options::Kernel::PerBlock ? "block" : "grid";
+          go.kernel = kv.kernel;
+          go.compact_params = kv.compact;
+          go.compact_max_classes = 65536;  // the real kidney: a stiffness per spring (a per-spring table)
+          go.gather_batch = kv.gather;
+          const std::string kname = kv.name;
           gpu::Engine e(models, s, go);
           for (int b = 0; b < batch; ++b) {
             PointLoad L;
@@ -389,8 +432,8 @@ int run_gpu_bench(const GpuBenchOptions& o) {
           std::printf(
               "batch: %d %s (%d nodes each) %s, %s kernel: %.2f µs per substep, %.3g "
               "model-substeps/s; step() %.1f µs per frame\n",
-              batch, kidney_name.c_str(), static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(), kname,
-              substep_us, rate, frame_med);
+              batch, kidney_name.c_str(), static_cast<int>(km.num_nodes()), gpu::to_string(p).c_str(),
+              kname.c_str(), substep_us, rate, frame_med);
           js << (bfirst ? "\n" : ",\n") << "    {\"models\": " << batch << ", \"model\": \""
              << json_escape(kidney_name) << "\""
              << ", \"nodes_per_model\": " << km.num_nodes() << ", \"precision\": \"" << gpu::to_string(p)

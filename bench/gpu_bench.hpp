@@ -15,8 +15,9 @@ struct GpuBenchOptions {
   bool torch = true;             // the PyTorch step when `import torch` works and sees the GPU
   std::string out;               // folder for gpu_bench.json and gpu_bench.png ("" = none)
   int device = 0;
-  std::string kidney;    // a hybrid kidney model package (.msm) for the batch case ("" = the phantom)
-  bool compact = false;  // also time each tube with compact parameters (gpu::Options::compact_params)
+  std::string kidney;           // a hybrid kidney model package (.msm) for the batch case ("" = the phantom)
+  bool compact = false;         // also time each tube with compact parameters (gpu::Options::compact_params)
+  std::vector<int> gathers{1};  // gather batches (gpu::Options::gather_batch) timed with compact parameters
 };
 
 /// Runs the benchmark and prints the table. Throws gpu::GpuError (no device, ...) or InvalidInput.
@@ -24,7 +25,7 @@ struct GpuBenchOptions {
 int run_gpu_bench(const GpuBenchOptions& options);
 
 /// Parses "--sizes 1200,120000 --batch 2048 --kidney FILE.msm --cpu-max 1000000 --no-torch --compact
-/// --out DIR --device 0"
+/// --gather 1,2,4 --out DIR --device 0"
 /// (argv-style, the program name excluded). Throws InvalidInput naming the bad argument.
 GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args);
 

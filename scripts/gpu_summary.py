@@ -92,23 +92,31 @@ def main(argv):
             r[f"fraction_of_copy_{key}"] = t.get("fraction_of_copy")
             if t.get("cpu_substep_us"):
                 r["cpu_us"] = t["cpu_substep_us"]
+            # The fastest variant of each precision (fp64, fp64c, fp64c-g4, ...: bench --compact --gather).
+            base, us = key[:4], t.get(f"gpu_{key}_substep_us")
+            if us is not None and (r.get(f"best_{base}_us") is None or us < r[f"best_{base}_us"]):
+                r[f"best_{base}_us"], r[f"best_{base}_variant"] = us, key
         table = [rows[n] for n in sorted(rows)]
 
         def fmt(v, digits=3):
             return "—" if v is None else f"{v:.{digits}g}"
 
-        md += ["| nodes | GPU fp64 µs/substep | GPU fp32 | PyTorch fp64 | PyTorch fp32 | CPU 1 thread | "
-               "fp64 of copy bandwidth | step() frame fp64 µs |", "|---|---|---|---|---|---|---|---|"]
+        md += ["| nodes | GPU fp64 µs/substep | GPU fp32 | fastest fp64 (variant) | fastest fp32 (variant) | "
+               "PyTorch fp64 | PyTorch fp32 | CPU 1 thread | fp64 of copy bandwidth | step() frame fp64 µs |",
+               "|---|---|---|---|---|---|---|---|---|---|"]
         for r in table:
             md.append(f"| {r['nodes']:,} | {fmt(r.get('gpu_fp64_us'))} | {fmt(r.get('gpu_fp32_us'))} | "
+                      f"{fmt(r.get('best_fp64_us'))} ({r.get('best_fp64_variant', '—')}) | "
+                      f"{fmt(r.get('best_fp32_us'))} ({r.get('best_fp32_variant', '—')}) | "
                       f"{fmt(r.get('torch_fp64_us'))} | {fmt(r.get('torch_fp32_us'))} | {fmt(r.get('cpu_us'))} | "
                       f"{fmt(r.get('fraction_of_copy_fp64'), 2)} | {fmt(r.get('frame_fp64_us'))} |")
-        md.append("")
+        md += ["", "Variants: fp64 = full parameter arrays; c = compact parameters; -gN = N entries gathered at a "
+               "time. The targets below take each precision's fastest variant.", ""]
 
         def t_of(nodes, key):
             for r in table:
                 if near(r["nodes"], nodes):
-                    return r.get(f"gpu_{key}_us")
+                    return r.get(f"best_{key}_us", r.get(f"gpu_{key}_us"))
             return None
 
         for what, nodes, key, limit in TARGETS:
@@ -119,8 +127,8 @@ def main(argv):
             checks.append({"target": "effective bandwidth >= 70 % of copy at >= 1M nodes",
                            "met": all(r["fraction_of_copy_fp64"] >= 0.7 for r in big)})
         m1 = next((r for r in table if near(r["nodes"], 1_000_000)), None)
-        if m1 and m1.get("torch_fp64_us") and m1.get("gpu_fp64_us"):
-            ratio = m1["torch_fp64_us"] / m1["gpu_fp64_us"]
+        if m1 and m1.get("torch_fp64_us") and m1.get("best_fp64_us"):
+            ratio = m1["torch_fp64_us"] / m1["best_fp64_us"]
             checks.append({"target": f">= 8x faster than PyTorch at 1M nodes (fp64: {ratio:.1f}x)", "met": ratio >= 8})
         batch = bench.get("batch", [])
         if batch:

@@ -143,7 +143,7 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     Tc.k = T0.k;
     Tc.kp = T0.kp;
     Tc.ik = T0.ik;
-    if ((compact_table = compact_spring_params(Tc))) {
+    if ((compact_table = compact_spring_params(Tc, o.compact_max_classes))) {
       spring_cls.assign(Tc.cls, "allocating the spring classes", "uploading the spring classes");
       ck.assign(Tc.ck, "allocating the spring classes", "uploading the spring classes");
       ckp.assign(Tc.ckp, "allocating the spring classes", "uploading the spring classes");
@@ -155,7 +155,7 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     Nc.mass = N0.mass;
     Nc.damping = N0.damping;
     Nc.kr = N0.kr;
-    if ((compact_nodes = compact_node_params(Nc))) {
+    if ((compact_nodes = compact_node_params(Nc, o.compact_max_classes))) {
       node_cls.assign(Nc.cls, "allocating the node classes", "uploading the node classes");
       cmass.assign(Nc.cmass, "allocating the node classes", "uploading the node classes");
       cdamping.assign(Nc.cdamping, "allocating the node classes", "uploading the node classes");

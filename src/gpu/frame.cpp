@@ -48,6 +48,7 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   A.soft = soft;
   A.stiff = stiff;
   A.guard = settings.guard;
+  A.gather = options.gather_batch;
   A.stiff_bits = stiff_dev.p + (stiff ? kk * B : 0);
   A.scalars = scalars_dev.p;
   if (grid_rows > 0) {

@@ -50,7 +50,7 @@ __device__ inline void block_max_into(double s, double* warp_max, unsigned long 
   }
 }
 
-template <class R, bool Soft, bool Stiff>
+template <class R, bool Soft, bool Stiff, int U>
 __global__ void substep_kernel(SubstepArgs<R> A) {
   if (A.scalars->fail_first < A.substep) return;  // an earlier substep failed: buffers left as they were
   const int b = blockIdx.y;
@@ -81,7 +81,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
     // the lead's warp (blockDim is a multiple of 32), so the warp's barrier orders them before phase 2.
     R* parts = A.parts + A.parts_stride * b;
     if (r < rows)
-      code = hd::grid_split_gather<Soft, Stiff>(N, T, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off,
+      code = hd::grid_split_gather<Soft, Stiff, U>(N, T, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off,
                                                 A.xo + off, A.vo + off, parts, stiff);
     __syncwarp();
     if (r < rows) {
@@ -90,7 +90,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
       code = c > code ? c : code;
     }
   } else if (r < rows) {
-    code = hd::node_substep<Soft, Stiff>(N, T, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
+    code = hd::node_substep<Soft, Stiff, U>(N, T, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
                                          A.vo + off, stiff);
   }
   if (code != hd::kNodeOk && A.guard) {
@@ -166,7 +166,13 @@ template <class R, bool Soft, bool Stiff>
 cudaError_t launch(const SubstepArgs<R>& A, int block, cudaStream_t stream) {
   const int rows = A.split.rows > 0 ? A.split.rows : A.nodes.nodes;
   const dim3 grid(static_cast<unsigned>((rows + block - 1) / block), static_cast<unsigned>(A.batch));
-  substep_kernel<R, Soft, Stiff><<<grid, block, 0, stream>>>(A);
+  // The gather batch (Options::gather_batch, validated by the engine: 1, 2 or 4).
+  if (A.gather == 4)
+    substep_kernel<R, Soft, Stiff, 4><<<grid, block, 0, stream>>>(A);
+  else if (A.gather == 2)
+    substep_kernel<R, Soft, Stiff, 2><<<grid, block, 0, stream>>>(A);
+  else
+    substep_kernel<R, Soft, Stiff, 1><<<grid, block, 0, stream>>>(A);
   return cudaGetLastError();
 }
 

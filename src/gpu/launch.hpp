@@ -42,6 +42,7 @@ struct SubstepArgs {
   bool soft = false;                         // some spring is soft (clamped law)
   bool stiff = false;                        // evaluate the stiffening into stiff_bits
   bool guard = true;                         // flag |v| > v_max / non-finite into scalars
+  int gather = 1;                            // entries gathered at a time (hd::gather_spring_forces' U)
   unsigned long long* stiff_bits = nullptr;  // this substep's slots, model b at + b: double bits, atomicMax
   FrameScalars* scalars = nullptr;
   // The grid kernel's heavy rows split (hd::GridSplit, make_grid_split_table); split.rows == 0: one row

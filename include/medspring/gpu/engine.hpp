@@ -17,6 +17,7 @@
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/physics/model.hpp"
+#include "medspring/physics/spring_table.hpp"
 #include "medspring/physics/state.hpp"
 
 namespace medspring::gpu {
@@ -71,6 +72,14 @@ struct Options {
   /// same results bit for bit (checked on the CPU: SpringTable.CompactParametersGiveBitIdenticalSteps).
   /// Off by default until its speed is measured on a device (`medspring bench --gpu --compact`).
   bool compact_params = false;
+  /// The most distinct (k, k', 1/k) triples (and node triples) compact parameters take; more keep the
+  /// per-entry arrays. 1,024 (kCompactClasses) keeps the classes in L1; up to 65,536 (a 2-byte class) makes
+  /// the compact table a per-spring table for real meshes (the real kidney: a stiffness per spring).
+  int compact_max_classes = kCompactClasses;
+  /// Spring-table entries each thread of the grid kernel gathers at a time (1, 2 or 4): their other
+  /// ends' positions and parameters are loaded before any force is formed (hd::gather_spring_forces), so
+  /// that more loads are in flight; the sums are the same bit for bit for every value.
+  int gather_batch = 1;
 };
 
 /// The kernel a batch of `batch` models of `nodes` nodes runs on `device` (docs/gpu.md): PerBlock when

@@ -198,14 +198,46 @@ MEDSPRING_HD inline int row_node(const SpringTable<R>& T, int r) {
 
 /// Adds the spring forces on node a = row_node(T, r) (positions x, interleaved xyz) to f[0..3), in
 /// increasing spring index: the same terms, summed in the same order, as the CPU's serial spring pass.
-template <bool Soft, bool Stiff, class R>
+/// U > 1 (the gather batch, gpu::Options::gather_batch): U entries at a time have their other ends'
+/// positions, rest lengths and parameters loaded before any force is formed, so that a GPU thread has U
+/// independent gathers in flight instead of one (the gather is latency-bound once the table is compact);
+/// the forces are then added in entry order, so every U gives the same sums, bit for bit.
+template <bool Soft, bool Stiff, int U = 1, class R>
 MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, int a, const R* x, R& stiff,
                                               R* f) {
+  static_assert(U >= 1 && U <= 8, "gather batch: 1..8 entries");
   const int slice = r / kSlice;
   const int w = T.slice_width[slice];
   int e = T.slice_begin[slice] + (r - slice * kSlice);
   const R xa = x[3 * a], ya = x[3 * a + 1], za = x[3 * a + 2];
-  for (int j = 0; j < w; ++j, e += kSlice) {
+  int j = 0;
+  if constexpr (U > 1) {
+    for (; j + U <= w; j += U, e += U * kSlice) {
+      R dx[U], dy[U], dz[U], l0[U];  // registers: indexed by unrolled constants only
+#if defined(__CUDA_ARCH__)
+#pragma unroll
+#endif
+      for (int u = 0; u < U; ++u) {
+        const int eu = e + u * kSlice, b = T.other[eu];
+        dx[u] = x[3 * b] - xa;
+        dy[u] = x[3 * b + 1] - ya;
+        dz[u] = x[3 * b + 2] - za;
+        l0[u] = T.L0[eu];
+      }
+#if defined(__CUDA_ARCH__)
+#pragma unroll
+#endif
+      for (int u = 0; u < U; ++u) {
+        R k, kp, ik, fx, fy, fz;
+        spring_params(T, e + u * kSlice, k, kp, ik);
+        if (!spring_force<Soft, Stiff>(dx[u], dy[u], dz[u], l0[u], k, kp, ik, stiff, fx, fy, fz)) continue;
+        f[0] += fx;
+        f[1] += fy;
+        f[2] += fz;
+      }
+    }
+  }
+  for (; j < w; ++j, e += kSlice) {
     const int b = T.other[e];
     R k, kp, ik, fx, fy, fz;
     spring_params(T, e, k, kp, ik);
@@ -302,7 +334,7 @@ MEDSPRING_HD inline int advance_node(const NodeArrays<R>& N, int a, R h, R vmax2
 /// springs) and symplectic update with implicit damping, reading x, v and writing xo, vo. x and xo are
 /// distinct buffers (every node reads its neighbours' old positions); v and vo may be one buffer (a node
 /// reads only its own velocity, before writing it). A pinned node keeps x and v. Returns a kNode* code.
-template <bool Soft, bool Stiff, class R>
+template <bool Soft, bool Stiff, int U = 1, class R>
 MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R>& T, int r, R h, R vmax2,
                                      const R* loads, const R* x, const R* v, R* xo, R* vo, R& stiff) {
   const int a = row_node(T, r);
@@ -311,13 +343,13 @@ MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R
     keep_node(q, x, v, xo, vo);
     if constexpr (Stiff) {  // its springs still count for the stability measure
       R g[3] = {R(0), R(0), R(0)};
-      gather_spring_forces<Soft, true>(T, r, a, x, stiff, g);
+      gather_spring_forces<Soft, true, U>(T, r, a, x, stiff, g);
     }
     return kNodeOk;
   }
   R g[3];
   load_and_return_force(N, a, loads, x, g);
-  gather_spring_forces<Soft, Stiff>(T, r, a, x, stiff, g);
+  gather_spring_forces<Soft, Stiff, U>(T, r, a, x, stiff, g);
   return advance_node(N, a, h, vmax2, x, v, g, xo, vo);
 }
 
