@@ -271,22 +271,28 @@ double torch_step(const Model& m, const std::vector<PointLoad>& loads, double h,
 
 namespace {
 
-// The batch case's kernels: grid and one block per model; with --compact the same with compact parameters
-// (as many classes as the kidney needs), the grid kernel for each gather batch of --gather.
 struct KidneyVariant {
   gpu::Options::Kernel kernel;
   bool compact;
   int gather;
+  gpu::Options::BatchOrder order;
   std::string name;
 };
 
+// The batch case's kernels: grid (rows first: a model's row blocks side by side; models first: the same
+// rows of consecutive models side by side) and one block per model; with --compact the same with compact
+// parameters (as many classes as the kidney needs), the models-first grid kernel for each --gather batch.
 std::vector<KidneyVariant> kidney_variants(const GpuBenchOptions& o) {
   using K = gpu::Options::Kernel;
-  std::vector<KidneyVariant> v{{K::Grid, false, 1, "grid"}, {K::PerBlock, false, 1, "block"}};
+  constexpr auto rows = gpu::Options::BatchOrder::RowsFirst, models = gpu::Options::BatchOrder::ModelsFirst;
+  std::vector<KidneyVariant> v{{K::Grid, false, 1, rows, "grid-rows"},
+                               {K::Grid, false, 1, models, "grid"},
+                               {K::PerBlock, false, 1, models, "block"}};
   if (!o.compact) return v;
+  v.push_back({K::Grid, true, 1, rows, "grid-rows-compact"});
   for (const int g : o.gathers)
-    v.push_back({K::Grid, true, g, g > 1 ? cat("grid-compact-g", g) : "grid-compact"});
-  v.push_back({K::PerBlock, true, 1, "block-compact"});
+    v.push_back({K::Grid, true, g, models, g > 1 ? cat("grid-compact-g", g) : "grid-compact"});
+  v.push_back({K::PerBlock, true, 1, models, "block-compact"});
   return v;
 }
 
@@ -407,6 +413,7 @@ int run_gpu_bench(const GpuBenchOptions& o) {
           go.compact_params = kv.compact;
           go.compact_max_classes = 65536;  // the real kidney: a stiffness per spring (a per-spring table)
           go.gather_batch = kv.gather;
+          go.batch_order = kv.order;
           const std::string kname = kv.name;
           gpu::Engine e(models, s, go);
           for (int b = 0; b < batch; ++b) {

@@ -25,7 +25,7 @@
 #   scripts/gpu-check.sh              compile, then full when nvidia-smi sees a GPU.
 # GPU_CHECK_USE_DEPS=1 takes Eigen/GoogleTest/nlohmann_json from DEPS even where the system has them;
 # GPU_CHECK_CONFIGURE_ONLY=1 stops `full` after configuring (both: to try the GPU machine's path here);
-# GPU_BENCH_ARGS replaces the bench's arguments (default --batch 8448 --compact).
+# GPU_BENCH_ARGS replaces the bench's arguments (default --batch 8448 --compact); GPU_CHECK_BENCH_S its time limit (200).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${OUT:-$root/build-gpu-check}
@@ -188,7 +188,7 @@ EOF
   fi
   # (1) the issue's table: tube sizes, precisions, bandwidth, PyTorch and CPU, the kidney batch.
   # shellcheck disable=SC2086
-  want bench && run_stage bench 200 "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" \
+  want bench && run_stage bench "${GPU_CHECK_BENCH_S:-200}" "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" \
     ${GPU_BENCH_ARGS:---batch 8448 --compact} "${kidney_args[@]}"
   # (2) GPU against CPU, the study's batch path, the haptic loops (figures recorded in the XML and log).
   # shellcheck disable=SC2086

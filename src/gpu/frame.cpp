@@ -49,6 +49,10 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   A.stiff = stiff;
   A.guard = settings.guard;
   A.gather = options.gather_batch;
+  // gridDim.y is at most 65,535 row blocks (16.7M rows of 256): larger models keep rows on x.
+  A.models_first =
+      B > 1 && options.batch_order != Options::BatchOrder::RowsFirst &&
+      (static_cast<long long>(grid_rows > 0 ? grid_rows : n) + options.block - 1) / options.block <= 65535;
   A.stiff_bits = stiff_dev.p + (stiff ? kk * B : 0);
   A.scalars = scalars_dev.p;
   if (grid_rows > 0) {

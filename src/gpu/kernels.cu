@@ -53,8 +53,13 @@ __device__ inline void block_max_into(double s, double* warp_max, unsigned long 
 template <class R, bool Soft, bool Stiff, int U>
 __global__ void substep_kernel(SubstepArgs<R> A) {
   if (A.scalars->fail_first < A.substep) return;  // an earlier substep failed: buffers left as they were
-  const int b = blockIdx.y;
-  const int r = blockIdx.x * blockDim.x + threadIdx.x;  // table row
+  // Block order (SubstepArgs::models_first): blockIdx.x the model and blockIdx.y the row block, so that
+  // the blocks resident on a multiprocessor at once are the same rows of different models and share the
+  // table entries they read in L1; or blockIdx.x the row block (one model, or the old order).
+  const int b = A.models_first ? blockIdx.x : blockIdx.y;
+  const int row_block = A.models_first ? blockIdx.y : blockIdx.x;
+  const int row_blocks = A.models_first ? gridDim.y : gridDim.x;
+  const int r = row_block * blockDim.x + threadIdx.x;  // table row
   const bool split = A.split.rows > 0;                  // the same for every thread of the launch
   const int rows = split ? A.split.rows : A.nodes.nodes;
   R stiff = R(1);
@@ -66,7 +71,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
   R h = A.h;
   if (A.count_model) {  // each model its own substeps (uniform per block: blockIdx.y is the model)
     if (A.substep >= A.count_model[b]) {  // model b has taken its substeps: carry its state over
-      for (int q = r; q < A.nodes.nodes; q += gridDim.x * blockDim.x)
+      for (int q = r; q < A.nodes.nodes; q += row_blocks * blockDim.x)
         for (int c = 0; c < 3; ++c) {
           A.xo[off + 3ll * q + c] = A.x[off + 3ll * q + c];
           A.vo[off + 3ll * q + c] = A.v[off + 3ll * q + c];
@@ -165,7 +170,9 @@ __global__ void __launch_bounds__(kBlockThreads, 2) block_frame_kernel(BlockArgs
 template <class R, bool Soft, bool Stiff>
 cudaError_t launch(const SubstepArgs<R>& A, int block, cudaStream_t stream) {
   const int rows = A.split.rows > 0 ? A.split.rows : A.nodes.nodes;
-  const dim3 grid(static_cast<unsigned>((rows + block - 1) / block), static_cast<unsigned>(A.batch));
+  const auto row_blocks = static_cast<unsigned>((rows + block - 1) / block);
+  const auto models = static_cast<unsigned>(A.batch);
+  const dim3 grid = A.models_first ? dim3(models, row_blocks) : dim3(row_blocks, models);
   // The gather batch (Options::gather_batch, validated by the engine: 1, 2 or 4).
   if (A.gather == 4)
     substep_kernel<R, Soft, Stiff, 4><<<grid, block, 0, stream>>>(A);

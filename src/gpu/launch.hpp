@@ -43,6 +43,7 @@ struct SubstepArgs {
   bool stiff = false;                        // evaluate the stiffening into stiff_bits
   bool guard = true;                         // flag |v| > v_max / non-finite into scalars
   int gather = 1;                            // entries gathered at a time (hd::gather_spring_forces' U)
+  bool models_first = false;                 // grid x = model, y = row block (Options::batch_order)
   unsigned long long* stiff_bits = nullptr;  // this substep's slots, model b at + b: double bits, atomicMax
   FrameScalars* scalars = nullptr;
   // The grid kernel's heavy rows split (hd::GridSplit, make_grid_split_table); split.rows == 0: one row

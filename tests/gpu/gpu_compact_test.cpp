@@ -62,8 +62,9 @@ TEST(GpuCompact, TubeStatesEqualTheFullArraysWithFewerBytes) {
 }
 
 // The gather batch (Options::gather_batch 2, 4: entries loaded before any force is formed, summed in entry
-// order) gives the same states as one entry at a time; the real-mesh case: the kidney with as many classes
-// as it has stiffnesses (a per-spring table). CPU-side twin: HdKernels.GatherBatchesGiveBitIdenticalForces.
+// order) gives the states of one entry at a time, to rounding (the compiler may contract f += t e into an
+// FMA differently); the real-mesh case: the kidney with as many classes as it has stiffnesses (a
+// per-spring table). CPU-side twin: HdKernels.GatherBatchesGiveTheSameForces.
 TEST(GpuCompact, GatherBatchesAndPerSpringClassesGiveTheSameStates) {
   REQUIRE_GPU();
   const Model m = tube_model(40, 30);
@@ -72,11 +73,12 @@ TEST(GpuCompact, GatherBatchesAndPerSpringClassesGiveTheSameStates) {
   for (const gpu::Precision p : {gpu::Precision::Double, gpu::Precision::Float})
     for (const int gather : {2, 4}) {
       std::size_t full = 0, compact = 0;
-      EXPECT_EQ(compact_difference(m, loads, p, gpu::Options::Kernel::Grid, 400, &full, &compact, gather),
-                0.0);
-      EXPECT_EQ(compact_difference(kidney.model(), press(223, Vec3(0, 0, -1.0)), p,
+      const double tol = p == gpu::Precision::Double ? 1e-12 : 1e-4;  // fp32: as GPU against CPU (gpu.md)
+      EXPECT_LE(compact_difference(m, loads, p, gpu::Options::Kernel::Grid, 400, &full, &compact, gather),
+                tol);
+      EXPECT_LE(compact_difference(kidney.model(), press(223, Vec3(0, 0, -1.0)), p,
                                    gpu::Options::Kernel::Grid, 200, &full, &compact, gather, 65536),
-                0.0);
+                tol);
       EXPECT_LT(compact, full);
     }
 }

@@ -330,11 +330,13 @@ TEST(SpringTable, CompactClassesAreTheDistinctValues) {
 }
 
 // The gather batch (gpu::Options::gather_batch, hd::gather_spring_forces<..., U>): U entries loaded before
-// any force is formed, the forces added in entry order -- the same sums bit for bit for U = 1, 2, 4, on
-// every row of a table, hard and soft laws, with and without the stiffening measure, full and compact
-// parameters, fp64 and fp32. Positions displaced at random (a few % of a spring) so every law is active.
+// any force is formed, the forces added in entry order -- the same terms in the same order for U = 1, 2,
+// 4, on every row of a table, hard and soft laws, with and without the stiffening measure, full and compact
+// parameters, fp64 and fp32. Equal to rounding, not bit for bit: this CPU build (-march=native) may contract
+// f += t e into an FMA in one variant and not in another (when it vectorises the batch). Positions
+// displaced at random (a few % of a spring) so every law is active.
 template <class R, bool Soft, bool Stiff>
-void expect_gather_batches_bit_identical(const Model& m, bool compact) {
+void expect_gather_batches_equal(const Model& m, bool compact) {
   SpringTableArrays<R> T = make_spring_table<R>(m);
   if (compact) ASSERT_TRUE(compact_spring_params(T, 65536));
   const hd::SpringTable<R> view = T.view();
@@ -344,26 +346,32 @@ void expect_gather_batches_bit_identical(const Model& m, bool compact) {
   for (Index a = 0; a < m.num_nodes(); ++a)
     for (int c = 0; c < 3; ++c)
       x[static_cast<std::size_t>(3 * a + c)] = static_cast<R>(m.x0(a, c) + jitter(rng));
-  int moved = 0;
-  for (int r = 0; r < static_cast<int>(m.num_nodes()); ++r) {
+  const int rows = static_cast<int>(m.num_nodes());
+  std::vector<R> f1(3 * static_cast<std::size_t>(rows), R(0)), f2 = f1, f4 = f1;
+  R s1 = R(1), s2 = R(1), s4 = R(1);
+  for (int r = 0; r < rows; ++r) {
     const int a = hd::row_node(view, r);
-    R f1[3] = {R(0), R(0), R(0)}, f2[3] = {R(0), R(0), R(0)}, f4[3] = {R(0), R(0), R(0)};
-    R s1 = R(1), s2 = R(1), s4 = R(1);
-    hd::gather_spring_forces<Soft, Stiff, 1>(view, r, a, x.data(), s1, f1);
-    hd::gather_spring_forces<Soft, Stiff, 2>(view, r, a, x.data(), s2, f2);
-    hd::gather_spring_forces<Soft, Stiff, 4>(view, r, a, x.data(), s4, f4);
-    for (int c = 0; c < 3; ++c) {
-      EXPECT_EQ(f2[c], f1[c]) << "row " << r;
-      EXPECT_EQ(f4[c], f1[c]) << "row " << r;
-    }
-    EXPECT_EQ(s2, s1);
-    EXPECT_EQ(s4, s1);
-    moved += f1[0] != R(0) || f1[1] != R(0) || f1[2] != R(0);
+    hd::gather_spring_forces<Soft, Stiff, 1>(view, r, a, x.data(), s1, &f1[3 * static_cast<std::size_t>(r)]);
+    hd::gather_spring_forces<Soft, Stiff, 2>(view, r, a, x.data(), s2, &f2[3 * static_cast<std::size_t>(r)]);
+    hd::gather_spring_forces<Soft, Stiff, 4>(view, r, a, x.data(), s4, &f4[3 * static_cast<std::size_t>(r)]);
   }
-  EXPECT_GT(moved, m.num_nodes() / 2);  // the springs were stretched: not a sum of zeros
+  double scale = 0, d2 = 0, d4 = 0;
+  int moved = 0;
+  for (std::size_t q = 0; q < f1.size(); ++q) {
+    scale = std::max(scale, std::abs(static_cast<double>(f1[q])));
+    d2 = std::max(d2, std::abs(static_cast<double>(f2[q] - f1[q])));
+    d4 = std::max(d4, std::abs(static_cast<double>(f4[q] - f1[q])));
+    moved += f1[q] != R(0);
+  }
+  const double tol = (sizeof(R) == 8 ? 1e-13 : 1e-5) * scale;  // a wrong entry: ~ one spring's force
+  EXPECT_LE(d2, tol) << m.name << (compact ? " compact" : "");
+  EXPECT_LE(d4, tol) << m.name << (compact ? " compact" : "");
+  EXPECT_EQ(s2, s1);  // a max: order-free
+  EXPECT_EQ(s4, s1);
+  EXPECT_GT(moved, rows);  // the springs were stretched: not a sum of zeros
 }
 
-TEST(HdKernels, GatherBatchesGiveBitIdenticalForces) {
+TEST(HdKernels, GatherBatchesGiveTheSameForces) {
   const Model hard = small_tube(false), soft = small_tube(true);
   // A hub with 37 spokes and a ring of 37 (the kidney's atoms: widths not a multiple of 4), spread
   // stiffnesses.
@@ -377,12 +385,12 @@ TEST(HdKernels, GatherBatchesGiveBitIdenticalForces) {
   }
   const Model hub = b.build();
   for (const bool compact : {false, true}) {
-    expect_gather_batches_bit_identical<double, false, false>(hard, compact);
-    expect_gather_batches_bit_identical<double, false, true>(hard, compact);
-    expect_gather_batches_bit_identical<double, true, true>(soft, compact);
-    expect_gather_batches_bit_identical<float, true, false>(soft, compact);
-    expect_gather_batches_bit_identical<double, false, true>(hub, compact);
-    expect_gather_batches_bit_identical<float, false, false>(hub, compact);
+    expect_gather_batches_equal<double, false, false>(hard, compact);
+    expect_gather_batches_equal<double, false, true>(hard, compact);
+    expect_gather_batches_equal<double, true, true>(soft, compact);
+    expect_gather_batches_equal<float, true, false>(soft, compact);
+    expect_gather_batches_equal<double, false, true>(hub, compact);
+    expect_gather_batches_equal<float, false, false>(hub, compact);
   }
 }
 

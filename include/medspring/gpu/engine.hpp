@@ -78,8 +78,14 @@ struct Options {
   int compact_max_classes = kCompactClasses;
   /// Spring-table entries each thread of the grid kernel gathers at a time (1, 2 or 4): their other
   /// ends' positions and parameters are loaded before any force is formed (hd::gather_spring_forces), so
-  /// that more loads are in flight; the sums are the same bit for bit for every value.
+  /// that more loads are in flight; the same terms summed in the same order for every value.
   int gather_batch = 1;
+  /// The grid kernel's block order for a batch: ModelsFirst (the default for B > 1) launches the same
+  /// rows of consecutive models side by side, so that the blocks resident on a multiprocessor share the
+  /// (shared) table entries in L1 instead of each reading them from L2; RowsFirst: a model's row blocks
+  /// side by side. The same arithmetic either way.
+  enum class BatchOrder { ModelsFirst, RowsFirst };
+  BatchOrder batch_order = BatchOrder::ModelsFirst;
 };
 
 /// The kernel a batch of `batch` models of `nodes` nodes runs on `device` (docs/gpu.md): PerBlock when

@@ -201,7 +201,8 @@ MEDSPRING_HD inline int row_node(const SpringTable<R>& T, int r) {
 /// U > 1 (the gather batch, gpu::Options::gather_batch): U entries at a time have their other ends'
 /// positions, rest lengths and parameters loaded before any force is formed, so that a GPU thread has U
 /// independent gathers in flight instead of one (the gather is latency-bound once the table is compact);
-/// the forces are then added in entry order, so every U gives the same sums, bit for bit.
+/// the forces are then added in entry order: the same terms in the same order for every U (equal to
+/// rounding: a compiler may contract f += t e into an FMA differently when it vectorises the batch).
 template <bool Soft, bool Stiff, int U = 1, class R>
 MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, int a, const R* x, R& stiff,
                                               R* f) {
@@ -213,15 +214,15 @@ MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, in
   int j = 0;
   if constexpr (U > 1) {
     for (; j + U <= w; j += U, e += U * kSlice) {
-      R dx[U], dy[U], dz[U], l0[U];  // registers: indexed by unrolled constants only
+      R px[U], py[U], pz[U], l0[U];  // registers: indexed by unrolled constants only
 #if defined(__CUDA_ARCH__)
 #pragma unroll
 #endif
       for (int u = 0; u < U; ++u) {
         const int eu = e + u * kSlice, b = T.other[eu];
-        dx[u] = x[3 * b] - xa;
-        dy[u] = x[3 * b + 1] - ya;
-        dz[u] = x[3 * b + 2] - za;
+        px[u] = x[3 * b];
+        py[u] = x[3 * b + 1];
+        pz[u] = x[3 * b + 2];
         l0[u] = T.L0[eu];
       }
 #if defined(__CUDA_ARCH__)
@@ -230,7 +231,9 @@ MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, in
       for (int u = 0; u < U; ++u) {
         R k, kp, ik, fx, fy, fz;
         spring_params(T, e + u * kSlice, k, kp, ik);
-        if (!spring_force<Soft, Stiff>(dx[u], dy[u], dz[u], l0[u], k, kp, ik, stiff, fx, fy, fz)) continue;
+        if (!spring_force<Soft, Stiff>(px[u] - xa, py[u] - ya, pz[u] - za, l0[u], k, kp, ik, stiff, fx, fy,
+                                       fz))
+          continue;
         f[0] += fx;
         f[1] += fy;
         f[2] += fz;
