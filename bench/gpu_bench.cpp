@@ -66,8 +66,8 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
       std::stringstream ss(value(i));
       for (std::string item; std::getline(ss, item, ',');) {
         const long g = number(item, "--gather");
-        require(g == 1 || g == 2 || g == 4, "bench --gpu: --gather: each value must be 1, 2 or 4 (got ", g,
-                ")");
+        require(g == 0 || g == 1 || g == 2 || g == 4,
+                "bench --gpu: --gather: each value must be 0 (automatic), 1, 2 or 4 (got ", g, ")");
         o.gathers.push_back(static_cast<int>(g));
       }
     } else if (a == "--out") {
@@ -271,6 +271,11 @@ double torch_step(const Model& m, const std::vector<PointLoad>& loads, double h,
 
 namespace {
 
+// Row-name suffix of a gather batch: "" for 1, "-g2", "-g4", "-gauto" for 0 (Options::gather_batch).
+std::string gather_suffix(int gather) {
+  return gather == 0 ? "-gauto" : gather == 1 ? "" : cat("-g", gather);
+}
+
 struct KidneyVariant {
   gpu::Options::Kernel kernel;
   bool compact;
@@ -279,20 +284,18 @@ struct KidneyVariant {
   std::string name;
 };
 
-// The batch case's kernels: grid (rows first: a model's row blocks side by side; models first: the same
+// The batch case's kernels: grid (rows first: a model's row blocks side by side; "grid-models": the same
 // rows of consecutive models side by side) and one block per model; with --compact the same with compact
-// parameters (as many classes as the kidney needs), the models-first grid kernel for each --gather batch.
+// parameters (as many classes as the kidney needs), the grid kernel for each --gather batch.
 std::vector<KidneyVariant> kidney_variants(const GpuBenchOptions& o) {
   using K = gpu::Options::Kernel;
   constexpr auto rows = gpu::Options::BatchOrder::RowsFirst, models = gpu::Options::BatchOrder::ModelsFirst;
-  std::vector<KidneyVariant> v{{K::Grid, false, 1, rows, "grid-rows"},
-                               {K::Grid, false, 1, models, "grid"},
-                               {K::PerBlock, false, 1, models, "block"}};
+  std::vector<KidneyVariant> v{{K::Grid, false, 1, rows, "grid"},
+                               {K::Grid, false, 1, models, "grid-models"},
+                               {K::PerBlock, false, 1, rows, "block"}};
   if (!o.compact) return v;
-  v.push_back({K::Grid, true, 1, rows, "grid-rows-compact"});
-  for (const int g : o.gathers)
-    v.push_back({K::Grid, true, g, models, g > 1 ? cat("grid-compact-g", g) : "grid-compact"});
-  v.push_back({K::PerBlock, true, 1, models, "block-compact"});
+  for (const int g : o.gathers) v.push_back({K::Grid, true, g, rows, "grid-compact" + gather_suffix(g)});
+  v.push_back({K::PerBlock, true, 1, rows, "block-compact"});
   return v;
 }
 
@@ -370,8 +373,7 @@ int run_gpu_bench(const GpuBenchOptions& o) {
           torch_us = torch_step(m, loads, s.dt / subs, gpu::to_string(p), work / "torch_step", why);
         const double cpu_sub_us = cpu_us > 0 ? cpu_us / cpu_subs : -1;
         // fp64c: compact parameters; fp64c-g4: and four entries gathered at a time.
-        const std::string key =
-            gpu::to_string(p) + (compact ? "c" : "") + (gather > 1 ? cat("-g", gather) : "");
+        const std::string key = gpu::to_string(p) + (compact ? "c" : "") + gather_suffix(gather);
         std::printf("%-10s %-5s %12.2f %12.2f %10.0f %7.0f%% %12s %12s\n", size_name(m.num_nodes()).c_str(),
                     key.c_str(), substep_us, frame_us, gbs, 100.0 * gbs / copy_gbs,
                     torch_us > 0 ? cat(torch_us).c_str() : "-",

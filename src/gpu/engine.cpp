@@ -40,8 +40,9 @@ Engine::Engine(const std::vector<const Model*>& models, const StepSettings& sett
                        kCpuAlternative));
   require(options.block >= 32 && options.block <= 1024 && options.block % 32 == 0,
           "gpu::Options::block: must be a multiple of 32 in 32..1024 (got ", options.block, ")");
-  require(options.gather_batch == 1 || options.gather_batch == 2 || options.gather_batch == 4,
-          "gpu::Options::gather_batch: must be 1, 2 or 4 (got ", options.gather_batch, ")");
+  require(options.gather_batch == 0 || options.gather_batch == 1 || options.gather_batch == 2 ||
+              options.gather_batch == 4,
+          "gpu::Options::gather_batch: must be 0 (automatic), 1, 2 or 4 (got ", options.gather_batch, ")");
   require(options.compact_max_classes >= 1 && options.compact_max_classes <= 65536,
           "gpu::Options::compact_max_classes: must be in 1..65536 (got ", options.compact_max_classes, ")");
   const DeviceInfo dev = require_device(options.device);

@@ -48,11 +48,13 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   A.soft = soft;
   A.stiff = stiff;
   A.guard = settings.guard;
-  A.gather = options.gather_batch;
+  const long long table_rows = grid_rows > 0 ? grid_rows : static_cast<long long>(n);
+  // Automatic gather batch (Options::gather_batch): 2 where the launch is one wave (latency-bound), else 1.
+  const long long wave = 1024ll * std::max(1, device.multiprocessors);
+  A.gather = options.gather_batch > 0 ? options.gather_batch : table_rows * B <= wave ? 2 : 1;
   // gridDim.y is at most 65,535 row blocks (16.7M rows of 256): larger models keep rows on x.
-  A.models_first =
-      B > 1 && options.batch_order != Options::BatchOrder::RowsFirst &&
-      (static_cast<long long>(grid_rows > 0 ? grid_rows : n) + options.block - 1) / options.block <= 65535;
+  A.models_first = B > 1 && options.batch_order == Options::BatchOrder::ModelsFirst &&
+                   (table_rows + options.block - 1) / options.block <= 65535;
   A.stiff_bits = stiff_dev.p + (stiff ? kk * B : 0);
   A.scalars = scalars_dev.p;
   if (grid_rows > 0) {

@@ -23,6 +23,7 @@ double compact_difference(const Model& m, const std::vector<PointLoad>& loads, g
   gpu::Options full, compact;
   full.precision = compact.precision = p;
   full.kernel = compact.kernel = kernel;
+  full.compact_params = false;  // the per-entry arrays (compact parameters are the default)
   compact.compact_params = true;
   compact.compact_max_classes = max_classes;
   compact.gather_batch = gather;

@@ -67,25 +67,29 @@ struct Options {
   enum class Kernel { Auto, Grid, PerBlock };
   Kernel kernel = Kernel::Auto;
   /// Compact parameters (docs/gpu.md): where the batch shares its parameters and they take at most
-  /// kCompactClasses distinct values (a uniform tube: 8 spring classes, 1 node class), a 2-byte class per
-  /// spring end and node instead of three reals each -- fewer bytes per substep, the same values, so the
-  /// same results bit for bit (checked on the CPU: SpringTable.CompactParametersGiveBitIdenticalSteps).
-  /// Off by default until its speed is measured on a device (`medspring bench --gpu --compact`).
-  bool compact_params = false;
+  /// compact_max_classes distinct values (a uniform tube: 8 spring classes, 1 node class; the real kidney:
+  /// a class per stiffness), a 2-byte class per spring end and node instead of three reals each -- fewer
+  /// bytes per substep, the same values, so the same results bit for bit (SpringTable.Compact*,
+  /// GpuCompact.*). Measured on an H100 (bench --gpu --compact): 1M-node tube fp64 118.9 against 130.0 µs
+  /// per substep, 16M 1,838 against 1,938 µs, 8,448 real kidneys 415 against 441 µs; fp32 the same within
+  /// 1 %; the 1,200-node tube 6.56 against 6.21 µs (one more dependent load), won back by the gather batch.
+  bool compact_params = true;
   /// The most distinct (k, k', 1/k) triples (and node triples) compact parameters take; more keep the
-  /// per-entry arrays. 1,024 (kCompactClasses) keeps the classes in L1; up to 65,536 (a 2-byte class) makes
-  /// the compact table a per-spring table for real meshes (the real kidney: a stiffness per spring).
-  int compact_max_classes = kCompactClasses;
-  /// Spring-table entries each thread of the grid kernel gathers at a time (1, 2 or 4): their other
-  /// ends' positions and parameters are loaded before any force is formed (hd::gather_spring_forces), so
-  /// that more loads are in flight; the same terms summed in the same order for every value.
-  int gather_batch = 1;
-  /// The grid kernel's block order for a batch: ModelsFirst (the default for B > 1) launches the same
-  /// rows of consecutive models side by side, so that the blocks resident on a multiprocessor share the
-  /// (shared) table entries in L1 instead of each reading them from L2; RowsFirst: a model's row blocks
-  /// side by side. The same arithmetic either way.
-  enum class BatchOrder { ModelsFirst, RowsFirst };
-  BatchOrder batch_order = BatchOrder::ModelsFirst;
+  /// per-entry arrays. 65,536: a 2-byte class, so that a real mesh's table becomes a per-spring table.
+  int compact_max_classes = 65536;
+  /// Spring-table entries each thread of the grid kernel gathers at a time (1, 2 or 4; 0: automatic):
+  /// their other ends' positions and parameters are loaded before any force is formed
+  /// (hd::gather_spring_forces), so that more loads are in flight; the same terms summed in the same
+  /// order for every value. Automatic: 2 where the launch is one wave (rows x models <= 1,024 per
+  /// multiprocessor: latency-bound, measured 1.2k tube 5.29 against 6.56 µs, one kidney 11.8 against
+  /// 13.5 µs), 1 otherwise (more registers cost occupancy: 1M tube 139.8 against 118.9 µs).
+  int gather_batch = 0;
+  /// The grid kernel's block order for a batch: RowsFirst (default) launches a model's row blocks side
+  /// by side; ModelsFirst the same rows of consecutive models side by side, so that co-resident blocks
+  /// share the table in L1 -- measured slower (8,448 kidneys fp64 568 against 441 µs: each model's
+  /// positions are fetched once per row block, far apart in time). The same arithmetic either way.
+  enum class BatchOrder { RowsFirst, ModelsFirst };
+  BatchOrder batch_order = BatchOrder::RowsFirst;
 };
 
 /// The kernel a batch of `batch` models of `nodes` nodes runs on `device` (docs/gpu.md): PerBlock when
