@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "medspring/physics/trace_table.hpp"
 #include "medspring/scene/batch.hpp"
@@ -159,7 +160,9 @@ TEST(SceneBatchTraces, HdTraceSampleEqualsTheHostSamplingOnACpuBatch) {
   }
   ::testing::Test::RecordProperty("values", std::to_string(values));
   ::testing::Test::RecordProperty("bit_identical", std::to_string(exact));
-  ::testing::Test::RecordProperty("max_relative_difference", std::to_string(worst));
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", worst);
+  ::testing::Test::RecordProperty("max_relative_difference", buf);
   EXPECT_LE(worst, 1e-12) << exact << " of " << values << " bit-identical";
   EXPECT_GT(values, 1000u);
 }
