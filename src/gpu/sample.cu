@@ -26,10 +26,12 @@ __global__ void __launch_bounds__(kTraceThreads)
   __syncthreads();
   if (threadIdx.x == 0) {
     for (int w = 1; w < static_cast<int>(blockDim.x >> 5); ++w) m = hd::trace_max(m, warp_max[w]);
-    atomicMax(reinterpret_cast<unsigned long long*>(ob), static_cast<unsigned long long>(__double_as_longlong(m)));
+    atomicMax(reinterpret_cast<unsigned long long*>(ob),
+              static_cast<unsigned long long>(__double_as_longlong(m)));
   }
   if (blockIdx.x == 0)
-    for (int p = threadIdx.x; p < T.points; p += blockDim.x) ob[1 + p] = hd::traced_displacement(T, b, xb, o, p);
+    for (int p = threadIdx.x; p < T.points; p += blockDim.x)
+      ob[1 + p] = hd::traced_displacement(T, b, xb, o, p);
 }
 
 }  // namespace
@@ -49,7 +51,7 @@ cudaError_t launch_trace_sample(const hd::TraceTable& T, const R* x, long long m
 
 template cudaError_t launch_trace_sample<double>(const hd::TraceTable&, const double*, long long,
                                                  const double*, double*, cudaStream_t);
-template cudaError_t launch_trace_sample<float>(const hd::TraceTable&, const float*, long long,
-                                                const double*, double*, cudaStream_t);
+template cudaError_t launch_trace_sample<float>(const hd::TraceTable&, const float*, long long, const double*,
+                                                double*, cudaStream_t);
 
 }  // namespace medspring::gpu::detail

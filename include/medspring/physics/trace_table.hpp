@@ -30,7 +30,7 @@ struct TraceProbe {
 /// The arrays of an hd::TraceTable in host memory.
 struct TraceTableData {
   int batch = 0, surface = 0, points = 0;
-  Index nodes = 0;  // DOF rows per model
+  Index nodes = 0;                          // DOF rows per model
   std::vector<int> surface_dof, point_dof;  // surface_dof: one model's, or every model's (strides)
   std::vector<double> surface_rest, point_rest;
   long long dof_stride = 0, rest_stride = 0;
