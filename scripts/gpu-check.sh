@@ -46,7 +46,14 @@ compile() {
     "$(dirname "$nvcc")/cuobjdump" -sass "$out/kernels.o" > "$out/kernels.sass"
     echo "SASS: $(grep -c '' "$out/kernels.sass") lines in $out/kernels.sass (LDL/STL: $(grep -cE 'LDL|STL' "$out/kernels.sass" || true))"
   fi
-  if grep -E "[1-9][0-9]* bytes stack frame|[1-9][0-9]* bytes spill" "$out/ptxas.txt"; then
+  # The trace reduction of the study's batch path (sample.cu), reported the same way.
+  "$nvcc" -std=c++17 -O3 -gencode=arch=compute_90,code=sm_90 -I"$root/include" -I"$root/src/gpu" \
+    -Xptxas -v -c "$root/src/gpu/sample.cu" -o "$out/sample.o" 2> "$out/ptxas-sample.txt"
+  awk '/Compiling entry function/ { match($0, /trace_kernelI[fd]E/); k = substr($0, RSTART, RLENGTH) }
+       /bytes stack frame/ { match($0, /[0-9]+ bytes stack frame.*/); st = substr($0, RSTART) }
+       /Used [0-9]+ registers/ { match($0, /Used [0-9]+ registers.*/); printf "  %-26s %s; %s\n", k, substr($0, RSTART), st }' \
+    "$out/ptxas-sample.txt" | tee -a "$out/resources.txt"
+  if grep -E "[1-9][0-9]* bytes stack frame|[1-9][0-9]* bytes spill" "$out/ptxas.txt" "$out/ptxas-sample.txt"; then
     echo "gpu-check: a kernel uses a stack frame or spills (see $out/ptxas.txt)" >&2
     exit 1
   fi

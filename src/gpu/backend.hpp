@@ -16,6 +16,7 @@
 #include "launch.hpp"
 #include "medspring/gpu/engine.hpp"
 #include "medspring/physics/spring_table.hpp"
+#include "sample.hpp"
 
 namespace medspring::gpu {
 
@@ -44,6 +45,11 @@ struct Engine::Impl {
   virtual Engine::DeviceState device_state() = 0;
   virtual std::size_t device_bytes() const = 0;
   virtual double time_substeps(int count, int repeats) = 0;
+  // The device-side trace reduction (traces.cpp, sample.cu).
+  virtual void set_trace_probes(const std::vector<TraceProbe>& probes) = 0;
+  virtual int trace_width() const = 0;
+  virtual void request_traces() = 0;
+  virtual void traces(std::vector<double>& out) = 0;
 };
 
 namespace detail {
@@ -146,6 +152,12 @@ struct Backend final : Engine::Impl {
   Engine::DeviceState device_state() override;
   double time_substeps(int count, int repeats) override;
   std::size_t device_bytes() const override;
+  // The trace reduction (traces.cpp): its table, output and readback.
+  TraceBuffers trace;
+  void set_trace_probes(const std::vector<TraceProbe>& probes) override;
+  int trace_width() const override { return trace.table.batch > 0 ? trace.table.width() : 0; }
+  void request_traces() override;
+  void traces(std::vector<double>& out) override;
 };
 
 extern template struct Backend<double>;

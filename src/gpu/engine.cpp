@@ -102,6 +102,18 @@ bool Engine::poll_node(Vec3& out) {
 Engine::DeviceState Engine::device_state() {
   return impl_->device_state();
 }
+void Engine::set_trace_probes(const std::vector<TraceProbe>& probes) {
+  impl_->set_trace_probes(probes);
+}
+int Engine::trace_width() const {
+  return impl_->trace_width();
+}
+void Engine::request_traces() {
+  impl_->request_traces();
+}
+void Engine::traces(std::vector<double>& out) {
+  impl_->traces(out);
+}
 double Engine::time() const {
   return impl_->t;
 }

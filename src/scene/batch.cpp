@@ -69,6 +69,19 @@ double median(std::vector<double> v) {
   return *mid;
 }
 
+// scene_trace_sample's record from the values of trace_probe's probe (hd::trace_sample's layout).
+void trace_append(const BuiltScene& b, double time, const Vec3& applied, const double* v, SceneTrace& tr) {
+  const std::size_t nodes = b.trace_nodes.size(), atoms = b.trace_atom_dofs.size();
+  if (tr.node_disp.size() != nodes) tr.node_disp.resize(nodes);
+  if (tr.atom_disp.size() != atoms) tr.atom_disp.resize(atoms);
+  tr.time.push_back(time);
+  tr.force.push_back(applied.norm());
+  tr.max_disp.push_back(v[0]);
+  tr.local_contact.push_back(0.0);
+  for (std::size_t k = 0; k < nodes; ++k) tr.node_disp[k].push_back(v[1 + k]);
+  for (std::size_t k = 0; k < atoms; ++k) tr.atom_disp[k].push_back(v[1 + nodes + k]);
+}
+
 // One group: runs of one batch_key stepped together; results written into out[index[k]].
 void run_group(const std::vector<const BuiltScene*>& runs, const std::vector<std::size_t>& index, int group,
                const BatchStepperFactory& make, const std::vector<double>& times,
@@ -96,9 +109,38 @@ void run_group(const std::vector<const BuiltScene*>& runs, const std::vector<std
   MatX3 f_ext;
   for (const BuiltScene* b : g) states.push_back(make_state(b->body->model()));
   std::vector<double> us(static_cast<std::size_t>(n));
+  // The traces reduced by the stepper (on the device) where it can: then positions come back only for
+  // the field snapshots.
+  std::vector<TraceProbe> probes(B);
+  bool reduced = true;
+  for (std::size_t b = 0; b < B && reduced; ++b) reduced = trace_probe(*g[b], probes[b]);
+  reduced = reduced && stepper->set_trace_probes(probes);
+  std::size_t width = 1;
+  for (const TraceProbe& p : probes) width = std::max(width, 1 + p.point_dof.size());
+  std::vector<double> values;
 
   auto sample = [&](long k) {
+    if (reduced) {
+      stepper->trace_values(values);
+      require(values.size() == B * width, "batch run: the stepper gave ", values.size(), " trace values for ",
+              B, " models of ", width);
+    }
     for (std::size_t b = 0; b < B; ++b) {
+      if (reduced) {
+        const BuiltScene& s = *g[b];
+        const double t = stepper->time(static_cast<int>(b));
+        Vec3 applied = Vec3::Zero();
+        for (const PointLoad& L : s.loads) applied += L.at(t);  // Simulation::applied_force
+        trace_append(s, t, applied, values.data() + b * width, traces[b]);
+        if (want_fields && keys.count(k) > 0) {
+          stepper->positions(static_cast<int>(b), states[b].x);
+          states[b].t = t;
+          s.body->map_to_surface(states[b], surface[b]);
+          frame_times[b].push_back(t);
+          frames[b].push_back(surface[b] - s.body->rest_surface());
+        }
+        continue;
+      }
       const BuiltScene& s = *g[b];
       stepper->positions(static_cast<int>(b), states[b].x);
       const double t = stepper->time(static_cast<int>(b));
@@ -180,6 +222,46 @@ std::vector<PointLoad> frame_dof_loads(const Body& body, const std::vector<Point
     if (f_ext.row(i).squaredNorm() > 0.0)
       out.push_back({.node = i, .force = f_ext.row(i).transpose(), .t_on = 0.0, .t_ramp = 0.0});
   return out;
+}
+
+bool trace_probe(const BuiltScene& b, TraceProbe& p) {
+  const std::string kind = b.body->kind();
+  if (kind != "surface" && kind != "hybrid" && kind != "volumetric") return false;
+  // The map applied to x_i = (i, i^2, -i): a row selection gives each surface row one such triple (an
+  // interpolation between rows would not: the mean of squares is not the square of the mean).
+  const Model& m = b.body->model();
+  const Index n = m.num_nodes();
+  State st = make_state(m);
+  for (Index i = 0; i < n; ++i) {
+    const auto d = static_cast<double>(i);
+    st.x.row(i) = Vec3(d, d * d, -d).transpose();
+  }
+  MatX3 S;
+  b.body->map_to_surface(st, S);
+  const MatX3& S0 = b.body->rest_surface();
+  if (S.rows() != S0.rows()) return false;
+  p.surface_dof.resize(static_cast<std::size_t>(S.rows()));
+  for (Index s = 0; s < S.rows(); ++s) {
+    const double d = S(s, 0);
+    if (!(d >= 0 && d < static_cast<double>(n) && d == std::floor(d) && S(s, 1) == d * d && S(s, 2) == -d))
+      return false;
+    p.surface_dof[static_cast<std::size_t>(s)] = static_cast<Index>(d);
+  }
+  p.surface_rest = S0;
+  const std::size_t points = b.trace_nodes.size() + b.trace_atom_dofs.size();
+  p.point_dof.clear();
+  p.point_rest.resize(static_cast<Index>(points), 3);
+  for (Index i : b.trace_nodes) {
+    if (i < 0 || i >= S0.rows()) return false;
+    p.point_rest.row(static_cast<Index>(p.point_dof.size())) = S0.row(i);
+    p.point_dof.push_back(p.surface_dof[static_cast<std::size_t>(i)]);
+  }
+  for (Index i : b.trace_atom_dofs) {
+    if (i < 0 || i >= n) return false;
+    p.point_rest.row(static_cast<Index>(p.point_dof.size())) = m.x0.row(i);
+    p.point_dof.push_back(i);
+  }
+  return true;
 }
 
 std::string batch_unsupported(const BuiltScene& b) {

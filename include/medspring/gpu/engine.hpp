@@ -19,6 +19,7 @@
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/spring_table.hpp"
 #include "medspring/physics/state.hpp"
+#include "medspring/physics/trace_table.hpp"
 
 namespace medspring::gpu {
 
@@ -164,6 +165,16 @@ class Engine {
     const double* origin = nullptr;
   };
   DeviceState device_state();
+
+  /// Device-side trace sampling (docs/gpu.md, "Study runs on the GPU"): set_trace_probes takes one
+  /// TraceProbe per model (physics/trace_table.hpp: the surface as DOF rows with its rest positions, the
+  /// traced points); request_traces() enqueues, after the work issued so far, the reduction of the current
+  /// positions (hd::trace_sample per model: max |u| over the surface, |u| of each point) and the copy of
+  /// its B x trace_width() doubles to pinned host memory; traces(out) waits for the last request's values.
+  void set_trace_probes(const std::vector<TraceProbe>& probes);
+  int trace_width() const;  // 1 + the most traced points of a model (0 before set_trace_probes)
+  void request_traces();
+  void traces(std::vector<double>& out);
 
   double time() const;             // ms
   double stiffening() const;       // max kappa/k over the batch at the models' last evaluations

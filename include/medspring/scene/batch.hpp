@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "medspring/physics/trace_table.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/runner.hpp"
 
@@ -33,6 +34,14 @@ class BatchStepper {
   virtual double time(int b) const = 0;             // ms
   virtual std::uint64_t substeps(int b) const = 0;  // substeps taken so far
   virtual std::uint64_t warnings(int b) const = 0;  // Warnings::total() so far
+  /// Optional (docs/gpu.md, "Study runs on the GPU"): the stepper computes each frame's trace values
+  /// itself (gpu::SceneBatchStepper: on the device) from one probe per model; then run_scene_batch reads
+  /// trace_values() after every frame and positions() only for the field snapshots. Returns false when
+  /// the stepper has no such reduction (the default): the runner samples positions() on the host.
+  virtual bool set_trace_probes(const std::vector<TraceProbe>& /*probes*/) { return false; }
+  /// After step() (and before the first): every model's values of this frame, B x (1 + points) as
+  /// hd::trace_sample writes them (max |u| over the surface, then |u| of each traced point).
+  virtual void trace_values(std::vector<double>& /*out*/) {}
 };
 
 /// Makes the stepper of a group of runs (same topology, step settings and number of updates); the runs'
@@ -49,6 +58,12 @@ std::unique_ptr<BatchStepper> make_cpu_batch_stepper(const std::vector<const Bui
 /// constant load (t_on 0, no ramp, never released) of that row. `f_ext` is work space (resized).
 std::vector<PointLoad> frame_dof_loads(const Body& body, const std::vector<PointLoad>& loads, double t,
                                        MatX3& f_ext);
+
+/// What a run samples per frame (physics/trace_table.hpp): its surface as DOF rows (the body's
+/// map_to_surface when that is a selection of DOF rows, as for the surface and hybrid bodies) with the
+/// rest surface, then its traced points: trace_nodes (surface rows, rest surface) and trace_atom_dofs
+/// (model rest positions), in scene_trace_sample's order. False when the map is not a row selection.
+bool trace_probe(const BuiltScene& built, TraceProbe& probe);
 
 /// Why a built scene cannot run in a batch ("" when it can): the local deformation overlay and rigid
 /// tools need the Simulation around the step, which the batch path does not run.
