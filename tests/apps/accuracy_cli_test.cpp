@@ -46,7 +46,7 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
   const auto& o = j["organs"][0];
   EXPECT_GT(o["fem"]["nodes"].get<int>(), 1000);
   // the strain the FEM reaches, per solved case (docs/accuracy.md, "Large strain"): nominal = contact
-  // displacement / thickness; the peak element strain under the disk lies above it
+  // displacement / thickness; the peak element strain lies above it
   ASSERT_EQ(o["fem"]["strain"].size(), 2u);  // --quick: 2 sites at 0.5 N
   for (const auto& c : o["fem"]["strain"]) {
     const double nominal = c["nominal_strain_pct"].get<double>();
