@@ -235,6 +235,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   };
   std::vector<Case> cases;
   json fem_failed = json::array();
+  json fem_strain = json::array();
   for (std::size_t si = 0; si < sites.size(); ++si)
     for (double F : forces) {
       Case c{static_cast<Index>(si),
@@ -246,16 +247,29 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       c.train = si < train_sites && F == train_force;
       bool cached = false;
       note(st, cat(o.name, ": FEM site ", si, ", ", F, " N"));
+      MatX3 u_nodes;
       try {
-        c.u_fem = ref.surface_displacement(c.load, &c.seconds, &cached);
+        c.u_fem = ref.surface_displacement(c.load, &c.seconds, &cached, &u_nodes);
       } catch (const SolverError& e) {  // e.g. no equilibrium at a large strain: reported, not hidden
         note(st, cat(o.name, ": FEM site ", si, ", ", F, " N: no equilibrium"));
         fem_failed.push_back({{"site", si}, {"force_N", F}, {"train", c.train}, {"error", e.what()}});
         continue;
       }
+      // the strain the FEM reaches (large-strain runs, docs/accuracy.md): nominal = contact displacement /
+      // the organ's thickness along the load; peak = the largest principal strains of any FEM element
+      const fem::PeakStrain ps = fem::peak_strain(ref.mesh(), u_nodes);
+      const double contact_mm = c.u_fem.row(sites[si]).norm();
+      fem_strain.push_back({{"site", si},
+                            {"force_N", F},
+                            {"contact_mm", contact_mm},
+                            {"nominal_strain_pct", 100 * contact_mm / f.thickness},
+                            {"peak_compressive_strain_pct", 100 * ps.compressive},
+                            {"peak_tensile_strain_pct", 100 * ps.tensile}});
       cases.push_back(std::move(c));
     }
   out["fem_failed"] = fem_failed;
+  out["fem"]["thickness_mm"] = f.thickness;
+  out["fem"]["strain"] = fem_strain;
   require(!cases.empty(), "accuracy: ", o.name, ": CalculiX found no equilibrium for any load");
   double fem_seconds = 0;
   for (const auto& c : cases) fem_seconds += c.seconds;

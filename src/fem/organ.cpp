@@ -110,14 +110,15 @@ OrganReference::OrganReference(const SurfaceMesh& surface, const Material& mater
   sample_ = locate_on_boundary(problem_.mesh, boundary_, surface.V);
 }
 
-MatX3 OrganReference::surface_displacement(const ContactLoad& load, double* solve_seconds,
-                                           bool* from_cache) const {
+MatX3 OrganReference::surface_displacement(const ContactLoad& load, double* solve_seconds, bool* from_cache,
+                                           MatX3* nodal) const {
   FemProblem p = problem_;
   for (const auto& [node, f] : disk_load_quadratic(p.mesh, boundary_, load.centre, load.radius, load.force))
     p.loads.push_back({node, f});
   const FemResult r = solve(p, settings_.solver);
   if (solve_seconds) *solve_seconds = r.solve_seconds;
   if (from_cache) *from_cache = r.from_cache;
+  if (nodal) *nodal = r.u;
   return interpolate(boundary_, sample_, r.u);
 }
 

@@ -1,5 +1,7 @@
 #include "medspring/fem/tet_mesh.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -235,6 +237,36 @@ std::vector<Index> boundary_nodes(const TetMesh& mesh) {
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
+}
+
+PeakStrain peak_strain(const TetMesh& mesh, const MatX3& u) {
+  require(u.rows() == mesh.num_nodes(), "peak strain: the displacement has ", u.rows(), " rows, the mesh ",
+          mesh.num_nodes(), " nodes");
+  require(u.allFinite(), "peak strain: the displacement must be finite");
+  PeakStrain p;
+  double smin = 1, smax = 1;
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    Mat3 Dm, Ds;
+    for (int k = 0; k < 3; ++k) {
+      const Index a = mesh.T(e, k + 1), o = mesh.T(e, 0);
+      Dm.col(k) = (mesh.X.row(a) - mesh.X.row(o)).transpose();
+      Ds.col(k) = Dm.col(k) + (u.row(a) - u.row(o)).transpose();
+    }
+    const Mat3 F = Ds * Dm.inverse();
+    const Eigen::SelfAdjointEigenSolver<Mat3> es(F.transpose() * F, Eigen::EigenvaluesOnly);
+    const Vec3 l = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();  // ascending
+    if (l(0) < smin) {
+      smin = l(0);
+      p.compressive_element = e;
+    }
+    if (l(2) > smax) {
+      smax = l(2);
+      p.tensile_element = e;
+    }
+  }
+  p.compressive = 1 - smin;
+  p.tensile = smax - 1;
+  return p;
 }
 
 }  // namespace medspring::fem

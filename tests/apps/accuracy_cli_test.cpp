@@ -45,6 +45,15 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
   ASSERT_EQ(j["organs"].size(), 1u);
   const auto& o = j["organs"][0];
   EXPECT_GT(o["fem"]["nodes"].get<int>(), 1000);
+  // the strain the FEM reaches, per solved case (docs/accuracy.md, "Large strain"): nominal = contact
+  // displacement / thickness; the peak element strain lies above it
+  ASSERT_EQ(o["fem"]["strain"].size(), 2u);  // --quick: 2 sites at 0.5 N
+  for (const auto& c : o["fem"]["strain"]) {
+    const double nominal = c["nominal_strain_pct"].get<double>();
+    EXPECT_NEAR(nominal, 100 * c["contact_mm"].get<double>() / o["fem"]["thickness_mm"].get<double>(), 1e-9);
+    EXPECT_GT(nominal, 0.0);
+    EXPECT_GT(c["peak_compressive_strain_pct"].get<double>(), nominal) << c.dump();
+  }
   ASSERT_EQ(o["models"].size(), 16u);  // 8 kinds (6 + volumetric linear, Duffing) x (default, calibrated)
   for (const auto& m : o["models"]) {
     EXPECT_GT(m["update_us"].get<double>(), 0.0);

@@ -126,6 +126,41 @@ TEST(TetMesh, BoxMeshIsConformingAndQuadratic) {
   EXPECT_NEAR(g[1] - g[0], 10.0 / 15.0, 1e-12);  // cells 1 : 2 : 4 : 8
 }
 
+// The large-strain tables' FEM strain (docs/accuracy.md, "Large strain"): an affine field gives its
+// principal stretches exactly on every element, a large rigid rotation none, a local dent is found in its
+// element, and a field of the wrong shape or with a NaN is refused.
+TEST(TetMesh, PeakStrainIsThePrincipalStretchAndIgnoresRigidMotion) {
+  const TetMesh m = box_mesh(graded(0, 2, 2), graded(0, 3, 3), graded(0, 1, 2));
+  const Mat3 R = Eigen::AngleAxisd(1.1, Vec3(1, 2, -0.5).normalized()).toRotationMatrix();
+  const Mat3 S = Vec3(0.7, 1.1, 1.25).asDiagonal();  // 30 % shortening, 25 % stretch
+  const Mat3 V = Eigen::AngleAxisd(0.4, Vec3(0.3, -1, 2).normalized()).toRotationMatrix();
+  auto field = [&](const Mat3& F) {
+    MatX3 u(m.num_nodes(), 3);
+    for (Index i = 0; i < m.num_nodes(); ++i)
+      u.row(i) = (F * m.X.row(i).transpose() - m.X.row(i).transpose() + Vec3(3, -2, 7)).transpose();
+    return u;
+  };
+  const PeakStrain rigid = peak_strain(m, field(R));
+  EXPECT_NEAR(rigid.compressive, 0.0, 1e-12);
+  EXPECT_NEAR(rigid.tensile, 0.0, 1e-12);
+  const PeakStrain a = peak_strain(m, field(R * V * S * V.transpose()));  // rotated principal axes
+  EXPECT_NEAR(a.compressive, 0.3, 1e-12);
+  EXPECT_NEAR(a.tensile, 0.25, 1e-12);
+  // a dent: one corner node of one element pushed in (a node that only few elements share)
+  MatX3 u = MatX3::Zero(m.num_nodes(), 3);
+  const Index node = m.T(5, 0);
+  u(node, 2) = -0.2;
+  const PeakStrain d = peak_strain(m, u);
+  EXPECT_GT(d.compressive, 0.05);
+  ASSERT_GE(d.compressive_element, 0);
+  bool has_node = false;
+  for (int k = 0; k < 4; ++k) has_node |= m.T(d.compressive_element, k) == node;
+  EXPECT_TRUE(has_node) << "the peak sits in an element of the moved node";
+  EXPECT_THROW(peak_strain(m, MatX3::Zero(m.num_nodes() - 1, 3)), InvalidInput);
+  u(0, 0) = NAN;
+  EXPECT_THROW(peak_strain(m, u), InvalidInput);
+}
+
 TEST(TetMesh, ClosedSurfaceIsMeshedByTetgenAndOpenOnesAreRefused) {
   const SurfaceMesh sphere = icosphere(2, 10.0);
   TetgenSettings s;

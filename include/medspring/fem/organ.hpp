@@ -55,9 +55,10 @@ class OrganReference {
   /// support rule picks, and locates the surface nodes on the FEM boundary.
   OrganReference(const SurfaceMesh& surface, const Material& material, const SupportRule& support,
                  const OrganMeshSettings& settings = {});
-  /// FEM displacement (#S x 3, mm) of the surface nodes under `load` (cached by CalculiX input).
+  /// FEM displacement (#S x 3, mm) of the surface nodes under `load` (cached by CalculiX input);
+  /// `nodal`, when given, gets the displacement of every FEM node (mesh().num_nodes() x 3, mm).
   MatX3 surface_displacement(const ContactLoad& load, double* solve_seconds = nullptr,
-                             bool* from_cache = nullptr) const;
+                             bool* from_cache = nullptr, MatX3* nodal = nullptr) const;
   const TetMesh& mesh() const { return problem_.mesh; }
   const std::vector<Index>& fixed_fem_nodes() const { return problem_.fixed; }
   const Material& material() const { return problem_.material; }

@@ -63,4 +63,16 @@ double mesh_volume(const TetMesh& mesh);
 /// Sorted list of the nodes on the boundary (corner and mid-edge).
 std::vector<Index> boundary_nodes(const TetMesh& mesh);
 
+/// The largest strains of a displacement field (issue 23, large strain; docs/accuracy.md): per element the
+/// deformation gradient of its corner nodes (the element's mean for a curved C3D10 field, exact for an
+/// affine one), its principal stretches (eigenvalues of sqrt(F^T F)), and over the mesh the smallest and
+/// the largest. Rigid motions give 0 at any size.
+struct PeakStrain {
+  double compressive = 0;  // 1 - the smallest principal stretch (0.3 = 30 % shortening)
+  double tensile = 0;      // the largest principal stretch - 1
+  Index compressive_element = -1, tensile_element = -1;
+};
+/// InvalidInput for a displacement whose shape is not #N x 3 or that is not finite.
+PeakStrain peak_strain(const TetMesh& mesh, const MatX3& u);
+
 }  // namespace medspring::fem
