@@ -92,7 +92,12 @@ std::string markdown(const json& j) {
     if (o.contains("volumetric"))
       md << "Volumetric spring model: " << o["volumetric"]["nodes"] << " nodes ("
          << o["volumetric"]["surface_nodes"] << " on the surface), " << o["volumetric"]["tetrahedra"]
-         << " linear tetrahedra (TetGen -pqY).\n";
+         << " linear tetrahedra (TetGen -pqY)"
+         << (o["volumetric"].value("surface_subdivisions", 0) > 0
+                 ? cat(", the organ's surface subdivided ", o["volumetric"].value("surface_subdivisions", 0),
+                       " times (compared with the FEM at the organ's own surface nodes)")
+                 : std::string())
+         << ".\n";
     md << "\n| model | parameters | update us | case | contact FEM mm | contact model mm | contact err % | "
           "RMS mm | RMS % | max mm | max % |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|\n";
