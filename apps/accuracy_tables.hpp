@@ -83,7 +83,8 @@ struct Settings {
   bool quiet = false;
 };
 
-/// --kinds, --forces, --nodes, --compression and --surface-subdivisions of `accuracy` and `calibrate` (cmd names the command in errors).
+/// --kinds, --forces, --nodes, --compression and --surface-subdivisions of `accuracy` and `calibrate` (cmd
+/// names the command in errors).
 void read_kind_options(const Args& args, Settings& st, const std::string& cmd);
 /// A progress line on stderr unless --quiet / --json.
 void note(const Settings& s, const std::string& line);

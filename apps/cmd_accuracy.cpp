@@ -64,7 +64,8 @@ int cmd_accuracy(const Args& args) {
                       "vessel-only",
                       "indentation-only",
                       "no-indentation",
-                      "compression", "surface-subdivisions"});
+                      "compression",
+                      "surface-subdivisions"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;

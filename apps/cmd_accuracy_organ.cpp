@@ -49,15 +49,16 @@ namespace {
 
 const VolumetricMesh& volumetric_mesh_of(const Organ& o) {
   if (!o.vmesh)
-    o.vmesh = std::make_shared<const VolumetricMesh>(
-        fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes,
-                                         .surface_subdivisions = o.surface_subdivisions}));
+    o.vmesh = std::make_shared<const VolumetricMesh>(fem::volumetric_mesh(
+        o.surface, {.target_nodes = o.target_nodes, .surface_subdivisions = o.surface_subdivisions}));
   return *o.vmesh;
 }
 
 // The volumetric model's surface displacement at `surface`'s vertices (the first rows of its own surface,
 // which is `surface` subdivided o.surface_subdivisions times), where the FEM's is sampled.
-MatX3 on_organ_surface(const Organ& o, const MatX3& u) { return u.topRows(o.surface.num_vertices()); }
+MatX3 on_organ_surface(const Organ& o, const MatX3& u) {
+  return u.topRows(o.surface.num_vertices());
+}
 
 // Stiffness families: surface (k, k_r); hybrid (k_surf, k_spoke, k_cl, k_r); multipliers m scale them.
 // Volumetric: (springs, volume terms) from E and nu (docs/volumetric.md); no return springs (supports).
@@ -367,7 +368,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       const std::vector<MatX3> lin = fem::spring_displacement_linear(*b, loads);
       // the disk-mean read-out (docs/accuracy.md, "The load site"): |mean_model - mean_FEM| / |mean_FEM|
       auto mean_err = [&](const MatX3& u, const fem::ContactLoad& l, const Vec3& fm) {
-        return 100 * (fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, l, u) - fm).norm() / fm.norm();
+        return 100 * (fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, l, u) - fm).norm() /
+               fm.norm();
       };
       const Eigen::SparseMatrix<double> K = p1_stiffness(vm.X, vm.T, vb->stats().mu, vb->stats().lambda);
       const Model& m = b->model();
@@ -395,6 +397,10 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         const fem::SurfaceError el = fem::compare(on_organ_surface(o, lin[i]), c.u_fem, contact),
                                 ep = fem::compare(on_organ_surface(o, up), c.u_fem, contact);
         const double ml = mean_err(lin[i], c.load, c.fem_mean), mp = mean_err(up, c.load, c.fem_mean);
+        const Vec3 fd = c.load.force.normalized();  // the disk means along the load (compliance / |F|)
+        const auto along = [&](const MatX3& u) {
+          return fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, c.load, u).dot(fd);
+        };
         diag.push_back({{"site", c.site_index},
                         {"force_N", c.force},
                         {"train", c.train},
@@ -405,7 +411,10 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                         {"p1_rms_pct", 100 * ep.rel(ep.rms)},
                         {"p1_contact_ratio", ep.contact_model / ep.contact_fem},
                         {"springs_linear_disk_mean_pct", ml},
-                        {"p1_disk_mean_pct", mp}});
+                        {"p1_disk_mean_pct", mp},
+                        {"fem_disk_mean_along_mm", c.fem_mean.dot(fd)},
+                        {"springs_linear_disk_mean_along_mm", along(lin[i])},
+                        {"p1_disk_mean_along_mm", along(up)}});
         if (!c.train) {
           sums[0] += 100 * el.rel(el.contact_error), sums[1] += 100 * el.rel(el.rms);
           sums[2] += 100 * ep.rel(ep.contact_error), sums[3] += 100 * ep.rel(ep.rms);
@@ -421,12 +430,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
           {"held_out_mean_p1_rms_pct", (nh > 0 ? sums[3] / nh : 0.0)},
           {"held_out_mean_springs_linear_disk_mean_pct", (nh > 0 ? sums[4] / nh : 0.0)},
           {"held_out_mean_p1_disk_mean_pct", (nh > 0 ? sums[5] / nh : 0.0)}};
-      note(st,
-           cat(o.name, ": small strain, held out: springs (E, nu) contact ", (nh > 0 ? sums[0] / nh : 0.0),
-               " %, RMS ", (nh > 0 ? sums[1] / nh : 0.0), " %; P1 FE on the same tetrahedra contact ",
-               (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ", (nh > 0 ? sums[3] / nh : 0.0),
-               " %; disk-mean site error: springs ", (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ",
-               (nh > 0 ? sums[5] / nh : 0.0), " %"));
+      note(st, cat(o.name, ": small strain, held out: springs (E, nu) contact ",
+                   (nh > 0 ? sums[0] / nh : 0.0), " %, RMS ", (nh > 0 ? sums[1] / nh : 0.0),
+                   " %; P1 FE on the same tetrahedra contact ", (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ",
+                   (nh > 0 ? sums[3] / nh : 0.0), " %; disk-mean site error: springs ",
+                   (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ", (nh > 0 ? sums[5] / nh : 0.0), " %"));
     } catch (const Error& e) {  // a diagnosis, never the reason a run fails
       out["volumetric"]["small_strain"] = {{"error", e.what()}};
     }
@@ -464,8 +472,10 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         double mean_pct = 0;
         try {
           u = response(k, m, c.load);
-          mean_pct = 100 * (fem::disk_mean_linear(body->rest_surface(), body->faces(), c.load, u) - c.fem_mean).norm() /
-                     c.fem_mean.norm();
+          mean_pct =
+              100 *
+              (fem::disk_mean_linear(body->rest_surface(), body->faces(), c.load, u) - c.fem_mean).norm() /
+              c.fem_mean.norm();
           u = on_organ_surface(o, u);
         } catch (const SolverError& e) {
           errs.push_back({{"site", c.site_index}, {"force_N", c.force}, {"error", e.what()}});

@@ -319,8 +319,9 @@ const std::vector<CommandSpec>& commands() {
             {.name = "surface-subdivisions",
              .value = "K",
              .def = "0",
-             .help = "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
-                     "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
+             .help =
+                 "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
+                 "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
             {.name = "no-validation", .help = "skip the closed-form validation of the FEM pipeline"},
             {.name = "forces",
              .value = "LIST",
@@ -377,8 +378,9 @@ const std::vector<CommandSpec>& commands() {
             {.name = "surface-subdivisions",
              .value = "K",
              .def = "0",
-             .help = "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
-                     "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
+             .help =
+                 "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
+                 "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
             kScenes,
             kJson,
             kQuiet},

@@ -37,9 +37,10 @@ VolumetricMesh volumetric_mesh(const SurfaceMesh& given, const VolumetricMeshSet
           "volumetric mesh: surface_subdivisions must be in [0, 3] (got ", s.surface_subdivisions, ")");
   SurfaceMesh surface = given;
   for (int i = 0; i < s.surface_subdivisions; ++i) surface = subdivide_midpoint(surface);
-  require(s.target_nodes >= surface.num_vertices(), "volumetric mesh: target_nodes ", s.target_nodes,
-          " is below the surface's ", surface.num_vertices(), " vertices",
-          s.surface_subdivisions > 0 ? cat(" (after ", s.surface_subdivisions, " subdivisions)") : std::string());
+  require(
+      s.target_nodes >= surface.num_vertices(), "volumetric mesh: target_nodes ", s.target_nodes,
+      " is below the surface's ", surface.num_vertices(), " vertices",
+      s.surface_subdivisions > 0 ? cat(" (after ", s.surface_subdivisions, " subdivisions)") : std::string());
   require(s.attempts >= 1, "volumetric mesh: attempts must be >= 1");
   // first guess: interior nodes ~ volume / a * 0.2 (TetGen's quality meshes have ~5-6 tets per node and
   // mean tet volume ~ a / 2)

@@ -22,8 +22,9 @@ struct VolumetricMeshSettings {
 /// Tetrahedralises the closed, outward surface keeping its vertices and faces (TetGen -pqY) with the
 /// volume bound that brings the node count nearest target_nodes (within the attempts). The surface
 /// vertices are nodes [0, #V); with surface_subdivisions k > 0 the model's surface is the subdivided one
-/// (VolumetricMesh::F, surface_nodes), whose first #V vertices are still the given ones. Throws InvalidInput for an open/non-manifold/inward surface or a target
-/// below the surface's vertex count, SolverError when TetGen fails.
+/// (VolumetricMesh::F, surface_nodes), whose first #V vertices are still the given ones. Throws InvalidInput
+/// for an open/non-manifold/inward surface or a target below the surface's vertex count, SolverError when
+/// TetGen fails.
 VolumetricMesh volumetric_mesh(const SurfaceMesh& surface, const VolumetricMeshSettings& settings = {});
 
 }  // namespace medspring::fem
