@@ -35,6 +35,11 @@ struct Organ {
   mutable std::shared_ptr<const VolumetricMesh> vmesh;
   mutable double E_kPa = 10, nu = 0.45;
   mutable Index target_nodes = 2000;
+  // --surface-subdivisions: the volumetric model's surface is `surface` subdivided this many times
+  // (VolumetricMeshSettings::surface_subdivisions), held by the same rule (vsupport: its pinned nodes);
+  // its first #V surface nodes are `surface`'s, where it is compared with the FEM
+  mutable int surface_subdivisions = 0;
+  mutable std::vector<Index> vsupport;
   // VolumetricSettings::compression
   mutable double compression = kDefaultVolumetricCompression;
 };
@@ -70,6 +75,7 @@ struct Settings {
   bool quick = false;
   std::vector<std::string> kinds;  // --kinds: the bases to run (empty: all)
   Index volumetric_nodes = 2000;   // --nodes
+  int surface_subdivisions = 0;    // --surface-subdivisions (volumetric kinds)
   // --compression (volumetric kinds)
   double compression = kDefaultVolumetricCompression;
   std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)
@@ -77,7 +83,8 @@ struct Settings {
   bool quiet = false;
 };
 
-/// --kinds, --forces and --nodes of `accuracy` and `calibrate` (cmd names the command in errors).
+/// --kinds, --forces, --nodes, --compression and --surface-subdivisions of `accuracy` and `calibrate` (cmd
+/// names the command in errors).
 void read_kind_options(const Args& args, Settings& st, const std::string& cmd);
 /// A progress line on stderr unless --quiet / --json.
 void note(const Settings& s, const std::string& line);

@@ -64,7 +64,8 @@ int cmd_accuracy(const Args& args) {
                       "vessel-only",
                       "indentation-only",
                       "no-indentation",
-                      "compression"});
+                      "compression",
+                      "surface-subdivisions"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -224,7 +225,7 @@ int cmd_accuracy(const Args& args) {
 
 int cmd_calibrate(const Args& args) {
   args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
-                      "compression"});
+                      "compression", "surface-subdivisions"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));

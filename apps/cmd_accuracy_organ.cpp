@@ -49,9 +49,15 @@ namespace {
 
 const VolumetricMesh& volumetric_mesh_of(const Organ& o) {
   if (!o.vmesh)
-    o.vmesh = std::make_shared<const VolumetricMesh>(
-        fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes}));
+    o.vmesh = std::make_shared<const VolumetricMesh>(fem::volumetric_mesh(
+        o.surface, {.target_nodes = o.target_nodes, .surface_subdivisions = o.surface_subdivisions}));
   return *o.vmesh;
+}
+
+// The volumetric model's surface displacement at `surface`'s vertices (the first rows of its own surface,
+// which is `surface` subdivided o.surface_subdivisions times), where the FEM's is sampled.
+MatX3 on_organ_surface(const Organ& o, const MatX3& u) {
+  return u.topRows(o.surface.num_vertices());
 }
 
 // Stiffness families: surface (k, k_r); hybrid (k_surf, k_spoke, k_cl, k_r); multipliers m scale them.
@@ -66,7 +72,7 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.moduli_correction = k.corrected;
     s.compression = o.compression;
     if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
-    s.fixed = support;
+    s.fixed = o.surface_subdivisions > 0 ? o.vsupport : support;
     return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
   }
   if (k.base == "surface") {
@@ -172,6 +178,9 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   const long long nodes = args.integer("nodes", 2000);
   require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
   st.volumetric_nodes = static_cast<Index>(nodes);
+  const long long sub = args.integer("surface-subdivisions", 0);
+  require(sub >= 0 && sub <= 3, cmd, ": --surface-subdivisions must be in [0, 3] (got ", sub, ")");
+  st.surface_subdivisions = static_cast<int>(sub);
   st.compression = args.number("compression", st.compression);
   require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
           st.compression, ")");
@@ -232,6 +241,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     MatX3 u_fem;
     double seconds;
     bool train;
+    Vec3 fem_mean = Vec3::Zero();  // the FEM's mean displacement over the disk (the site read-out by area)
   };
   std::vector<Case> cases;
   json fem_failed = json::array();
@@ -249,7 +259,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       note(st, cat(o.name, ": FEM site ", si, ", ", F, " N"));
       MatX3 u_nodes;
       try {
-        c.u_fem = ref.surface_displacement(c.load, &c.seconds, &cached, &u_nodes);
+        c.u_fem = ref.surface_displacement(c.load, &c.seconds, &cached, &c.fem_mean, &u_nodes);
       } catch (const SolverError& e) {  // e.g. no equilibrium at a large strain: reported, not hidden
         note(st, cat(o.name, ": FEM site ", si, ", ", F, " N: no equilibrium"));
         fem_failed.push_back({{"site", si}, {"force_N", F}, {"train", c.train}, {"error", e.what()}});
@@ -327,10 +337,14 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   o.nu = st.material.nu;
   o.target_nodes = st.volumetric_nodes;
   o.compression = st.compression;
+  o.surface_subdivisions = st.surface_subdivisions;
   if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
     const VolumetricMesh& vm = volumetric_mesh_of(o);
+    if (o.surface_subdivisions > 0)  // the same rule on the refined surface (its mid-edge points too)
+      o.vsupport = fem::support_nodes(SurfaceMesh{vm.X.topRows(vm.surface_nodes), vm.F}, rule);
     out["volumetric"] = {{"nodes", vm.X.rows()},
                          {"surface_nodes", vm.surface_nodes},
+                         {"surface_subdivisions", o.surface_subdivisions},
                          {"tetrahedra", vm.T.rows()},
                          {"target_nodes", st.volumetric_nodes},
                          {"compression", st.compression}};
@@ -366,13 +380,18 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       std::vector<fem::ContactLoad> loads;
       for (const auto& c : cases) loads.push_back(c.load);
       const std::vector<MatX3> lin = fem::spring_displacement_linear(*b, loads);
+      // the disk-mean read-out (docs/accuracy.md, "The load site"): |mean_model - mean_FEM| / |mean_FEM|
+      auto mean_err = [&](const MatX3& u, const fem::ContactLoad& l, const Vec3& fm) {
+        return 100 * (fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, l, u) - fm).norm() /
+               fm.norm();
+      };
       const Eigen::SparseMatrix<double> K = p1_stiffness(vm.X, vm.T, vb->stats().mu, vb->stats().lambda);
       const Model& m = b->model();
       Index nf = 0;
       const std::vector<Index> map = fem::free_dof_map(m, nf);
       const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(fem::restrict_to_free(K, map, nf));
       json diag = json::array();
-      double sums[4] = {0, 0, 0, 0}, nh = 0;
+      double sums[6] = {0, 0, 0, 0, 0, 0}, nh = 0;
       for (std::size_t i = 0; i < cases.size(); ++i) {
         const auto& c = cases[i];
         const MatX3 fs = fem::disk_load_linear(vm.X.topRows(vm.surface_nodes), vm.F, c.load.centre,
@@ -389,8 +408,13 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
             if (map[static_cast<std::size_t>(3 * a + d)] >= 0)
               up(a, d) = u[map[static_cast<std::size_t>(3 * a + d)]];
         const Index contact = sites[static_cast<std::size_t>(c.site_index)];
-        const fem::SurfaceError el = fem::compare(lin[i], c.u_fem, contact),
-                                ep = fem::compare(up, c.u_fem, contact);
+        const fem::SurfaceError el = fem::compare(on_organ_surface(o, lin[i]), c.u_fem, contact),
+                                ep = fem::compare(on_organ_surface(o, up), c.u_fem, contact);
+        const double ml = mean_err(lin[i], c.load, c.fem_mean), mp = mean_err(up, c.load, c.fem_mean);
+        const Vec3 fd = c.load.force.normalized();  // the disk means along the load (compliance / |F|)
+        const auto along = [&](const MatX3& u) {
+          return fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, c.load, u).dot(fd);
+        };
         diag.push_back({{"site", c.site_index},
                         {"force_N", c.force},
                         {"train", c.train},
@@ -399,10 +423,16 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                         {"springs_linear_contact_ratio", el.contact_model / el.contact_fem},
                         {"p1_contact_pct", 100 * ep.rel(ep.contact_error)},
                         {"p1_rms_pct", 100 * ep.rel(ep.rms)},
-                        {"p1_contact_ratio", ep.contact_model / ep.contact_fem}});
+                        {"p1_contact_ratio", ep.contact_model / ep.contact_fem},
+                        {"springs_linear_disk_mean_pct", ml},
+                        {"p1_disk_mean_pct", mp},
+                        {"fem_disk_mean_along_mm", c.fem_mean.dot(fd)},
+                        {"springs_linear_disk_mean_along_mm", along(lin[i])},
+                        {"p1_disk_mean_along_mm", along(up)}});
         if (!c.train) {
           sums[0] += 100 * el.rel(el.contact_error), sums[1] += 100 * el.rel(el.rms);
           sums[2] += 100 * ep.rel(ep.contact_error), sums[3] += 100 * ep.rel(ep.rms);
+          sums[4] += ml, sums[5] += mp;
           nh += 1;
         }
       }
@@ -411,11 +441,14 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
           {"held_out_mean_springs_linear_contact_pct", (nh > 0 ? sums[0] / nh : 0.0)},
           {"held_out_mean_springs_linear_rms_pct", (nh > 0 ? sums[1] / nh : 0.0)},
           {"held_out_mean_p1_contact_pct", (nh > 0 ? sums[2] / nh : 0.0)},
-          {"held_out_mean_p1_rms_pct", (nh > 0 ? sums[3] / nh : 0.0)}};
-      note(st,
-           cat(o.name, ": small strain, held out: springs (E, nu) contact ", (nh > 0 ? sums[0] / nh : 0.0),
-               " %, RMS ", (nh > 0 ? sums[1] / nh : 0.0), " %; P1 FE on the same tetrahedra contact ",
-               (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ", (nh > 0 ? sums[3] / nh : 0.0), " %"));
+          {"held_out_mean_p1_rms_pct", (nh > 0 ? sums[3] / nh : 0.0)},
+          {"held_out_mean_springs_linear_disk_mean_pct", (nh > 0 ? sums[4] / nh : 0.0)},
+          {"held_out_mean_p1_disk_mean_pct", (nh > 0 ? sums[5] / nh : 0.0)}};
+      note(st, cat(o.name, ": small strain, held out: springs (E, nu) contact ",
+                   (nh > 0 ? sums[0] / nh : 0.0), " %, RMS ", (nh > 0 ? sums[1] / nh : 0.0),
+                   " %; P1 FE on the same tetrahedra contact ", (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ",
+                   (nh > 0 ? sums[3] / nh : 0.0), " %; disk-mean site error: springs ",
+                   (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ", (nh > 0 ? sums[5] / nh : 0.0), " %"));
     } catch (const Error& e) {  // a diagnosis, never the reason a run fails
       out["volumetric"]["small_strain"] = {{"error", e.what()}};
     }
@@ -423,6 +456,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   // The displacement of kind k with its families scaled by m (+ local: the last multiplier scales k_loc).
   auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {
     const BodyPtr body = make_body(o, k, support, m);
+    if (k.base == "volumetric") return fem::spring_displacement(*body, load);  // its own (refined) surface
     return k.local ? fem::spring_displacement_local(*body, load, body->local_stiffness() * m(k.local_index()))
                    : fem::spring_displacement(*body, load);
   };
@@ -434,7 +468,9 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         if (k.base == "volumetric")  // on the small-strain response: one factorisation per ratio
           m = fem::calibrate_scale_and_ratio(
               [&](const VecX& mm, const std::vector<fem::ContactLoad>& ls) {
-                return fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
+                std::vector<MatX3> us = fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
+                for (MatX3& u : us) u = on_organ_surface(o, u);
+                return us;
               },
               training);
         else
@@ -447,8 +483,14 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       double sum_rms_rel_held = 0, n_held = 0;
       for (const auto& c : cases) {
         MatX3 u;
+        double mean_pct = 0;
         try {
           u = response(k, m, c.load);
+          mean_pct =
+              100 *
+              (fem::disk_mean_linear(body->rest_surface(), body->faces(), c.load, u) - c.fem_mean).norm() /
+              c.fem_mean.norm();
+          u = on_organ_surface(o, u);
         } catch (const SolverError& e) {
           errs.push_back({{"site", c.site_index}, {"force_N", c.force}, {"error", e.what()}});
           continue;
@@ -467,6 +509,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                         {"contact_model_mm", e.contact_model},
                         {"contact_error_mm", e.contact_error},
                         {"contact_error_pct", 100 * e.rel(e.contact_error)},
+                        {"disk_mean_error_pct", mean_pct},
                         {"rms_mm", e.rms},
                         {"rms_pct", 100 * e.rel(e.rms)},
                         {"max_mm", e.max},

@@ -316,6 +316,12 @@ const std::vector<CommandSpec>& commands() {
              .value = "C",
              .def = "32",
              .help = "volumetric kinds: compression stiffening c (units of mu; 0 = off; docs/volumetric.md)"},
+            {.name = "surface-subdivisions",
+             .value = "K",
+             .def = "0",
+             .help =
+                 "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
+                 "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
             {.name = "no-validation", .help = "skip the closed-form validation of the FEM pipeline"},
             {.name = "forces",
              .value = "LIST",
@@ -369,6 +375,12 @@ const std::vector<CommandSpec>& commands() {
              .value = "C",
              .def = "32",
              .help = "volumetric kinds: compression stiffening c (units of mu; 0 = off; docs/volumetric.md)"},
+            {.name = "surface-subdivisions",
+             .value = "K",
+             .def = "0",
+             .help =
+                 "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
+                 "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
             kScenes,
             kJson,
             kQuiet},

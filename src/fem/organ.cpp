@@ -111,15 +111,26 @@ OrganReference::OrganReference(const SurfaceMesh& surface, const Material& mater
 }
 
 MatX3 OrganReference::surface_displacement(const ContactLoad& load, double* solve_seconds, bool* from_cache,
-                                           MatX3* nodal) const {
+                                           Vec3* disk_mean, MatX3* nodal) const {
   FemProblem p = problem_;
   for (const auto& [node, f] : disk_load_quadratic(p.mesh, boundary_, load.centre, load.radius, load.force))
     p.loads.push_back({node, f});
   const FemResult r = solve(p, settings_.solver);
   if (solve_seconds) *solve_seconds = r.solve_seconds;
   if (from_cache) *from_cache = r.from_cache;
+  if (disk_mean) {
+    const double F2 = load.force.squaredNorm();
+    *disk_mean = Vec3::Zero();
+    for (const auto& l : p.loads) *disk_mean += (l.force.dot(load.force) / F2) * r.u.row(l.node).transpose();
+  }
   if (nodal) *nodal = r.u;
   return interpolate(boundary_, sample_, r.u);
+}
+
+Vec3 disk_mean_linear(const MatX3& V, const MatX3i& F, const ContactLoad& load, const MatX3& u) {
+  require(u.rows() == V.rows(), "disk mean: ", u.rows(), " displacements for ", V.rows(), " vertices");
+  const VecX w = disk_load_linear(V, F, load.centre, load.radius, Vec3(1, 0, 0)).col(0);
+  return (u.transpose() * w);
 }
 
 namespace {

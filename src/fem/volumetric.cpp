@@ -1,8 +1,10 @@
 #include "medspring/fem/volumetric.hpp"
 
 #include <cmath>
+#include <string>
 
 #include "medspring/core/check.hpp"
+#include "medspring/fem/organ.hpp"
 
 namespace medspring::fem {
 
@@ -30,9 +32,15 @@ VolumetricMesh linear_mesh(const SurfaceMesh& surface, double max_volume, double
 
 }  // namespace
 
-VolumetricMesh volumetric_mesh(const SurfaceMesh& surface, const VolumetricMeshSettings& s) {
-  require(s.target_nodes >= surface.num_vertices(), "volumetric mesh: target_nodes ", s.target_nodes,
-          " is below the surface's ", surface.num_vertices(), " vertices");
+VolumetricMesh volumetric_mesh(const SurfaceMesh& given, const VolumetricMeshSettings& s) {
+  require(s.surface_subdivisions >= 0 && s.surface_subdivisions <= 3,
+          "volumetric mesh: surface_subdivisions must be in [0, 3] (got ", s.surface_subdivisions, ")");
+  SurfaceMesh surface = given;
+  for (int i = 0; i < s.surface_subdivisions; ++i) surface = subdivide_midpoint(surface);
+  require(
+      s.target_nodes >= surface.num_vertices(), "volumetric mesh: target_nodes ", s.target_nodes,
+      " is below the surface's ", surface.num_vertices(), " vertices",
+      s.surface_subdivisions > 0 ? cat(" (after ", s.surface_subdivisions, " subdivisions)") : std::string());
   require(s.attempts >= 1, "volumetric mesh: attempts must be >= 1");
   // first guess: interior nodes ~ volume / a * 0.2 (TetGen's quality meshes have ~5-6 tets per node and
   // mean tet volume ~ a / 2)

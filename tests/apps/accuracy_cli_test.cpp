@@ -64,6 +64,9 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
       }
       EXPECT_TRUE(std::isfinite(c["rms_mm"].get<double>()));
       EXPECT_GT(c["contact_fem_mm"].get<double>(), 0.0);
+      // the disk-mean read-out (docs/accuracy.md, "The load site"): every scored case has one
+      const double dm = c.value("disk_mean_error_pct", -1.0);
+      EXPECT_TRUE(std::isfinite(dm) && dm >= 0.0 && dm < 1000.0) << c.dump();
     }
   }
   // calibration lowers the training error of the hybrid model (the fit minimises it)

@@ -11,6 +11,7 @@
 #include "medspring/fem/calculix.hpp"
 #include "medspring/fem/frd.hpp"
 #include "medspring/fem/matching.hpp"
+#include "medspring/fem/organ.hpp"
 #include "medspring/fem/tet_mesh.hpp"
 #include "medspring/fem/validation.hpp"
 #include "medspring/geometry/phantoms.hpp"
@@ -245,6 +246,52 @@ TEST(Matching, DiskLoadsCarryTheTotalForceAndQuadraticInterpolationIsExactOnLine
                    smp.bary(i, 2) * Vec3(m.X.row(B(t, 2)));
     EXPECT_NEAR((ui.row(i).transpose() - (A * x + b)).norm(), 0.0, 1e-12);
   }
+}
+
+// The load-site read-out (docs/accuracy.md, "The load site"): the disk load's weights on an off-centre disk
+// of a graded flat patch sum to 1 and have the disk's centre as their centroid, on both sides (linear and
+// quadratic faces), so the disk mean of a linear field u = A x + b is its value at the centre. Lumping the
+// load equally on the nodes inside the disk (a wrong rule) misses the centroid on the graded patch.
+TEST(Matching, DiskLoadWeightsHaveTheDisksCentroidOnAGradedFlatPatch) {
+  const TetMesh m = box_mesh(graded(-6, 6, 8, 1.6), graded(-6, 6, 7, 0.7), graded(-4, 0, 2));
+  const MatX6i top = faces_on_plane(m, boundary_faces(m), 2, 0.0);
+  const Vec3 c(1.3, -0.7, 0.0), F(0.2, -0.1, -1.0);
+  const double a = 3.0;
+  Vec3 sum = Vec3::Zero(), centroid = Vec3::Zero();
+  double wsum = 0;
+  for (const auto& [node, f] : disk_load_quadratic(m, top, c, a, F)) {
+    const double w = f.dot(F) / F.squaredNorm();
+    sum += f;
+    wsum += w;
+    centroid += w * Vec3(m.X.row(node));
+  }
+  EXPECT_NEAR((sum - F).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(wsum, 1.0, 1e-12);
+  EXPECT_NEAR((centroid - c).norm(), 0.0, 0.01) << centroid.transpose();  // 256 sub-triangles per face
+  // linear triangles: the patch's corner triangles
+  MatX3 V(m.num_nodes(), 3);
+  V = m.X;
+  MatX3i T(top.rows(), 3);
+  for (Index t = 0; t < top.rows(); ++t) T.row(t) << top(t, 0), top(t, 1), top(t, 2);
+  const MatX3 fl = disk_load_linear(V, T, c, a, F);
+  EXPECT_NEAR((fl.colwise().sum().transpose() - F).norm(), 0.0, 1e-12);
+  const VecX w = fl * F / F.squaredNorm();
+  EXPECT_NEAR((V.transpose() * w - c).norm(), 0.0, 0.01);
+  Mat3 A;
+  A << 0.1, 0.2, -0.3, 0.05, -0.1, 0.2, 0.3, 0.1, 0.0;
+  const Vec3 b(1, -2, 0.5);
+  MatX3 u(V.rows(), 3);
+  for (Index i = 0; i < V.rows(); ++i) u.row(i) = (A * Vec3(V.row(i)) + b).transpose();
+  EXPECT_NEAR((disk_mean_linear(V, T, {c, F, a}, u) - (A * c + b)).norm(), 0.0, 0.01);
+  // the wrong rule: the whole load on the nodes inside the disk, equally
+  Vec3 lumped = Vec3::Zero();
+  double n = 0;
+  for (Index i = 0; i < V.rows(); ++i)
+    if (w[i] != 0.0 && (Vec3(V.row(i)) - c).norm() < a) lumped += Vec3(V.row(i)), n += 1;
+  const double lin_err = (V.transpose() * w - c).norm(), lumped_err = (lumped / n - c).norm();
+  EXPECT_GT(lumped_err, 0.05);
+  EXPECT_GT(lumped_err, 5 * lin_err) << lin_err << " " << (centroid - c).norm();
+  EXPECT_THROW(disk_mean_linear(V, T, {c, F, a}, u.topRows(3)), InvalidInput);
 }
 
 TEST(Calculix, AMissingCcxNamesThePackage) {

@@ -375,6 +375,23 @@ TEST(Volumetric, TetgenBuildAimsAtTheNodeCountAndKeepsTheSurface) {
   EXPECT_THROW(fem::volumetric_mesh(surf, {.target_nodes = 10}), InvalidInput);
 }
 
+// surface_subdivisions (docs/accuracy.md, "The load site"): the model's surface is the given one subdivided
+// at edge midpoints (the same polyhedron, 4x the faces), its first #V nodes the given vertices, unmoved.
+TEST(Volumetric, SubdividedSurfaceKeepsTheGivenVerticesFirstAndTheSamePolyhedron) {
+  const SurfaceMesh surf = kidney_phantom();
+  const Index nv = surf.num_vertices(), nf = surf.num_faces();
+  const VolumetricMesh vm = fem::volumetric_mesh(surf, {.target_nodes = 4 * nv, .surface_subdivisions = 1});
+  EXPECT_EQ(vm.surface_nodes, nv + 3 * nf / 2);  // V + E on a closed triangle surface
+  EXPECT_EQ(vm.F.rows(), 4 * nf);
+  EXPECT_EQ((vm.X.topRows(nv) - surf.V).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(vm.X.rows(), vm.surface_nodes);  // an interior
+  EXPECT_NEAR(std::abs(signed_volume(vm.X.topRows(vm.surface_nodes), vm.F)),
+              std::abs(signed_volume(surf.V, surf.F)), 1e-9 * std::abs(signed_volume(surf.V, surf.F)));
+  // the target counts the refined surface's vertices; the subdivision count is bounded
+  EXPECT_THROW(fem::volumetric_mesh(surf, {.target_nodes = 2 * nv, .surface_subdivisions = 1}), InvalidInput);
+  EXPECT_THROW(fem::volumetric_mesh(surf, {.target_nodes = 4 * nv, .surface_subdivisions = 4}), InvalidInput);
+}
+
 TEST(Volumetric, ModelPackageRebuildsTheSameModel) {
   const VolumetricMesh vm = fem::volumetric_mesh(kidney_phantom(), {.target_nodes = 700});
   VolumetricSettings st;

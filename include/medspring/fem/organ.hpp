@@ -55,10 +55,14 @@ class OrganReference {
   /// support rule picks, and locates the surface nodes on the FEM boundary.
   OrganReference(const SurfaceMesh& surface, const Material& material, const SupportRule& support,
                  const OrganMeshSettings& settings = {});
-  /// FEM displacement (#S x 3, mm) of the surface nodes under `load` (cached by CalculiX input);
+  /// FEM displacement (#S x 3, mm) of the surface nodes under `load` (cached by CalculiX input).
+  /// disk_mean (optional) gets the mean displacement over the load's disk, (1/A) ∫_disk u dA with the
+  /// quadratic faces' own interpolation: sum_i w_i u_i over the FEM nodes with the weights of its nodal
+  /// forces (disk_load_quadratic / |F|, summing to 1) — the displacement conjugate to the traction.
   /// `nodal`, when given, gets the displacement of every FEM node (mesh().num_nodes() x 3, mm).
   MatX3 surface_displacement(const ContactLoad& load, double* solve_seconds = nullptr,
-                             bool* from_cache = nullptr, MatX3* nodal = nullptr) const;
+                             bool* from_cache = nullptr, Vec3* disk_mean = nullptr,
+                             MatX3* nodal = nullptr) const;
   const TetMesh& mesh() const { return problem_.mesh; }
   const std::vector<Index>& fixed_fem_nodes() const { return problem_.fixed; }
   const Material& material() const { return problem_.material; }
@@ -89,6 +93,11 @@ std::vector<Index> apply_support_rule(const MatX3& P, const MatX3& N, const Supp
 /// displacement of its surface nodes (#S x 3, mm). The disk load becomes nodal forces on the surface
 /// (disk_load_linear) that travel the body's force map. Throws SolverError when there is no equilibrium.
 MatX3 spring_displacement(const Body& body, const ContactLoad& load);
+
+/// The mean displacement over the load's disk, (1/A) ∫_disk u dA, of a field u (#V x 3) on the linear
+/// triangles (V, F): sum_i w_i u_i with the weights of disk_load_linear (its forces / |F|, summing to 1),
+/// the same read-out as OrganReference's disk_mean on the FEM side (docs/accuracy.md, "The load site").
+Vec3 disk_mean_linear(const MatX3& V, const MatX3i& F, const ContactLoad& load, const MatX3& u);
 
 /// The DOFs of the model's free nodes: map[3 a + d] is the index of node a's component d among them (-1
 /// for pinned nodes); `free` gets their count.

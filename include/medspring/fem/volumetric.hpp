@@ -12,12 +12,19 @@ struct VolumetricMeshSettings {
   Index target_nodes = 2000;  // total nodes aimed at (surface + interior); at least the surface's
   double radius_edge = 1.6;   // TetGen quality bound
   int attempts = 5;           // TetGen runs to approach target_nodes (volume bound rescaled each time)
+  // midpoint subdivisions of the surface before meshing (0..3; subdivide_midpoint, organ.hpp): the same
+  // polyhedron with 4^k times the faces, its first #V vertices the given ones, so a load spread over a
+  // small disk (a tool tip, the accuracy tables' contact disk) falls on many nodes instead of a handful
+  // (docs/accuracy.md, "The load site"). target_nodes counts the refined surface's vertices.
+  int surface_subdivisions = 0;
 };
 
 /// Tetrahedralises the closed, outward surface keeping its vertices and faces (TetGen -pqY) with the
 /// volume bound that brings the node count nearest target_nodes (within the attempts). The surface
-/// vertices are nodes [0, #V). Throws InvalidInput for an open/non-manifold/inward surface or a target
-/// below the surface's vertex count, SolverError when TetGen fails.
+/// vertices are nodes [0, #V); with surface_subdivisions k > 0 the model's surface is the subdivided one
+/// (VolumetricMesh::F, surface_nodes), whose first #V vertices are still the given ones. Throws InvalidInput
+/// for an open/non-manifold/inward surface or a target below the surface's vertex count, SolverError when
+/// TetGen fails.
 VolumetricMesh volumetric_mesh(const SurfaceMesh& surface, const VolumetricMeshSettings& settings = {});
 
 }  // namespace medspring::fem
