@@ -72,6 +72,8 @@ struct Settings {
   Index volumetric_nodes = 2000;   // --nodes
   // --compression (volumetric kinds)
   double compression = kDefaultVolumetricCompression;
+  // --fit nonlinear (default) | small-strain: the volumetric calibration refined on the full response
+  bool fit_nonlinear = true;
   std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;

@@ -316,6 +316,11 @@ const std::vector<CommandSpec>& commands() {
              .value = "C",
              .def = "32",
              .help = "volumetric kinds: compression stiffening c (units of mu; 0 = off; docs/volumetric.md)"},
+            {.name = "fit",
+             .value = "nonlinear|small-strain",
+             .def = "nonlinear",
+             .help = "volumetric calibration: the small-strain fit refined with c on the full response, or "
+                     "the small-strain fit alone (docs/accuracy.md)"},
             {.name = "no-validation", .help = "skip the closed-form validation of the FEM pipeline"},
             {.name = "forces",
              .value = "LIST",
@@ -369,6 +374,11 @@ const std::vector<CommandSpec>& commands() {
              .value = "C",
              .def = "32",
              .help = "volumetric kinds: compression stiffening c (units of mu; 0 = off; docs/volumetric.md)"},
+            {.name = "fit",
+             .value = "nonlinear|small-strain",
+             .def = "nonlinear",
+             .help = "volumetric calibration: the small-strain fit refined with c on the full response, or "
+                     "the small-strain fit alone (docs/accuracy.md)"},
             kScenes,
             kJson,
             kQuiet},
