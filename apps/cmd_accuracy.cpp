@@ -65,7 +65,8 @@ int cmd_accuracy(const Args& args) {
                       "indentation-only",
                       "no-indentation",
                       "compression",
-                      "fit"});
+                      "fit",
+                      "train-force"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -225,7 +226,7 @@ int cmd_accuracy(const Args& args) {
 
 int cmd_calibrate(const Args& args) {
   args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
-                      "compression", "fit"});
+                      "compression", "fit", "train-force"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));

@@ -172,7 +172,9 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   const long long nodes = args.integer("nodes", 2000);
   require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
   st.volumetric_nodes = static_cast<Index>(nodes);
-  const std::string fit = args.get_or("fit", "nonlinear");
+  st.train_force = args.number("train-force", 0.0);
+  require(std::isfinite(st.train_force) && st.train_force >= 0, cmd, ": --train-force must be > 0 N");
+  const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
   require(fit == "nonlinear" || fit == "small-strain", cmd,
           ": --fit must be nonlinear or small-strain (got '", fit, "')");
   st.fit_nonlinear = fit == "nonlinear";
@@ -197,9 +199,12 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                                      : st.quick         ? std::vector<double>{0.5}
                                                         : std::vector<double>{0.2, 0.5, 1.0};
   // training force: 0.5 N, or the smallest of --forces without it (large-strain runs train on small loads)
-  const double train_force = std::find(forces.begin(), forces.end(), 0.5) != forces.end()
+  const double train_force = st.train_force > 0 ? st.train_force
+                             : std::find(forces.begin(), forces.end(), 0.5) != forces.end()
                                  ? 0.5
                                  : *std::min_element(forces.begin(), forces.end());
+  require(std::find(forces.begin(), forces.end(), train_force) != forces.end(), "accuracy: --train-force ",
+          train_force, " N is not one of the forces");
   // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
   const std::size_t train_sites = st.quick ? 1 : 2;
   json out = {{"organ", o.name},
