@@ -173,7 +173,8 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
   st.volumetric_nodes = static_cast<Index>(nodes);
   st.train_force = args.number("train-force", 0.0);
-  require(std::isfinite(st.train_force) && st.train_force >= 0, cmd, ": --train-force must be > 0 N");
+  require(std::isfinite(st.train_force) && (st.train_force > 0 || !args.get("train-force")), cmd,
+          ": --train-force must be > 0 N (got ", st.train_force, ")");
   const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
   require(fit == "nonlinear" || fit == "small-strain", cmd,
           ": --fit must be nonlinear or small-strain (got '", fit, "')");
