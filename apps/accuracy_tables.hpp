@@ -78,6 +78,9 @@ struct Settings {
   int surface_subdivisions = 0;    // --surface-subdivisions (volumetric kinds)
   // --compression (volumetric kinds)
   double compression = kDefaultVolumetricCompression;
+  // --fit nonlinear (default) | small-strain: the volumetric calibration refined on the full response
+  bool fit_nonlinear = true;
+  double train_force = 0;      // --train-force (N): the training sites' load (0: 0.5 N or the smallest force)
   std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;

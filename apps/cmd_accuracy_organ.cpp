@@ -70,8 +70,8 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.spring_scale = m(0);
     s.volume_scale = m(1);
     s.moduli_correction = k.corrected;
-    s.compression = o.compression;
-    if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
+    s.compression = o.compression * (m.size() > 2 ? m(2) : 1.0);  // m(2): the nonlinear fit's c multiplier
+    if (k.nonlinear) s.duffing = DuffingSettings{};               // Strain, eta = 1 (D-3)
     s.fixed = o.surface_subdivisions > 0 ? o.vsupport : support;
     return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
   }
@@ -181,6 +181,13 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   const long long sub = args.integer("surface-subdivisions", 0);
   require(sub >= 0 && sub <= 3, cmd, ": --surface-subdivisions must be in [0, 3] (got ", sub, ")");
   st.surface_subdivisions = static_cast<int>(sub);
+  st.train_force = args.number("train-force", 0.0);
+  require(std::isfinite(st.train_force) && (st.train_force > 0 || !args.get("train-force")), cmd,
+          ": --train-force must be > 0 N (got ", st.train_force, ")");
+  const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
+  require(fit == "nonlinear" || fit == "small-strain", cmd,
+          ": --fit must be nonlinear or small-strain (got '", fit, "')");
+  st.fit_nonlinear = fit == "nonlinear";
   st.compression = args.number("compression", st.compression);
   require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
           st.compression, ")");
@@ -202,9 +209,12 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                                      : st.quick         ? std::vector<double>{0.5}
                                                         : std::vector<double>{0.2, 0.5, 1.0};
   // training force: 0.5 N, or the smallest of --forces without it (large-strain runs train on small loads)
-  const double train_force = std::find(forces.begin(), forces.end(), 0.5) != forces.end()
+  const double train_force = st.train_force > 0 ? st.train_force
+                             : std::find(forces.begin(), forces.end(), 0.5) != forces.end()
                                  ? 0.5
                                  : *std::min_element(forces.begin(), forces.end());
+  require(std::find(forces.begin(), forces.end(), train_force) != forces.end(), "accuracy: --train-force ",
+          train_force, " N is not one of the forces");
   // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
   const std::size_t train_sites = st.quick ? 1 : 2;
   json out = {{"organ", o.name},
@@ -463,9 +473,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   for (const Kind& k : kinds) {
     for (bool calibrated : {false, true}) {
       VecX m = VecX::Ones(k.families());
+      json fit = nullptr;
       if (calibrated) {
         note(st, cat(o.name, ": calibrating ", k.label()));
-        if (k.base == "volumetric")  // on the small-strain response: one factorisation per ratio
+        if (k.base == "volumetric") {  // on the small-strain response: one factorisation per ratio
+          const auto t0 = std::chrono::steady_clock::now();
           m = fem::calibrate_scale_and_ratio(
               [&](const VecX& mm, const std::vector<fem::ContactLoad>& ls) {
                 std::vector<MatX3> us = fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
@@ -473,14 +485,39 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                 return us;
               },
               training);
-        else
+          fit = {{"small_strain_multipliers", {m(0), m(1)}}, {"nonlinear", false}};
+          // then on the full response of the same training loads: the compression coefficient c, which the
+          // small-strain response cannot see, and the two scales (docs/accuracy.md, "Calibration of the
+          // nonlinear response")
+          if (st.fit_nonlinear && o.compression > 0) {
+            note(st, cat(o.name, ": small-strain fit springs x ", m(0), ", volume x ", m(1),
+                         "; refining with c on the full response"));
+            const fem::VolumetricFit vf = fem::calibrate_volumetric_nonlinear(
+                [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, m, training);
+            const fem::RefineResult& rr = vf.refine;
+            m = vf.m;
+            fit["nonlinear"] = true;
+            fit["start"] = vf.from_small_strain ? "small-strain fit" : "closed forms (E, nu)";
+            fit["spans"] = fem::kVolumetricRefineSpans;
+            fit["small_strain_cost"] = vf.small_strain_cost;
+            fit["closed_forms_cost"] = vf.closed_forms_cost;
+            fit["cost"] = rr.cost;
+            fit["evaluations"] = rr.evaluations;
+            note(st, cat(o.name, ": nonlinear fit springs x ", m(0), ", volume x ", m(1), ", c ",
+                         o.compression, " -> ", o.compression * m(2), " (cost ", rr.start_cost, " -> ",
+                         rr.cost, ", ", rr.evaluations, " evaluations)"));
+          }
+          fit["compression"] = o.compression * (m.size() > 2 ? m(2) : 1.0);
+          fit["compression_start"] = o.compression;
+          fit["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        } else
           m = fem::calibrate_multipliers(
               [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, k.families(),
               training, st.quick ? 1 : 2);
       }
       const BodyPtr body = make_body(o, k, support, m);
       json errs = json::array();
-      double sum_rms_rel_held = 0, n_held = 0;
+      double sum_rms_rel_held = 0, n_held = 0, sum_rms_rel_sites = 0, n_sites = 0;
       for (const auto& c : cases) {
         MatX3 u;
         double mean_pct = 0;
@@ -518,6 +555,10 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
           sum_rms_rel_held += e.rel(e.rms);
           n_held += 1;
         }
+        if (static_cast<std::size_t>(c.site_index) >= train_sites) {  // sites no training load touched
+          sum_rms_rel_sites += e.rel(e.rms);
+          n_sites += 1;
+        }
         if (c.site_index == 0 && c.force == forces.back() && k.base == "hybrid" && !k.local && k.nonlinear) {
           const VecX d = (u - c.u_fem).rowwise().norm();
           maps[o.name + (calibrated ? " calibrated" : " default")] = {
@@ -537,7 +578,9 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                       {"multipliers", std::vector<double>(m.data(), m.data() + m.size())},
                       {"update_us", us},
                       {"held_out_mean_rms_pct", n_held > 0 ? 100 * sum_rms_rel_held / n_held : 0.0},
+                      {"held_out_sites_mean_rms_pct", n_sites > 0 ? 100 * sum_rms_rel_sites / n_sites : 0.0},
                       {"cases", errs}});
+      if (!fit.is_null()) rows.back()["fit"] = fit;
     }
   }
   out["models"] = rows;

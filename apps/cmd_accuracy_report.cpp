@@ -122,6 +122,23 @@ std::string markdown(const json& j) {
            << pct(c["max_mm"].get<double>()) << " | " << pct(c["max_pct"].get<double>()) << " |\n";
       }
     }
+    for (const auto& r : o["models"]) {  // what the volumetric calibration moved (docs/accuracy.md)
+      if (!r.contains("fit")) continue;
+      const auto& f = r["fit"];
+      const auto m = r["multipliers"].get<std::vector<double>>();
+      md << "\nCalibrated " << r["kind"].get<std::string>() << ": small-strain fit springs x "
+         << f["small_strain_multipliers"][0].get<double>() << ", volume terms x "
+         << f["small_strain_multipliers"][1].get<double>();
+      if (f["nonlinear"].get<bool>())
+        md << "; on the full response (start: " << f["start"].get<std::string>() << ") springs x " << m[0]
+           << ", volume terms x " << m[1] << ", c " << f["compression_start"].get<double>() << " -> "
+           << f["compression"].get<double>() << " (training cost " << f["small_strain_cost"].get<double>()
+           << " at the small-strain fit, " << f["cost"].get<double>() << " fitted; " << f["evaluations"]
+           << " evaluations)";
+      md << "; " << pct(f["seconds"].get<double>()) << " s. Held-out mean RMS "
+         << pct(r["held_out_mean_rms_pct"].get<double>()) << " %, at the sites no training load touched "
+         << pct(r["held_out_sites_mean_rms_pct"].get<double>()) << " %.\n";
+    }
   }
   for (const auto& v : j.value("vessels", json::array())) {
     md << "\n## " << v["vessel"].get<std::string>() << ": SMRM centerline against the FEM wall\n\n";

@@ -322,6 +322,16 @@ const std::vector<CommandSpec>& commands() {
              .help =
                  "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
                  "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
+            {.name = "fit",
+             .value = "nonlinear|small-strain",
+             .def = "nonlinear; --quick: small-strain",
+             .help = "volumetric calibration: the small-strain fit refined with c on the full response, or "
+                     "the small-strain fit alone (docs/accuracy.md)"},
+            {.name = "train-force",
+             .value = "F",
+             .unit = "N",
+             .def = "0.5, or the smallest of --forces",
+             .help = "the load of the two training sites (one of the forces); every other case is held out"},
             {.name = "no-validation", .help = "skip the closed-form validation of the FEM pipeline"},
             {.name = "forces",
              .value = "LIST",
@@ -381,6 +391,16 @@ const std::vector<CommandSpec>& commands() {
              .help =
                  "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
                  "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
+            {.name = "fit",
+             .value = "nonlinear|small-strain",
+             .def = "nonlinear",
+             .help = "volumetric calibration: the small-strain fit refined with c on the full response, or "
+                     "the small-strain fit alone (docs/accuracy.md)"},
+            {.name = "train-force",
+             .value = "F",
+             .unit = "N",
+             .def = "0.5, or the smallest of --forces",
+             .help = "the load of the two training sites (one of the forces); every other case is held out"},
             kScenes,
             kJson,
             kQuiet},

@@ -279,26 +279,30 @@ SurfaceError compare(const MatX3& u_model, const MatX3& u_fem, Index contact) {
   return e;
 }
 
+double calibration_cost(const Response& response, const VecX& m,
+                        const std::vector<CalibrationCase>& training) {
+  double c = 0;
+  for (const auto& t : training) {
+    MatX3 u;
+    try {
+      u = response(m, t.load);
+    } catch (const SolverError&) {
+      return std::numeric_limits<double>::infinity();
+    }
+    require(u.rows() == t.u_fem.rows(), "calibrate: the response has ", u.rows(), " surface nodes, the FEM ",
+            t.u_fem.rows());
+    const double scale = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
+    c += (u - t.u_fem).squaredNorm() / (scale * scale * static_cast<double>(u.rows()));
+    c += (u.row(t.contact) - t.u_fem.row(t.contact)).squaredNorm() / (scale * scale);
+  }
+  return c;
+}
+
 VecX calibrate_multipliers(const Response& response, Index families,
                            const std::vector<CalibrationCase>& training, int sweeps) {
   require(families >= 1 && !training.empty(), "calibrate: need >= 1 family and >= 1 training load");
   VecX logm = VecX::Zero(families);
-  auto cost = [&](const VecX& lm) {
-    const VecX m = lm.array().exp().matrix();
-    double c = 0;
-    for (const auto& t : training) {
-      MatX3 u;
-      try {
-        u = response(m, t.load);
-      } catch (const SolverError&) {
-        return std::numeric_limits<double>::infinity();
-      }
-      const double scale = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
-      c += (u - t.u_fem).squaredNorm() / (scale * scale * static_cast<double>(u.rows()));
-      c += (u.row(t.contact) - t.u_fem.row(t.contact)).squaredNorm() / (scale * scale);
-    }
-    return c;
-  };
+  auto cost = [&](const VecX& lm) { return calibration_cost(response, lm.array().exp().matrix(), training); };
   const double lo0 = std::log(1e-3), hi0 = std::log(1e3);
   for (int sweep = 0; sweep < sweeps; ++sweep)
     for (Index f = 0; f < families; ++f) {
@@ -364,6 +368,83 @@ VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<
   VecX m(2);
   m << best_c, best_c * std::exp(best_logr);
   return m;
+}
+
+RefineResult refine_multipliers(const Response& response, const VecX& start, const std::vector<double>& spans,
+                                const std::vector<CalibrationCase>& training, int probes, int sweeps) {
+  const Index n = static_cast<Index>(spans.size());
+  require(n >= 1 && start.size() <= n && !training.empty() && probes >= 2 && sweeps >= 1,
+          "refine_multipliers: need >= 1 span, a start of at most as many families, >= 1 training load, "
+          ">= 2 probes and >= 1 sweep");
+  VecX logm = VecX::Zero(n);
+  for (Index f = 0; f < start.size(); ++f) {
+    require(std::isfinite(start(f)) && start(f) > 0, "refine_multipliers: start[", f, "] must be > 0 (got ",
+            start(f), ")");
+    logm(f) = std::log(start(f));
+  }
+  RefineResult r;
+  auto cost = [&](const VecX& lm) {
+    ++r.evaluations;
+    return calibration_cost(response, lm.array().exp().matrix(), training);
+  };
+  r.start_cost = r.cost = cost(logm);
+  std::vector<Index> order(static_cast<std::size_t>(n));  // widest span first
+  for (Index f = 0; f < n; ++f) order[static_cast<std::size_t>(f)] = f;
+  std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
+    return spans[static_cast<std::size_t>(a)] > spans[static_cast<std::size_t>(b)];
+  });
+  for (int sweep = 0; sweep < sweeps; ++sweep)
+    for (Index f : order) {
+      const double span = spans[static_cast<std::size_t>(f)];
+      if (!(span > 1)) continue;
+      const double w = std::log(span) / std::pow(2.0, sweep);
+      VecX x = logm;
+      double best = r.cost, best_v = logm(f);
+      golden_section(
+          [&](double v) {
+            x(f) = v;
+            const double c = cost(x);
+            if (c < best) best = c, best_v = v;
+            return c;
+          },
+          logm(f) - w, logm(f) + w, probes - 2);
+      logm(f) = best_v;
+      r.cost = best;
+    }
+  r.m = logm.array().exp().matrix();
+  return r;
+}
+
+VolumetricFit calibrate_volumetric_nonlinear(const Response& response, const VecX& small_strain,
+                                             const std::vector<CalibrationCase>& training, int probes,
+                                             int sweeps) {
+  require(small_strain.size() == 2 && small_strain.minCoeff() > 0,
+          "calibrate: the small-strain fit must be two positive multipliers (springs, volume terms)");
+  auto to_m = [](const VecX& p) {
+    VecX m(3);
+    m << p(0), p(0) * p(1), p(2);
+    return m;
+  };
+  const Response in_p = [&](const VecX& p, const ContactLoad& l) { return response(to_m(p), l); };
+  VecX from_fit(3), from_closed_forms = VecX::Ones(3);
+  from_fit << small_strain(0), small_strain(1) / small_strain(0), 1.0;
+  VolumetricFit out;
+  // c first from each start (the one family the small-strain fit cannot see), then all three from the better
+  const RefineResult a = refine_multipliers(in_p, from_fit, {1.0, 1.0, kVolumetricRefineSpans[2]}, training,
+                                            probes, 1),
+                     b = refine_multipliers(in_p, from_closed_forms, {1.0, 1.0, kVolumetricRefineSpans[2]},
+                                            training, probes, 1);
+  out.small_strain_cost = a.start_cost;
+  out.closed_forms_cost = b.start_cost;
+  out.from_small_strain = a.cost <= b.cost;
+  out.refine =
+      refine_multipliers(in_p, out.from_small_strain ? a.m : b.m,
+                         {kVolumetricRefineSpans[0], kVolumetricRefineSpans[1], kVolumetricRefineSpans[1]},
+                         training, probes, sweeps);
+  out.refine.start_cost = std::min(a.start_cost, b.start_cost);
+  out.refine.evaluations += a.evaluations + b.evaluations;
+  out.m = to_m(out.refine.m);
+  return out;
 }
 
 }  // namespace medspring::fem

@@ -152,4 +152,44 @@ using BatchResponse =
 VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<CalibrationCase>& training,
                                int evaluations = 18);
 
+/// The cost calibrate_multipliers minimises, of multipliers m over the training loads (mean squared surface
+/// error plus the squared contact-node error, each relative to the load's largest FEM displacement);
+/// infinite where the response throws SolverError.
+double calibration_cost(const Response& response, const VecX& m,
+                        const std::vector<CalibrationCase>& training);
+
+/// Refinement of multipliers on the full (nonlinear) response, from a start such as the small-strain fit of
+/// calibrate_scale_and_ratio (docs/accuracy.md, "Calibration of the nonlinear response"). Coordinate descent
+/// in log space, the families in order of their span (widest first), each by a golden-section search within a
+/// factor spans[f] of its current value (spans[f] <= 1: held), `probes` responses per family and sweep, each
+/// later sweep within the square root of the span. Only a probe that lowers the cost is taken, so the cost
+/// never rises above the start's. Families the start lacks (start.size() < spans.size()) start at 1.
+struct RefineResult {
+  VecX m;                 // the multipliers
+  double start_cost = 0;  // calibration_cost at the start
+  double cost = 0;        // at m
+  int evaluations = 0;    // calls of calibration_cost (each: one response per training load)
+};
+RefineResult refine_multipliers(const Response& response, const VecX& start, const std::vector<double>& spans,
+                                const std::vector<CalibrationCase>& training, int probes = 8, int sweeps = 1);
+
+/// The volumetric kind's calibration on the full response (docs/accuracy.md, "Calibration of the nonlinear
+/// response"): the multipliers (springs, volume terms, compression coefficient c) that response(m, load)
+/// takes, fitted over (overall scale s, volume / spring ratio r, c multiplier), m = (s, s r, c). Two starts:
+/// the small-strain fit (calibrate_scale_and_ratio, c multiplier 1) and the closed forms (1, 1, 1). From
+/// each, c alone within a factor 32 (refine_multipliers, `probes` responses); then from the better of the
+/// two, all three for `sweeps` sweeps within factors 1.5 (s), 4 (r) and 4 (c). The small-strain fit alone is
+/// biased wherever the training loads compress beyond the linear range (it buys the missing stiffening with
+/// a larger volume multiplier), hence the second start.
+inline constexpr double kVolumetricRefineSpans[3] = {1.5, 4.0, 32.0};  // s, r and c, c first
+struct VolumetricFit {
+  VecX m;                                               // springs, volume terms, c multiplier
+  RefineResult refine;                                  // over (s, r, c)
+  bool from_small_strain = false;                       // the start taken
+  double small_strain_cost = 0, closed_forms_cost = 0;  // calibration_cost of the two starts
+};
+VolumetricFit calibrate_volumetric_nonlinear(const Response& response, const VecX& small_strain,
+                                             const std::vector<CalibrationCase>& training, int probes = 8,
+                                             int sweeps = 2);
+
 }  // namespace medspring::fem
