@@ -31,16 +31,19 @@ double spring_forces(const Model& m, const double* x, double* f) {
 // term and the (at most two) springs it owns from its four corners, loaded and scattered once; the loose
 // springs (on no tetrahedron edge, or beyond two per tetrahedron) follow in the plain loop. Returns the
 // larger of the springs' max kappa/k and the terms' stiffening (1 without Stiff).
-template <bool Soft, bool Stiff>
+template <bool Soft, bool Stiff, bool Comp = false>
 double fused_forces(const Model& m, const double* x, double* f) {
+  if constexpr (!Comp) {
+    if (!m.volume.kc.empty()) return fused_forces<Soft, Stiff, true>(m, x, f);  // with compression terms
+  }
   const VolumeTerms& T = m.volume;
   const detail::SpringParams P{m.springs.L0.data(), m.springs.k.data(), m.springs.kp.data(), m.inv_k.data()};
   const VolumeTerms::Packed* R = T.packed.data();
   double ss = 1.0, sv = 1.0;
   Index t = 0;
-  for (; t < T.owned_end[0]; ++t) detail::tet_record<0, Soft, Stiff>(R[t], P, x, f, ss, sv);
-  for (; t < T.owned_end[1]; ++t) detail::tet_record<1, Soft, Stiff>(R[t], P, x, f, ss, sv);
-  for (; t < T.owned_end[2]; ++t) detail::tet_record<2, Soft, Stiff>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[0]; ++t) detail::tet_record<0, Soft, Stiff, false, Comp>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[1]; ++t) detail::tet_record<1, Soft, Stiff, false, Comp>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[2]; ++t) detail::tet_record<2, Soft, Stiff, false, Comp>(R[t], P, x, f, ss, sv);
   const detail::SpringArrays S(m);
   for (const Index s : T.loose_springs) {
     detail::add_spring_force<Soft, Stiff>(S, s, x, ss, f);
@@ -65,10 +68,13 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
 double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff,
                         double* rows) {
   if (m.compression.size() == 0) return stiff;
+  // fused into the volume pass (fuse_compression_terms): its forces are in f already, the bound is not
+  const bool fused = m.volume.size() > 0 && m.volume.kc.size() == static_cast<std::size_t>(m.volume.size());
   if (!stiffening) {
-    add_compression_forces(m.compression, x, f);
+    if (!fused) add_compression_forces(m.compression, x, f);
     return stiff;
   }
+  if (fused) f = nullptr;  // the bound alone
   VecX local;
   if (!rows) {
     local.resize(m.num_nodes());
