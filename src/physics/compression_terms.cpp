@@ -80,19 +80,6 @@ Eigen::Matrix<double, 12, 12> hessian(const At& r, double kc, double V0, const C
   return H;
 }
 
-// h' and h'' of compression_h alone (h = 0): the same expressions, without its logarithm (the force and
-// bound pass needs no energy).
-CompressionH compression_dh(double J) {
-  if (J >= 1.0) return {};
-  if (J >= kCompressionJMin) {
-    const double u = J - 1.0;
-    return {0.0, 1.0 - 1.0 / J - u, 1.0 / (J * J) - 1.0};
-  }
-  const CompressionH m = compression_dh(kCompressionJMin);
-  const double t = J - kCompressionJMin;
-  return {0.0, m.d1 + m.d2 * t, m.d2};
-}
-
 }  // namespace
 
 CompressionH compression_h(double J) {
@@ -144,9 +131,9 @@ double add_compression_forces(const CompressionTerms& T, const double* x, double
     const At r = term_at(T, x, t);
     const double J = r.V / T.V0[i];
     if (J >= 1.0) continue;
-    const CompressionH hj = compression_dh(J);
+    const CompressionH hj = compression_h(J);
     const double c = -T.kc[i] * hj.d1;
-    for (int k = 0; k < 4 && f; ++k) {
+    for (int k = 0; k < 4; ++k) {
       double* o = f + 3 * r.id[k];
       o[0] += c * r.g[k].x();
       o[1] += c * r.g[k].y();

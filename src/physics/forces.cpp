@@ -14,6 +14,13 @@ namespace {
 
 constexpr double kMinLength = detail::kMinSpringLength;
 
+// The compression terms are fused into the volume pass (fuse_compression_terms): the force passes without
+// the stiffening bound (all sub-steps of a frame but its last) add their forces with the volume terms'. The
+// pass with the bound keeps them separate: add_compression_forces evaluates the forces with the bound.
+bool compression_fused(const Model& m) {
+  return m.volume.size() > 0 && m.volume.kc.size() == static_cast<std::size_t>(m.volume.size());
+}
+
 // Spring pass of the force evaluation (vector form of eqs. 1 and 5, §1.3). Returns max kappa_s/k_s
 // (1 without Stiff). A plain scalar scatter loop over the springs in their order.
 template <bool Soft, bool Stiff>
@@ -33,8 +40,8 @@ double spring_forces(const Model& m, const double* x, double* f) {
 // larger of the springs' max kappa/k and the terms' stiffening (1 without Stiff).
 template <bool Soft, bool Stiff, bool Comp = false>
 double fused_forces(const Model& m, const double* x, double* f) {
-  if constexpr (!Comp) {
-    if (!m.volume.kc.empty()) return fused_forces<Soft, Stiff, true>(m, x, f);  // with compression terms
+  if constexpr (!Comp && !Stiff) {
+    if (compression_fused(m)) return fused_forces<Soft, Stiff, true>(m, x, f);  // with compression terms
   }
   const VolumeTerms& T = m.volume;
   const detail::SpringParams P{m.springs.L0.data(), m.springs.k.data(), m.springs.kp.data(), m.inv_k.data()};
@@ -68,13 +75,11 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
 double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff,
                         double* rows) {
   if (m.compression.size() == 0) return stiff;
-  // fused into the volume pass (fuse_compression_terms): its forces are in f already, the bound is not
-  const bool fused = m.volume.size() > 0 && m.volume.kc.size() == static_cast<std::size_t>(m.volume.size());
+  if (!stiffening && compression_fused(m)) return stiff;  // its forces came with the volume pass
   if (!stiffening) {
-    if (!fused) add_compression_forces(m.compression, x, f);
+    add_compression_forces(m.compression, x, f);
     return stiff;
   }
-  if (fused) f = nullptr;  // the bound alone
   VecX local;
   if (!rows) {
     local.resize(m.num_nodes());
@@ -111,6 +116,10 @@ double volume_term_forces(const Model& m, const double* X, double* Fo, bool stif
       return global;
     const double row_max = volume_row_max(m.volume, local->scratch + n, local->scratch, n);
     return std::min(global, stiff + row_max / w2);
+  }
+  if (!stiffening && compression_fused(m)) {
+    add_volume_and_compression_forces(m.volume, X, Fo);
+    return stiff;
   }
   const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
   return stiffening ? std::max(stiff, sv) : stiff;

@@ -100,26 +100,27 @@ double volume_pass(const VolumeTerms& T, const double* x, double* f) {
   return sv;
 }
 
-template <bool Comp>
-double volume_pass_inc(const VolumeTerms& T, const double* x, double* f, double* inc) {
-  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
-  double ss = 1.0, sv = 1.0;
-  for (const auto& r : T.packed) detail::tet_record<0, false, true, true, Comp>(r, none, x, f, ss, sv, inc++);
-  return sv;
-}
-
 }  // namespace
 
 double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
   require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
+  return stiffening ? volume_pass<true, false>(T, x, f) : volume_pass<false, false>(T, x, f);
+}
+
+void add_volume_and_compression_forces(const VolumeTerms& T, const double* x, double* f) {
+  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
   if (T.kc.empty())
-    return stiffening ? volume_pass<true, false>(T, x, f) : volume_pass<false, false>(T, x, f);
-  return stiffening ? volume_pass<true, true>(T, x, f) : volume_pass<false, true>(T, x, f);
+    volume_pass<false, false>(T, x, f);
+  else
+    volume_pass<false, true>(T, x, f);
 }
 
 double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc) {
   require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
-  return T.kc.empty() ? volume_pass_inc<false>(T, x, f, inc) : volume_pass_inc<true>(T, x, f, inc);
+  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
+  double ss = 1.0, sv = 1.0;
+  for (const auto& r : T.packed) detail::tet_record<0, false, true, true>(r, none, x, f, ss, sv, inc++);
+  return sv;
 }
 
 bool fuse_compression_terms(VolumeTerms& T, const CompressionTerms& C) {

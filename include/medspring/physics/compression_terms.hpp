@@ -56,8 +56,7 @@ void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std:
 /// overwritten), returns the Gershgorin bound of the terms' mass-scaled Hessian at x, max over free nodes i
 /// of sum over the compressed terms t at i and their free corners l of ||d^2E_t / dx_i dx_l|| / sqrt(m_i m_l)
 /// ((rad/ms)^2), each block bounded by kc (h'' |g_i| |g_l| / V0 + |h'| L_max / 3) (g = dV/dx); by Weyl the
-/// caller adds it to the others' omega^2 bound. Without them returns 0. With f null only the bound (the
-/// forces of terms fused into the volume pass, fuse_compression_terms).
+/// caller adds it to the others' omega^2 bound. Without them returns 0.
 double add_compression_forces(const CompressionTerms& T, const double* x, double* f,
                               const double* mass = nullptr, const std::uint8_t* fixed = nullptr,
                               double* rows = nullptr, Index nodes = 0);

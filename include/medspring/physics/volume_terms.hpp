@@ -84,10 +84,11 @@ void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& i, const std::
 
 /// Fuses compression terms C (compression_terms.hpp) into the volume pass when they span the same
 /// tetrahedra as T, term by term with the same corners in the same order (as VolumetricBody builds them),
-/// T is finalized and has no spring plan yet: sets T.kc and the records' kc6, so that add_volume_forces
-/// (and the fused spring pass) add C's forces -kc h'(J) dV/dx along the same dV/dx, with J = V / V0 of the
-/// volume term (one gradient and one scatter per tetrahedron). Returns whether it fused (else T.kc is
-/// empty and C's forces stay with add_compression_forces). The curvature bound of C is not part of it.
+/// T is finalized and has no spring plan yet: sets T.kc and the records' kc6, so that
+/// add_volume_and_compression_forces (and the fused spring pass without the stiffening) add C's forces
+/// -kc h'(J) dV/dx along the same dV/dx, with J = V / V0 of the volume term (one gradient and one scatter
+/// per tetrahedron). Returns whether it fused (else T.kc is empty and C's forces stay with
+/// add_compression_forces, as they do in the force pass with the stable step's bound).
 bool fuse_compression_terms(VolumeTerms& T, const CompressionTerms& C);
 
 /// Sets T.rest_rows from the rest positions, masses and pins (after finalize_volume_terms).
@@ -111,9 +112,13 @@ double volume_row_max(const VolumeTerms& T, const double* inc, double* rows, Ind
 
 /// Adds the volume forces -dE/dx to f (flat 3N arrays). With `stiffening`, returns the stiffening of the
 /// terms (>= 1): the largest ratio of a term's current curvature bound to its rest one, for the stable
-/// step (§2.2); without, returns 1 (skips the six edge lengths per term). With fused compression terms
-/// (T.kc, fuse_compression_terms) their forces too (not their curvature bound: add_compression_forces).
+/// step (§2.2); without, returns 1 (skips the six edge lengths per term).
 double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening = true);
+/// add_volume_forces without the stiffening, and the forces of the fused compression terms (T.kc, from
+/// fuse_compression_terms; none when empty) in the same pass: one dV/dx and one scatter per tetrahedron.
+/// The force passes of the sub-steps without the stable step's bound use it (forces.cpp); the pass with the
+/// bound keeps add_volume_forces and add_compression_forces (which evaluates the bound with the forces).
+void add_volume_and_compression_forces(const VolumeTerms& T, const double* x, double* f);
 /// Sum of the volume energies (mJ).
 double volume_energy(const VolumeTerms& T, const MatX3& x);
 /// Number of terms whose tetrahedron is inverted or flat (V <= 0) at x.
