@@ -172,6 +172,10 @@ BENCHMARK(BM_VolumetricKidneyForcesUnfused)
 // frame's first sub-steps), 2 = with the global bound, 3 = with the local stiffening (the frame's last
 // sub-step: the pass with the increments, then the row scatter), 4 = the per-frame inversion count, 5 = the
 // pass with the increments alone (the frame's last sub-step where the local rule cannot save a sub-step).
+// The default model has compression terms (c = 32): 6 = the volume pass with them fused
+// (add_volume_and_compression_forces: the frame's first sub-steps), 7 = their forces in a separate pass
+// (add_compression_forces, as before the fusion: /1 + /7 is what /6 replaces), 8 = their forces and
+// curvature bound (the frame's last sub-step).
 void BM_VolumetricKidneyPhases(benchmark::State& st) {
   const auto body = kidney(2000, 0.0);
   const Model& m = body->model();
@@ -180,6 +184,7 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   MatX3 x = m.x0, f = MatX3::Zero(m.num_nodes(), 3), fe = MatX3::Zero(m.num_nodes(), 3);
   x.col(2) *= 0.98;
   VecX rows(m.num_nodes() + m.volume.size());
+  VecX crows(8 * m.num_nodes());  // the compression bound's scratch (a few doubles per node)
   const int phase = static_cast<int>(st.range(0));
   double row_max = 0;
   for (auto _ : st) {
@@ -193,12 +198,17 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
     if (phase == 5)
       benchmark::DoNotOptimize(
           add_volume_forces_inc(m.volume, x.data(), f.data(), rows.data() + m.num_nodes()));
+    if (phase == 6) add_volume_and_compression_forces(m.volume, x.data(), f.data());
+    if (phase == 7 || phase == 8)
+      benchmark::DoNotOptimize(add_compression_forces(
+          m.compression, x.data(), f.data(), phase == 8 ? m.mass.data() : nullptr,
+          phase == 8 ? m.fixed.data() : nullptr, phase == 8 ? crows.data() : nullptr, m.num_nodes()));
     benchmark::DoNotOptimize(f.data());
   }
   st.counters["tets"] = static_cast<double>(m.volume.size());
   st.counters["springs"] = static_cast<double>(m.num_springs());
 }
-BENCHMARK(BM_VolumetricKidneyPhases)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_VolumetricKidneyPhases)->DenseRange(0, 8)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 #endif

@@ -14,6 +14,13 @@ namespace {
 
 constexpr double kMinLength = detail::kMinSpringLength;
 
+// The compression terms are fused into the volume pass (fuse_compression_terms): the force passes without
+// the stiffening bound (all sub-steps of a frame but its last) add their forces with the volume terms'. The
+// pass with the bound keeps them separate: add_compression_forces evaluates the forces with the bound.
+bool compression_fused(const Model& m) {
+  return m.volume.size() > 0 && m.volume.kc.size() == static_cast<std::size_t>(m.volume.size());
+}
+
 // Spring pass of the force evaluation (vector form of eqs. 1 and 5, §1.3). Returns max kappa_s/k_s
 // (1 without Stiff). A plain scalar scatter loop over the springs in their order.
 template <bool Soft, bool Stiff>
@@ -31,16 +38,19 @@ double spring_forces(const Model& m, const double* x, double* f) {
 // term and the (at most two) springs it owns from its four corners, loaded and scattered once; the loose
 // springs (on no tetrahedron edge, or beyond two per tetrahedron) follow in the plain loop. Returns the
 // larger of the springs' max kappa/k and the terms' stiffening (1 without Stiff).
-template <bool Soft, bool Stiff>
+template <bool Soft, bool Stiff, bool Comp = false>
 double fused_forces(const Model& m, const double* x, double* f) {
+  if constexpr (!Comp && !Stiff) {
+    if (compression_fused(m)) return fused_forces<Soft, Stiff, true>(m, x, f);  // with compression terms
+  }
   const VolumeTerms& T = m.volume;
   const detail::SpringParams P{m.springs.L0.data(), m.springs.k.data(), m.springs.kp.data(), m.inv_k.data()};
   const VolumeTerms::Packed* R = T.packed.data();
   double ss = 1.0, sv = 1.0;
   Index t = 0;
-  for (; t < T.owned_end[0]; ++t) detail::tet_record<0, Soft, Stiff>(R[t], P, x, f, ss, sv);
-  for (; t < T.owned_end[1]; ++t) detail::tet_record<1, Soft, Stiff>(R[t], P, x, f, ss, sv);
-  for (; t < T.owned_end[2]; ++t) detail::tet_record<2, Soft, Stiff>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[0]; ++t) detail::tet_record<0, Soft, Stiff, false, Comp>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[1]; ++t) detail::tet_record<1, Soft, Stiff, false, Comp>(R[t], P, x, f, ss, sv);
+  for (; t < T.owned_end[2]; ++t) detail::tet_record<2, Soft, Stiff, false, Comp>(R[t], P, x, f, ss, sv);
   const detail::SpringArrays S(m);
   for (const Index s : T.loose_springs) {
     detail::add_spring_force<Soft, Stiff>(S, s, x, ss, f);
@@ -65,6 +75,7 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
 double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff,
                         double* rows) {
   if (m.compression.size() == 0) return stiff;
+  if (!stiffening && compression_fused(m)) return stiff;  // its forces came with the volume pass
   if (!stiffening) {
     add_compression_forces(m.compression, x, f);
     return stiff;
@@ -105,6 +116,10 @@ double volume_term_forces(const Model& m, const double* X, double* Fo, bool stif
       return global;
     const double row_max = volume_row_max(m.volume, local->scratch + n, local->scratch, n);
     return std::min(global, stiff + row_max / w2);
+  }
+  if (!stiffening && compression_fused(m)) {
+    add_volume_and_compression_forces(m.volume, X, Fo);
+    return stiff;
   }
   const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
   return stiffening ? std::max(stiff, sv) : stiff;

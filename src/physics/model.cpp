@@ -123,7 +123,10 @@ void finalize(Model& m) {
     finalize_volume_terms(m.volume, m.x0, w);
     set_volume_rest_rows(m.volume, m.x0, m.mass, m.fixed);  // the stable step's local stiffening
   }
-  if (m.compression.size() > 0) finalize_compression_terms(m.compression, m.x0, w);
+  if (m.compression.size() > 0) {
+    finalize_compression_terms(m.compression, m.x0, w);
+    fuse_compression_terms(m.volume, m.compression);  // on the volume terms' tetrahedra: one pass (issue 23)
+  }
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) m.free_nodes.push_back(a);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstddef>
 
+#include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/kernels.hpp"
 #include "medspring/physics/volume_terms.hpp"
 
@@ -26,6 +27,22 @@ inline void cross3(const double* u, const double* v, double* w) {
   w[2] = u[0] * v[1] - u[1] * v[0];
 }
 
+/// The fused compression term's share of the force scalar s of tet_record (f_k = s (6 dV/dx_k)):
+/// -kc h'(J) / 6 with J = 1 + dv6 / V06, h' of compression_h written without branches and without its
+/// cancellation: h'(J) = 1 - 1/J - (J - 1) = -(J - 1)^2 / J on [J_min, 1), 0 from J = 1 on, and the
+/// continuation h'(J_min) + h''(J_min) (J - J_min) below J_min. Only its forces: h (a logarithm) is not
+/// needed.
+[[gnu::always_inline]] inline double compression_scalar(double dv6, double V06, double kc6) {
+  constexpr double jm = kCompressionJMin, d2m = 1.0 / (jm * jm) - 1.0;  // h''(J_min)
+  const double u = dv6 / V06;                                           // J - 1
+  const double J = 1.0 + u;
+  const double uc = u < 0.0 ? u : 0.0;  // J - 1 clamped to [J_min - 1, 0]
+  const double ul = uc > jm - 1.0 ? uc : jm - 1.0;
+  const double below = J < jm ? J - jm : 0.0;             // the linear continuation's argument
+  const double d1 = -ul * ul / (1.0 + ul) + d2m * below;  // h'(J)
+  return -kc6 * d1;
+}
+
 /// Adds the forces of record r (its volume term and its first Own owned springs) to f (flat 3N). With
 /// Stiff: sv = max(sv, the term's curvature bound |dV/dx|^2 + |V - V0| L_max / 2 over its rest value;
 /// ||d^2V|| <= L_max / 2: each corner row of d^2V has three 3x3 blocks [x_m - x_n]x / 6)
@@ -33,7 +50,10 @@ inline void cross3(const double* u, const double* v, double* w) {
 /// also *inc = (s_t - 1)+, the term's stiffening increment (the local stiffening of the stable step,
 /// scattered to the nodes afterwards by volume_row_max: a scatter here would chain the next terms' row
 /// updates to this term's square root through memory).
-template <int Own, bool Soft, bool Stiff, bool Local = false>
+/// With Comp: also the fused compression term's force (r.kc6, fuse_compression_terms), -kc h'(J) dV/dx, along
+/// the same dV/dx: its scalar joins the volume term's (no second gradient, no second scatter). Its curvature
+/// bound is not part of sv (add_compression_forces computes it).
+template <int Own, bool Soft, bool Stiff, bool Local = false, bool Comp = false>
 [[gnu::always_inline]] inline void tet_record(const VolumeTerms::Packed& r, const SpringParams& S,
                                               const double* x, double* f, double& ss, double& sv,
                                               double* inc = nullptr) {
@@ -52,7 +72,8 @@ template <int Own, bool Soft, bool Stiff, bool Local = false>
   cross3(e[2], e[0], c[1]);
   cross3(e[0], e[1], c[2]);
   const double dv6 = e[0][0] * c[0][0] + e[0][1] * c[0][1] + e[0][2] * c[0][2] - r.V06;  // 6 (V - V0)
-  const double s = -r.alpha * dv6;
+  double s = -r.alpha * dv6;
+  if constexpr (Comp) s += compression_scalar(dv6, r.V06, r.kc6);
   double F[4][3];
   for (int d = 0; d < 3; ++d) {
     F[1][d] = s * c[0][d];

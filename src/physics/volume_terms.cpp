@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "medspring/core/check.hpp"
+#include "medspring/physics/compression_terms.hpp"
 #include "tet_kernel.hpp"
 
 namespace medspring {
@@ -79,6 +80,7 @@ VolumeTerms::Packed record(const VolumeTerms& T, Index t) {
   r.V06 = 6.0 * T.V0[u];
   r.iG0 = T.G0[u] > 0 ? 1.0 / T.G0[u] : 0.0;
   r.kv = T.kv[u];
+  r.kc6 = T.kc.size() == T.a.size() ? T.kc[u] / 6.0 : 0.0;
   return r;
 }
 
@@ -88,15 +90,29 @@ double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const V
   return (p1 - p0).dot((p2 - p0).cross(p3 - p0)) / 6.0;
 }
 
-double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
-  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
+namespace {
+
+template <bool Stiff, bool Comp>
+double volume_pass(const VolumeTerms& T, const double* x, double* f) {
   const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
   double ss = 1.0, sv = 1.0;
-  if (stiffening)
-    for (const auto& r : T.packed) detail::tet_record<0, false, true>(r, none, x, f, ss, sv);
-  else
-    for (const auto& r : T.packed) detail::tet_record<0, false, false>(r, none, x, f, ss, sv);
+  for (const auto& r : T.packed) detail::tet_record<0, false, Stiff, false, Comp>(r, none, x, f, ss, sv);
   return sv;
+}
+
+}  // namespace
+
+double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
+  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
+  return stiffening ? volume_pass<true, false>(T, x, f) : volume_pass<false, false>(T, x, f);
+}
+
+void add_volume_and_compression_forces(const VolumeTerms& T, const double* x, double* f) {
+  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
+  if (T.kc.empty())
+    volume_pass<false, false>(T, x, f);
+  else
+    volume_pass<false, true>(T, x, f);
 }
 
 double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc) {
@@ -105,6 +121,19 @@ double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, d
   double ss = 1.0, sv = 1.0;
   for (const auto& r : T.packed) detail::tet_record<0, false, true, true>(r, none, x, f, ss, sv, inc++);
   return sv;
+}
+
+bool fuse_compression_terms(VolumeTerms& T, const CompressionTerms& C) {
+  T.kc.clear();
+  const Index nt = T.size();
+  if (nt == 0 || C.size() != nt || static_cast<Index>(T.packed.size()) != nt || T.planned_springs >= 0)
+    return false;
+  for (Index t = 0; t < nt; ++t)
+    if (C.a[t] != T.a[t] || C.b[t] != T.b[t] || C.c[t] != T.c[t] || C.d[t] != T.d[t]) return false;
+  T.kc = C.kc;
+  for (Index t = 0; t < nt; ++t)
+    T.packed[static_cast<std::size_t>(t)].kc6 = T.kc[static_cast<std::size_t>(t)] / 6.0;
+  return true;
 }
 
 double volume_row_max(const VolumeTerms& T, const double* inc, double* rows, Index nodes) {
@@ -184,6 +213,7 @@ void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& w
         r.g[0].squaredNorm() + r.g[1].squaredNorm() + r.g[2].squaredNorm() + r.g[3].squaredNorm();
   }
   require(n <= std::numeric_limits<std::int32_t>::max(), w, ": volume terms need node indices below 2^31");
+  T.kc.clear();  // fuse_compression_terms sets it again
   T.packed.resize(nt);
   for (Index t = 0; t < T.size(); ++t) T.packed[static_cast<std::size_t>(t)] = record(T, t);
   T.owned_end[0] = T.owned_end[1] = T.owned_end[2] = T.size();

@@ -115,6 +115,106 @@ TEST(Compression, ForcesAndHessianMatchFiniteDifferences) {
   EXPECT_GE(inverted, 3);
 }
 
+VolumetricSettings cube_settings(double nu, double compression);
+
+// The same check for a term fused into the volume pass (fuse_compression_terms): a volume term and a
+// compression term on one tetrahedron, forces of the fused kernel against finite differences of the energy,
+// on both branches of h and inverted.
+TEST(Compression, FusedForcesMatchFiniteDifferences) {
+  ModelBuilder b("tet");
+  const MatX3 X = irregular_tet();
+  for (Index a = 0; a < 4; ++a) b.add_node(X.row(a).transpose(), 1.0, 0.0, 0.0);
+  b.add_volume(0, 1, 2, 3, 0.3);
+  b.add_compression(0, 1, 2, 3, 0.7);
+  const Model m = b.build();
+  ASSERT_EQ(m.volume.kc.size(), 1u);  // fused
+  EXPECT_EQ(m.volume.packed[0].kc6, 0.7 / 6.0);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> N(0.0, 1.0);
+  const MatX3 zero = MatX3::Zero(4, 3);
+  int below = 0, inverted = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    MatX3 x = m.x0;
+    const double sz = trial % 8 == 7 ? -0.3 : 0.15 + 0.95 * (trial % 7) / 6.0;
+    x.col(2) *= sz;
+    for (Index a = 0; a < 4; ++a) x.row(a) += 0.1 * Vec3(N(rng), N(rng), N(rng)).transpose();
+    const double J = signed_tet_volume(x.row(0), x.row(1), x.row(2), x.row(3)) / m.volume.V0[0];
+    below += J < kCompressionJMin ? 1 : 0;
+    inverted += J <= 0 ? 1 : 0;
+    for (const bool stiff : {false, true}) {
+      MatX3 f = MatX3::Zero(4, 3);
+      detail::internal_forces(m, x, zero, f, stiff);
+      double fscale = 1e-12;
+      for (Index a = 0; a < 4; ++a) fscale = std::max(fscale, f.row(a).norm());
+      const double h = 1e-6;
+      for (Index a = 0; a < 4; ++a)
+        for (int c = 0; c < 3; ++c) {
+          MatX3 xp = x, xm = x;
+          xp(a, c) += h;
+          xm(a, c) -= h;
+          const double dE = (potential_energy(m, xp) - potential_energy(m, xm)) / (2 * h);
+          EXPECT_NEAR(f(a, c), -dE, 1e-6 * (1 + fscale)) << "trial " << trial << " J " << J;
+        }
+    }
+  }
+  EXPECT_GE(below, 5);
+  EXPECT_GE(inverted, 3);
+}
+
+// The fused pass gives the forces and the stiffening of the separate passes (the volume pass, then
+// add_compression_forces) to 1e-12 of the largest force, on a meshed cube compressed unevenly (terms in
+// tension, compressed, below J_min and inverted), on the scatter path (internal_forces) and the volume part
+// of the gather path (volume_forces, with and without the local rule's scratch).
+TEST(Compression, FusedPassEqualsTheSeparatePasses) {
+  const VolumetricMesh vm = fem::volumetric_mesh(box_surface(4, 20), {.target_nodes = 300});
+  VolumetricSettings st = cube_settings(0.45, 32.0);
+  st.fixed = {0, 1, 2, 3};
+  const VolumetricBody body(vm, st, "cube");
+  const Model& m = body.model();
+  ASSERT_GT(m.volume.size(), 100);
+  ASSERT_EQ(m.volume.kc.size(), static_cast<std::size_t>(m.volume.size()));  // fused by finalize
+  Model sep = m;  // the same model with the compression terms in their own pass
+  sep.volume.kc.clear();
+  std::mt19937 rng(11);
+  std::normal_distribution<double> N(0.0, 1.0);
+  const Index n = m.num_nodes();
+  const MatX3 zero = MatX3::Zero(n, 3);
+  for (int trial = 0; trial < 6; ++trial) {
+    MatX3 x = m.x0;
+    const double sz = 1.1 - 0.25 * trial;  // 1.1 .. -0.15: tension to pushed through
+    for (Index a = 0; a < n; ++a) x(a, 2) *= x(a, 0) > 10 ? sz : 1.0;
+    x += (0.6 * trial) * MatX3::NullaryExpr(n, 3, [&] { return N(rng); });
+    std::vector<int> kind(4, 0);  // tension, compressed, below J_min, inverted
+    for (Index t = 0; t < m.volume.size(); ++t) {
+      const double J = signed_tet_volume(x.row(m.volume.a[t]), x.row(m.volume.b[t]), x.row(m.volume.c[t]),
+                                         x.row(m.volume.d[t])) /
+                       m.volume.V0[t];
+      ++kind[J >= 1 ? 0 : J >= kCompressionJMin ? 1 : J > 0 ? 2 : 3];
+    }
+    for (const bool stiff : {false, true}) {
+      MatX3 ff = MatX3::Zero(n, 3), fs = MatX3::Zero(n, 3);
+      const double a = detail::internal_forces(m, x, zero, ff, stiff);
+      const double b = detail::internal_forces(sep, x, zero, fs, stiff);
+      const double scale = fs.cwiseAbs().maxCoeff();
+      EXPECT_LE((ff - fs).cwiseAbs().maxCoeff(), 1e-12 * scale) << "trial " << trial;
+      EXPECT_NEAR(a, b, 1e-12 * b) << "trial " << trial;
+      VecX scratch_f(n + m.volume.size()), scratch_s(n + m.volume.size());
+      const detail::LocalStiffening lf{scratch_f.data(), 0.5, 0.9}, ls{scratch_s.data(), 0.5, 0.9};
+      for (const bool local : {false, true}) {
+        MatX3 vf = MatX3::Zero(n, 3), vs = MatX3::Zero(n, 3);
+        const double c = detail::volume_forces(m, x.data(), vf.data(), stiff, 1.0, local ? &lf : nullptr);
+        const double d = detail::volume_forces(sep, x.data(), vs.data(), stiff, 1.0, local ? &ls : nullptr);
+        EXPECT_LE((vf - vs).cwiseAbs().maxCoeff(), 1e-12 * vs.cwiseAbs().maxCoeff()) << "trial " << trial;
+        EXPECT_NEAR(c, d, 1e-12 * d) << "trial " << trial;
+      }
+    }
+    if (trial == 5) {  // the last trial reaches every branch
+      for (int k = 0; k < 4; ++k) EXPECT_GT(kind[static_cast<std::size_t>(k)], 0) << k;
+      EXPECT_EQ(count_inverted(m.volume, x), static_cast<std::uint64_t>(kind[3]));
+    }
+  }
+}
+
 // The stable step's bound: the largest eigenvalue of the term's exact Hessian is at most
 // kc (h'' |dV/dx|^2 / V0 + |h'| L_max / 2), and the Gershgorin row bound the force pass returns (unit masses
 // here) is at least the largest eigenvalue.

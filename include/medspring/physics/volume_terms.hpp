@@ -15,6 +15,8 @@
 
 namespace medspring {
 
+struct CompressionTerms;  // compression_terms.hpp
+
 /// Volume terms as a struct of arrays; term t spans the tetrahedron (a[t], b[t], c[t], d[t]) with a
 /// positive rest volume.
 struct VolumeTerms {
@@ -34,6 +36,7 @@ struct VolumeTerms {
     double V06;          // 6 V0, mm^3
     double iG0;          // 1 / rest sum of |dV/dx|^2 (stiffening bound; 0 when that sum is 0)
     double kv;           // modulus (the order of the records is not the order of the terms)
+    double kc6;          // the fused compression term's kc / 6 (0: none; fuse_compression_terms)
   };
   // Derived by finalize_volume_terms (records) and plan_owned_springs (owned springs): the records
   // grouped by the number of springs they own (0, 1, 2), so that the fused pass runs three loops without
@@ -47,6 +50,10 @@ struct VolumeTerms {
   // M^-1/2 K M^-1/2, r_k = kv/V0 |dV0/dx_k| sum_{l free} |dV0/dx_l| / sqrt(m_k m_l), (rad/ms)^2; 0 for a
   // fixed corner. Empty (the global rule is used) until set, and cleared by finalize / plan.
   std::vector<double> rest_rows;  // (4 #T)
+  // Derived by fuse_compression_terms (Model's finalize): the moduli kc of the model's compression terms
+  // on the same tetrahedra (term order), evaluated in this pass (records' kc6); empty: not fused. Cleared
+  // by finalize.
+  std::vector<double> kc;  // (#T)
 
   Index size() const { return static_cast<Index>(a.size()); }
   void add(Index na, Index nb, Index nc, Index nd, double modulus) {
@@ -75,6 +82,15 @@ void finalize_volume_terms(VolumeTerms& T, const MatX3& x0, const std::string& w
 void plan_owned_springs(VolumeTerms& T, const std::vector<Index>& i, const std::vector<Index>& j,
                         Index nodes);
 
+/// Fuses compression terms C (compression_terms.hpp) into the volume pass when they span the same
+/// tetrahedra as T, term by term with the same corners in the same order (as VolumetricBody builds them),
+/// T is finalized and has no spring plan yet: sets T.kc and the records' kc6, so that
+/// add_volume_and_compression_forces (and the fused spring pass without the stiffening) add C's forces
+/// -kc h'(J) dV/dx along the same dV/dx, with J = V / V0 of the volume term (one gradient and one scatter
+/// per tetrahedron). Returns whether it fused (else T.kc is empty and C's forces stay with
+/// add_compression_forces, as they do in the force pass with the stable step's bound).
+bool fuse_compression_terms(VolumeTerms& T, const CompressionTerms& C);
+
 /// Sets T.rest_rows from the rest positions, masses and pins (after finalize_volume_terms).
 void set_volume_rest_rows(VolumeTerms& T, const MatX3& x0, const VecX& mass,
                           const std::vector<std::uint8_t>& fixed);
@@ -98,6 +114,11 @@ double volume_row_max(const VolumeTerms& T, const double* inc, double* rows, Ind
 /// terms (>= 1): the largest ratio of a term's current curvature bound to its rest one, for the stable
 /// step (§2.2); without, returns 1 (skips the six edge lengths per term).
 double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening = true);
+/// add_volume_forces without the stiffening, and the forces of the fused compression terms (T.kc, from
+/// fuse_compression_terms; none when empty) in the same pass: one dV/dx and one scatter per tetrahedron.
+/// The force passes of the sub-steps without the stable step's bound use it (forces.cpp); the pass with the
+/// bound keeps add_volume_forces and add_compression_forces (which evaluates the bound with the forces).
+void add_volume_and_compression_forces(const VolumeTerms& T, const double* x, double* f);
 /// Sum of the volume energies (mJ).
 double volume_energy(const VolumeTerms& T, const MatX3& x);
 /// Number of terms whose tetrahedron is inverted or flat (V <= 0) at x.
