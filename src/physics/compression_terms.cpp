@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "compression_rows.hpp"
 #include "medspring/core/check.hpp"
 
 namespace medspring {
@@ -124,13 +125,13 @@ void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std:
 double add_compression_forces(const CompressionTerms& T, const double* x, double* f, const double* mass,
                               const std::uint8_t* fixed, double* rows, Index nodes) {
   const bool bound = mass && fixed && rows;
-  if (bound) std::fill(rows, rows + nodes, 0.0);
+  if (bound) std::fill(rows, rows + kCompressionRowsPerNode * nodes, 0.0);
   bool any = false;
   for (Index t = 0; t < T.size(); ++t) {
     const auto i = static_cast<std::size_t>(t);
     const At r = term_at(T, x, t);
     const double J = r.V / T.V0[i];
-    if (J >= 1.0) continue;
+    if (J >= 1.0) continue;  // zero in tension and at rest: no force, no curvature
     const CompressionH hj = compression_h(J);
     const double c = -T.kc[i] * hj.d1;
     for (int k = 0; k < 4; ++k) {
@@ -139,23 +140,41 @@ double add_compression_forces(const CompressionTerms& T, const double* x, double
       o[1] += c * r.g[k].y();
       o[2] += c * r.g[k].z();
     }
-    if (bound) {
+    if (bound) {  // the block bound of the header: per corner a 3x3 block into rows (6 per node)
       any = true;
-      const double a = T.kc[i] / T.V0[i] * hj.d2;
-      const double hb = std::abs(T.kc[i] * hj.d1) * longest_edge(r) / 3.0;  // a d^2V block, off the diagonal
-      double gn[4], is[4];
+      const double a = T.kc[i] / T.V0[i] * hj.d2;                           // >= 0: h'' > 0 below J = 1
+      const double hb = std::abs(T.kc[i] * hj.d1) * longest_edge(r) / 6.0;  // norm bound of a d^2V block
+      double gn[4], is[4], sigma = 0, ssum = 0;
       for (int k = 0; k < 4; ++k) {
         gn[k] = r.g[k].norm();
         is[k] = fixed[r.id[k]] ? 0.0 : 1.0 / std::sqrt(mass[r.id[k]]);
+        sigma += is[k] * gn[k];
+        ssum += is[k];
       }
-      for (int k = 0; k < 4; ++k)
-        for (int l = 0; l < 4; ++l)
-          rows[r.id[k]] += (a * gn[k] * gn[l] + (l == k ? 0.0 : hb)) * is[k] * is[l];
+      for (int k = 0; k < 4; ++k) {
+        if (is[k] == 0.0) continue;
+        const double w = gn[k] > 0 ? a * sigma * is[k] / gn[k] : 0.0;
+        const double beta = hb * is[k] * (ssum - is[k]);
+        const Vec3& g = r.g[k];
+        double* B = rows + kCompressionRowsPerNode * r.id[k];
+        B[0] += w * g.x() * g.x() + beta;
+        B[1] += w * g.y() * g.y() + beta;
+        B[2] += w * g.z() * g.z() + beta;
+        B[3] += w * g.x() * g.y();
+        B[4] += w * g.x() * g.z();
+        B[5] += w * g.y() * g.z();
+      }
     }
   }
   if (!any) return 0.0;
   double row_max = 0;
-  for (Index n = 0; n < nodes; ++n) row_max = std::max(row_max, rows[n]);
+  for (Index n = 0; n < nodes; ++n) {
+    const double* B = rows + kCompressionRowsPerNode * n;
+    const double m = (B[0] + B[1] + B[2]) / 3.0;  // lambda_max <= m + sqrt(2/3 |B - m I|_F^2)
+    const double d0 = B[0] - m, d1 = B[1] - m, d2 = B[2] - m;
+    const double dev2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (B[3] * B[3] + B[4] * B[4] + B[5] * B[5]);
+    row_max = std::max(row_max, m + std::sqrt(2.0 / 3.0 * dev2));
+  }
   return row_max;
 }
 

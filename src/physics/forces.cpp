@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "compression_rows.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/stability.hpp"
 #include "spring_kernel.hpp"
@@ -61,7 +62,8 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
 
 // Compression stiffening (issue 23, compression_terms.hpp): its forces and, for the stable step, the
 // Gershgorin bound of its mass-scaled Hessian at x added to the others' bound (Weyl: omega^2 <= stiff
-// omega_rest^2 + that bound). `rows`: scratch of #N doubles (a local one when the caller has none).
+// omega_rest^2 + that bound). `rows`: scratch of kCompressionRowsPerNode #N doubles (State::stiff_rows; a
+// local one when the caller has none).
 double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff,
                         double* rows) {
   if (m.compression.size() == 0) return stiff;
@@ -71,7 +73,7 @@ double with_compression(const Model& m, const double* x, double* f, bool stiffen
   }
   VecX local;
   if (!rows) {
-    local.resize(m.num_nodes());
+    local.resize(kCompressionRowsPerNode * m.num_nodes());
     rows = local.data();
   }
   const double w2 = m.omega_rest * m.omega_rest;

@@ -1,0 +1,21 @@
+// Scratch sizes of the compression terms' stable-step bound (issue 23, compression_terms.hpp): internal to
+// the physics layer (State::stiff_rows is sized by them).
+#pragma once
+
+#include "medspring/core/types.hpp"
+
+namespace medspring {
+
+/// Doubles of scratch per node that the stable-step bound of add_compression_forces needs (a symmetric 3x3
+/// block each).
+inline constexpr Index kCompressionRowsPerNode = 6;
+
+/// Size of State::stiff_rows for a model with `volume_terms` volume and `compression_terms` compression terms
+/// on `nodes` nodes: the volume terms' local rule needs #N + #T, the compression bound 6 #N (used after it).
+inline Index stiff_rows_size(Index nodes, Index volume_terms, Index compression_terms) {
+  const Index v = volume_terms > 0 || compression_terms > 0 ? nodes + volume_terms : 0;
+  const Index c = compression_terms > 0 ? kCompressionRowsPerNode * nodes : 0;
+  return v > c ? v : c;
+}
+
+}  // namespace medspring
