@@ -11,11 +11,11 @@ namespace medspring {
 inline constexpr Index kCompressionRowsPerNode = 6;
 
 /// Size of State::stiff_rows for a model with `volume_terms` volume and `compression_terms` compression terms
-/// on `nodes` nodes: the volume terms' local rule needs #N + #T, the compression bound 6 #N (used after it).
+/// on `nodes` nodes: the volume terms' local rule needs #N rows and #T increments, the compression bound
+/// 6 #N after them (both are live at once: the rule's gate counts the compression bound).
 inline Index stiff_rows_size(Index nodes, Index volume_terms, Index compression_terms) {
-  const Index v = volume_terms > 0 || compression_terms > 0 ? nodes + volume_terms : 0;
-  const Index c = compression_terms > 0 ? kCompressionRowsPerNode * nodes : 0;
-  return v > c ? v : c;
+  if (volume_terms == 0 && compression_terms == 0) return 0;
+  return nodes + volume_terms + (compression_terms > 0 ? kCompressionRowsPerNode * nodes : 0);
 }
 
 }  // namespace medspring
