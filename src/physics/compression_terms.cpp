@@ -142,18 +142,31 @@ double add_compression_forces(const CompressionTerms& T, const double* x, double
     }
     if (bound) {  // the block bound of the header: per corner a 3x3 block into rows (6 per node)
       any = true;
-      const double a = T.kc[i] / T.V0[i] * hj.d2;                           // >= 0: h'' > 0 below J = 1
-      const double hb = std::abs(T.kc[i] * hj.d1) * longest_edge(r) / 6.0;  // norm bound of a d^2V block
-      double gn[4], is[4], sigma = 0, ssum = 0;
+      const double a = T.kc[i] / T.V0[i] * hj.d2;  // >= 0: h'' > 0 below J = 1
+      const double L2 = std::max({r.e[0].squaredNorm(), r.e[1].squaredNorm(), r.e[2].squaredNorm(),
+                                  (r.e[1] - r.e[0]).squaredNorm(), (r.e[2] - r.e[0]).squaredNorm(),
+                                  (r.e[2] - r.e[1]).squaredNorm()});
+      const double hb = std::abs(T.kc[i] * hj.d1) * std::sqrt(L2) / 6.0;  // norm bound of a d^2V block
+      // per corner r_k = s_k / |g_k| = (m_k |g_k|^2)^-1/2 and s_k = r_k |g_k|: no division beyond the former
+      // bound's one per corner
+      double is[4], ir[4], sigma = 0, ssum = 0;
       for (int k = 0; k < 4; ++k) {
-        gn[k] = r.g[k].norm();
-        is[k] = fixed[r.id[k]] ? 0.0 : 1.0 / std::sqrt(mass[r.id[k]]);
-        sigma += is[k] * gn[k];
+        const double gg = r.g[k].squaredNorm();
+        if (fixed[r.id[k]]) {
+          is[k] = ir[k] = 0.0;
+        } else if (gg > 0) {
+          ir[k] = 1.0 / std::sqrt(mass[r.id[k]] * gg);
+          is[k] = ir[k] * std::sqrt(gg);
+        } else {
+          ir[k] = 0.0;  // no gradient at this corner: no rank-one part there
+          is[k] = 1.0 / std::sqrt(mass[r.id[k]]);
+        }
+        sigma += ir[k] * gg;  // s_k |g_k|
         ssum += is[k];
       }
       for (int k = 0; k < 4; ++k) {
         if (is[k] == 0.0) continue;
-        const double w = gn[k] > 0 ? a * sigma * is[k] / gn[k] : 0.0;
+        const double w = a * sigma * ir[k];
         const double beta = hb * is[k] * (ssum - is[k]);
         const Vec3& g = r.g[k];
         double* B = rows + kCompressionRowsPerNode * r.id[k];
@@ -170,7 +183,9 @@ double add_compression_forces(const CompressionTerms& T, const double* x, double
   double row_max = 0;
   for (Index n = 0; n < nodes; ++n) {
     const double* B = rows + kCompressionRowsPerNode * n;
-    const double m = (B[0] + B[1] + B[2]) / 3.0;  // lambda_max <= m + sqrt(2/3 |B - m I|_F^2)
+    const double tr = B[0] + B[1] + B[2];
+    if (tr <= row_max) continue;  // B is positive semi-definite: lambda_max(B) <= tr B
+    const double m = tr / 3.0;    // lambda_max <= m + sqrt(2/3 |B - m I|_F^2)
     const double d0 = B[0] - m, d1 = B[1] - m, d2 = B[2] - m;
     const double dev2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (B[3] * B[3] + B[4] * B[4] + B[5] * B[5]);
     row_max = std::max(row_max, m + std::sqrt(2.0 / 3.0 * dev2));
