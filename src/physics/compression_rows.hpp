@@ -2,7 +2,10 @@
 // the physics layer (State::stiff_rows is sized by them).
 #pragma once
 
+#include <cstdint>
+
 #include "medspring/core/types.hpp"
+#include "medspring/physics/compression_terms.hpp"
 
 namespace medspring {
 
@@ -17,5 +20,15 @@ inline Index stiff_rows_size(Index nodes, Index volume_terms, Index compression_
   if (volume_terms == 0 && compression_terms == 0) return 0;
   return nodes + volume_terms + (compression_terms > 0 ? kCompressionRowsPerNode * nodes : 0);
 }
+
+/// add_compression_forces in two stages, for the step (src/physics/forces.cpp): the forces and the cheap
+/// bound max_i tr B_i (the blocks' traces, `rows`: #N doubles), which is at most 3x the block bound and at
+/// least it ...
+double add_compression_forces_trace(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                                    const std::uint8_t* fixed, double* rows, Index nodes);
+/// ... and the block bound alone, without the forces (`rows`: kCompressionRowsPerNode #N doubles), computed
+/// only where the step's sub-step count depends on where in [trace / 3, trace] it lies.
+double compression_block_bound(const CompressionTerms& T, const double* x, const double* mass,
+                               const std::uint8_t* fixed, double* rows, Index nodes);
 
 }  // namespace medspring

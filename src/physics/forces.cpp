@@ -105,13 +105,21 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
     // rule max(s_springs, s_terms), never below s_springs: scattered only where that range holds more
     // than one sub-step count (the same sub-steps as always scattering, without its cost elsewhere).
     const double sv = add_volume_forces_inc(m.volume, X, Fo, local->scratch + n);
-    const double c = with_compression(m, X, Fo, true, 0.0, crows);
-    const double global = std::max(stiff, sv) + c;
-    if (stable_substeps(m, global, local->frame_dt, local->safety) <=
-        stable_substeps(m, stiff + c, local->frame_dt, local->safety))
-      return global;
-    const double row_max = volume_row_max(m.volume, local->scratch + n, local->scratch, n);
-    return std::min(global, stiff + row_max / w2 + c);
+    const double global = std::max(stiff, sv);
+    auto count = [&](double v) { return stable_substeps(m, v, local->frame_dt, local->safety); };
+    // The result is R + c: R in [stiff, global] the volume terms' rule (exact once their rows are
+    // scattered), c in [c_tr / 3, c_tr] the compression terms' block bound (c_tr: the blocks' traces, a
+    // cheap pass with the forces; exact after a second pass over the compressed terms). Each is refined only
+    // while the range left holds more than one sub-step count: the same sub-steps as computing both always.
+    const double ct =
+        m.compression.size() > 0
+            ? add_compression_forces_trace(m.compression, X, Fo, m.mass.data(), m.fixed.data(), crows, n) / w2
+            : 0.0;
+    if (count(global + ct) <= count(stiff + ct / 3)) return global + ct;
+    const double R =
+        std::min(global, stiff + volume_row_max(m.volume, local->scratch + n, local->scratch, n) / w2);
+    if (count(R + ct) <= count(R + ct / 3)) return R + ct;
+    return R + compression_block_bound(m.compression, X, m.mass.data(), m.fixed.data(), crows, n) / w2;
   }
   const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
   return with_compression(m, X, Fo, stiffening, stiffening ? std::max(stiff, sv) : stiff, crows);
