@@ -124,6 +124,15 @@ void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std:
 
 namespace {
 
+// h' and h'' of compression_h (the same expressions, so the same bits) without h itself: the force and bound
+// passes need no logarithm.
+inline CompressionH compression_dh(double J) {
+  if (J >= kCompressionJMin) return {0.0, 1.0 - 1.0 / J - (J - 1.0), 1.0 / (J * J) - 1.0};
+  constexpr double Jm = kCompressionJMin;
+  const double d1m = 1.0 - 1.0 / Jm - (Jm - 1.0), d2m = 1.0 / (Jm * Jm) - 1.0;
+  return {0.0, d1m + d2m * (J - Jm), d2m};
+}
+
 // The per-corner data of the block bound of a compressed term (compression_terms.hpp): r_k = s_k / |g_k| =
 // (m_k |g_k|^2)^-1/2, s_k = r_k |g_k| (no division beyond one per corner), sigma = sum s_k |g_k|, and the
 // weights w_k = a sigma r_k of the blocks w_k g_k g_k^T and beta_k = |b| L_max / 6 s_k sum_{l != k} s_l.
@@ -187,7 +196,7 @@ bool compression_pass(const CompressionTerms& T, const double* x, double* f, con
     const double J = r.V / T.V0[i];
     if (J >= 1.0) continue;  // zero in tension and at rest: no force, no curvature
     any = true;
-    const CompressionH hj = compression_h(J);
+    const CompressionH hj = compression_dh(J);  // h itself (a logarithm) is not needed here
     if (f) {
       const double c = -T.kc[i] * hj.d1;
       for (int k = 0; k < 4; ++k) {
