@@ -13,8 +13,10 @@
 #include "medspring/fem/volumetric.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/volumetric_body.hpp"
+#include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/stability.hpp"
+#include "medspring/physics/volume_terms.hpp"
 #include "medspring/sim/simulation.hpp"
 
 namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
@@ -35,9 +37,44 @@ std::shared_ptr<const VolumetricBody> kidney(Index nodes, double mass_scaling_dt
   return std::make_shared<VolumetricBody>(vm, st, "volumetric kidney");
 }
 
-// Args: nodes, mass_scaling_dt in microseconds (0 = off: the masses as lumped, with the 0.5 floor).
-void BM_VolumetricKidneyUpdate(benchmark::State& st) {
-  const auto body = kidney(static_cast<Index>(st.range(0)), 1e-3 * static_cast<double>(st.range(1)));
+// The former stable-step bound of the terms (before the block bound, issue 23; as in
+// tests/fem/compression_test.cpp): the scalar Gershgorin row,
+// max over free nodes of sum_t sum_l (a |g_k| |g_l| + [l != k] |b| L_max / 3) s_k s_l.
+double former_compression_bound(const CompressionTerms& T, const MatX3& x, const VecX& mass,
+                                const std::vector<std::uint8_t>& fixed) {
+  VecX rows = VecX::Zero(x.rows());
+  for (Index t = 0; t < T.size(); ++t) {
+    const auto u = static_cast<std::size_t>(t);
+    const Index id[4] = {T.a[u], T.b[u], T.c[u], T.d[u]};
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = x.row(id[k]).transpose();
+    const Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
+    Vec3 g[4];
+    g[1] = e2.cross(e3) / 6;
+    g[2] = e3.cross(e1) / 6;
+    g[3] = e1.cross(e2) / 6;
+    g[0] = -(g[1] + g[2] + g[3]);
+    const double J = e1.dot(g[1]) / T.V0[u];
+    if (J >= 1) continue;
+    double L = 0;
+    for (int k = 0; k < 4; ++k)
+      for (int l = 0; l < k; ++l) L = std::max(L, (p[k] - p[l]).norm());
+    const CompressionH hj = compression_h(J);
+    const double a = T.kc[u] / T.V0[u] * hj.d2, hb = std::abs(T.kc[u] * hj.d1) * L / 3;
+    for (int k = 0; k < 4; ++k)
+      for (int l = 0; l < 4; ++l) {
+        const double sk = fixed[static_cast<std::size_t>(id[k])] ? 0 : 1 / std::sqrt(mass[id[k]]);
+        const double sl = fixed[static_cast<std::size_t>(id[l])] ? 0 : 1 / std::sqrt(mass[id[l]]);
+        rows[id[k]] += (a * g[k].norm() * g[l].norm() + (l == k ? 0.0 : hb)) * sk * sl;
+      }
+  }
+  return rows.maxCoeff();
+}
+
+// One update of the kidney of `nodes` nodes with mass scaling for `mass_scaling_dt` (ms, 0: off) under a
+// point load of `load` N on its top node, with the counters of its stable step.
+void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, double load) {
+  const auto body = kidney(nodes, mass_scaling_dt);
   SimulationSettings ss;
   ss.normals = false;
   ss.local.enabled = false;
@@ -45,7 +82,7 @@ void BM_VolumetricKidneyUpdate(benchmark::State& st) {
   Index top = 0;
   for (Index i = 0; i < body->num_surface_nodes(); ++i)
     if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
-  sim.set_loads({{.node = top, .force = Vec3(0, 0, -0.5), .t_ramp = 0}});
+  sim.set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
   sim.advance(50);
   const auto s0 = sim.state().substeps;
   const auto f0 = sim.state().frames;
@@ -63,7 +100,62 @@ void BM_VolumetricKidneyUpdate(benchmark::State& st) {
   st.counters["omega_bound_over_true"] =
       m.omega_rest * std::sqrt(sim.state().stiffening) / power_iteration_omega(m, sim.state().x, 40, 1.0);
   st.counters["omega_rest_over_true_rest"] = m.omega_rest / power_iteration_omega(m, m.x0, 40, 1.0);
+  // how the stiffening splits (issue 23): the compression terms' bound (omega^2 / omega_rest^2 added by
+  // Weyl), the rest (springs and volume terms), the compressed terms, and the sub-steps at rest
+  const double w2r = m.omega_rest * m.omega_rest;
+  const Index n = m.num_nodes();
+  VecX fc = VecX::Zero(3 * n), rows(6 * n);  // src/physics/compression_rows.hpp
+  const double bc = m.compression.size() > 0
+                        ? add_compression_forces(m.compression, sim.state().x.data(), fc.data(),
+                                                 m.mass.data(), m.fixed.data(), rows.data(), n)
+                        : 0.0;
+  Index compressed = 0;
+  for (Index t = 0; t < m.compression.size(); ++t) {
+    const auto& C = m.compression;
+    const MatX3& x = sim.state().x;
+    const auto u = static_cast<std::size_t>(t);
+    compressed +=
+        signed_tet_volume(x.row(C.a[u]), x.row(C.b[u]), x.row(C.c[u]), x.row(C.d[u])) < C.V0[u] ? 1 : 0;
+  }
+  // the parts of the rule: springs alone, the volume terms' global and local rows, their rule R
+  Model springs_only = m;
+  springs_only.volume = VolumeTerms{};
+  springs_only.compression = CompressionTerms{};
+  MatX3 fs(n, 3), fe = MatX3::Zero(n, 3);
+  const double s_springs = detail::internal_forces(springs_only, sim.state().x, fe, fs, true);
+  VecX inc(m.volume.size()), vrows(n);
+  VecX fv = VecX::Zero(3 * n);
+  const double sv = add_volume_forces_inc(m.volume, sim.state().x.data(), fv.data(), inc.data());
+  const double rv = volume_row_max(m.volume, inc.data(), vrows.data(), n);
+  const double R = std::min(std::max(s_springs, sv), s_springs + rv / w2r);
+  st.counters["s_springs"] = s_springs;
+  st.counters["s_volume_global"] = sv;
+  st.counters["volume_rows_max"] = rv / w2r;
+  st.counters["stiff_rest_terms"] = R;  // springs and volume terms (the local rule)
+  // the compression terms' part, block bound and former bound, and the sub-steps each asks for with R
+  const double former = former_compression_bound(m.compression, sim.state().x, m.mass, m.fixed) / w2r;
+  const StepSettings& step_s = sim.settings().step;
+  st.counters["stiff_compression"] = bc / w2r;
+  st.counters["stiff_compression_former"] = former;
+  st.counters["substeps_block_bound"] = stable_substeps(m, R + bc / w2r, step_s.dt, step_s.safety);
+  st.counters["substeps_former_bound"] = stable_substeps(m, R + former, step_s.dt, step_s.safety);
+  st.counters["compressed_tets"] = static_cast<double>(compressed);
+  st.counters["substeps_at_rest"] =
+      stable_substeps(m, 1.0, sim.settings().step.dt, sim.settings().step.safety);
 }
+
+// Args: nodes, mass_scaling_dt in microseconds (0 = off: the masses as lumped, with the 0.5 floor); 0.5 N.
+void BM_VolumetricKidneyUpdate(benchmark::State& st) {
+  kidney_update(st, static_cast<Index>(st.range(0)), 1e-3 * static_cast<double>(st.range(1)), 0.5);
+}
+// Args: nodes, the load in mN (mass scaling off): where the compression terms' bound sets the sub-steps.
+void BM_VolumetricKidneyUpdateLoad(benchmark::State& st) {
+  kidney_update(st, static_cast<Index>(st.range(0)), 0.0, 1e-3 * static_cast<double>(st.range(1)));
+}
+BENCHMARK(BM_VolumetricKidneyUpdateLoad)
+    ->Args({2000, 1000})
+    ->Args({2000, 2000})
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_VolumetricKidneyUpdate)
     ->Args({500, 0})
     ->Args({700, 0})

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "compression_rows.hpp"
 #include "medspring/core/check.hpp"
 
 namespace medspring {
@@ -121,42 +122,137 @@ void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std:
   }
 }
 
-double add_compression_forces(const CompressionTerms& T, const double* x, double* f, const double* mass,
-                              const std::uint8_t* fixed, double* rows, Index nodes) {
-  const bool bound = mass && fixed && rows;
-  if (bound) std::fill(rows, rows + nodes, 0.0);
+namespace {
+
+// h' and h'' of compression_h (the same expressions, so the same bits) without h itself: the force and bound
+// passes need no logarithm.
+inline CompressionH compression_dh(double J) {
+  if (J >= kCompressionJMin) return {0.0, 1.0 - 1.0 / J - (J - 1.0), 1.0 / (J * J) - 1.0};
+  constexpr double Jm = kCompressionJMin;
+  const double d1m = 1.0 - 1.0 / Jm - (Jm - 1.0), d2m = 1.0 / (Jm * Jm) - 1.0;
+  return {0.0, d1m + d2m * (J - Jm), d2m};
+}
+
+// The per-corner data of the block bound of a compressed term (compression_terms.hpp): r_k = s_k / |g_k| =
+// (m_k |g_k|^2)^-1/2, s_k = r_k |g_k| (no division beyond one per corner), sigma = sum s_k |g_k|, and the
+// weights w_k = a sigma r_k of the blocks w_k g_k g_k^T and beta_k = |b| L_max / 6 s_k sum_{l != k} s_l.
+struct BlockTerm {
+  double w[4], beta[4];
+};
+inline BlockTerm block_term(const At& r, double kc, double V0, const CompressionH& hj, const double* mass,
+                            const std::uint8_t* fixed) {
+  const double a = kc / V0 * hj.d2;  // >= 0: h'' > 0 below J = 1
+  const double L2 = std::max({r.e[0].squaredNorm(), r.e[1].squaredNorm(), r.e[2].squaredNorm(),
+                              (r.e[1] - r.e[0]).squaredNorm(), (r.e[2] - r.e[0]).squaredNorm(),
+                              (r.e[2] - r.e[1]).squaredNorm()});
+  const double hb = std::abs(kc * hj.d1) * std::sqrt(L2) / 6.0;  // norm bound of a d^2V block
+  double is[4], ir[4], sigma = 0, ssum = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double gg = r.g[k].squaredNorm();
+    if (fixed[r.id[k]]) {
+      is[k] = ir[k] = 0.0;
+    } else if (gg > 0) {
+      ir[k] = 1.0 / std::sqrt(mass[r.id[k]] * gg);
+      is[k] = ir[k] * std::sqrt(gg);
+    } else {
+      ir[k] = 0.0;  // no gradient at this corner: no rank-one part there
+      is[k] = 1.0 / std::sqrt(mass[r.id[k]]);
+    }
+    sigma += ir[k] * gg;  // s_k |g_k|
+    ssum += is[k];
+  }
+  BlockTerm bt;
+  for (int k = 0; k < 4; ++k) {
+    bt.w[k] = a * sigma * ir[k];
+    bt.beta[k] = hb * is[k] * (ssum - is[k]);
+  }
+  return bt;
+}
+
+// max over nodes of the bound tr/3 + sqrt(2/3 |dev B|_F^2) >= lambda_max(B) of the 3x3 blocks in rows.
+double block_rows_max(const double* rows, Index nodes) {
+  double row_max = 0;
+  for (Index n = 0; n < nodes; ++n) {
+    const double* B = rows + kCompressionRowsPerNode * n;
+    const double tr = B[0] + B[1] + B[2];
+    if (tr <= row_max) continue;  // B is positive semi-definite: lambda_max(B) <= tr B
+    const double m = tr / 3.0;    // lambda_max <= m + sqrt(2/3 |B - m I|_F^2)
+    const double d0 = B[0] - m, d1 = B[1] - m, d2 = B[2] - m;
+    const double dev2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (B[3] * B[3] + B[4] * B[4] + B[5] * B[5]);
+    row_max = std::max(row_max, m + std::sqrt(2.0 / 3.0 * dev2));
+  }
+  return row_max;
+}
+
+// Adds the forces of the compressed terms; with bound = 1 the traces of the blocks into rows (#N), with
+// bound = 2 the blocks (6 #N); returns whether a term is compressed.
+template <int Bound>
+bool compression_pass(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                      const std::uint8_t* fixed, double* rows) {
   bool any = false;
   for (Index t = 0; t < T.size(); ++t) {
     const auto i = static_cast<std::size_t>(t);
     const At r = term_at(T, x, t);
     const double J = r.V / T.V0[i];
-    if (J >= 1.0) continue;
-    const CompressionH hj = compression_h(J);
-    const double c = -T.kc[i] * hj.d1;
-    for (int k = 0; k < 4; ++k) {
-      double* o = f + 3 * r.id[k];
-      o[0] += c * r.g[k].x();
-      o[1] += c * r.g[k].y();
-      o[2] += c * r.g[k].z();
-    }
-    if (bound) {
-      any = true;
-      const double a = T.kc[i] / T.V0[i] * hj.d2;
-      const double hb = std::abs(T.kc[i] * hj.d1) * longest_edge(r) / 3.0;  // a d^2V block, off the diagonal
-      double gn[4], is[4];
+    if (J >= 1.0) continue;  // zero in tension and at rest: no force, no curvature
+    any = true;
+    const CompressionH hj = compression_dh(J);  // h itself (a logarithm) is not needed here
+    if (f) {
+      const double c = -T.kc[i] * hj.d1;
       for (int k = 0; k < 4; ++k) {
-        gn[k] = r.g[k].norm();
-        is[k] = fixed[r.id[k]] ? 0.0 : 1.0 / std::sqrt(mass[r.id[k]]);
+        double* o = f + 3 * r.id[k];
+        o[0] += c * r.g[k].x();
+        o[1] += c * r.g[k].y();
+        o[2] += c * r.g[k].z();
       }
-      for (int k = 0; k < 4; ++k)
-        for (int l = 0; l < 4; ++l)
-          rows[r.id[k]] += (a * gn[k] * gn[l] + (l == k ? 0.0 : hb)) * is[k] * is[l];
+    }
+    if constexpr (Bound > 0) {
+      const BlockTerm bt = block_term(r, T.kc[i], T.V0[i], hj, mass, fixed);
+      for (int k = 0; k < 4; ++k) {
+        const Vec3& g = r.g[k];
+        if constexpr (Bound == 1) {
+          rows[r.id[k]] += bt.w[k] * g.squaredNorm() + 3.0 * bt.beta[k];
+        } else {
+          const double w = bt.w[k], beta = bt.beta[k];
+          double* B = rows + kCompressionRowsPerNode * r.id[k];
+          B[0] += w * g.x() * g.x() + beta;
+          B[1] += w * g.y() * g.y() + beta;
+          B[2] += w * g.z() * g.z() + beta;
+          B[3] += w * g.x() * g.y();
+          B[4] += w * g.x() * g.z();
+          B[5] += w * g.y() * g.z();
+        }
+      }
     }
   }
-  if (!any) return 0.0;
-  double row_max = 0;
-  for (Index n = 0; n < nodes; ++n) row_max = std::max(row_max, rows[n]);
-  return row_max;
+  return any;
+}
+
+}  // namespace
+
+double add_compression_forces(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                              const std::uint8_t* fixed, double* rows, Index nodes) {
+  if (!(mass && fixed && rows)) {
+    compression_pass<0>(T, x, f, nullptr, nullptr, nullptr);
+    return 0.0;
+  }
+  std::fill(rows, rows + kCompressionRowsPerNode * nodes, 0.0);
+  return compression_pass<2>(T, x, f, mass, fixed, rows) ? block_rows_max(rows, nodes) : 0.0;
+}
+
+double add_compression_forces_trace(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                                    const std::uint8_t* fixed, double* rows, Index nodes) {
+  std::fill(rows, rows + nodes, 0.0);
+  if (!compression_pass<1>(T, x, f, mass, fixed, rows)) return 0.0;
+  double m = 0;
+  for (Index n = 0; n < nodes; ++n) m = rows[n] > m ? rows[n] : m;
+  return m;
+}
+
+double compression_block_bound(const CompressionTerms& T, const double* x, const double* mass,
+                               const std::uint8_t* fixed, double* rows, Index nodes) {
+  std::fill(rows, rows + kCompressionRowsPerNode * nodes, 0.0);
+  return compression_pass<2>(T, x, nullptr, mass, fixed, rows) ? block_rows_max(rows, nodes) : 0.0;
 }
 
 double compression_energy(const CompressionTerms& T, const MatX3& x) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "compression_rows.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/stability.hpp"
 #include "spring_kernel.hpp"
@@ -71,7 +72,8 @@ void bending_forces(const BendingTerms& B, const MatX3& x, MatX3& f) {
 
 // Compression stiffening (issue 23, compression_terms.hpp): its forces and, for the stable step, the
 // Gershgorin bound of its mass-scaled Hessian at x added to the others' bound (Weyl: omega^2 <= stiff
-// omega_rest^2 + that bound). `rows`: scratch of #N doubles (a local one when the caller has none).
+// omega_rest^2 + that bound). `rows`: scratch of kCompressionRowsPerNode #N doubles (State::stiff_rows; a
+// local one when the caller has none).
 double with_compression(const Model& m, const double* x, double* f, bool stiffening, double stiff,
                         double* rows) {
   if (m.compression.size() == 0) return stiff;
@@ -82,7 +84,7 @@ double with_compression(const Model& m, const double* x, double* f, bool stiffen
   }
   VecX local;
   if (!rows) {
-    local.resize(m.num_nodes());
+    local.resize(kCompressionRowsPerNode * m.num_nodes());
     rows = local.data();
   }
   const double w2 = m.omega_rest * m.omega_rest;
@@ -97,41 +99,52 @@ namespace detail {
 
 namespace {
 
-// The volume terms' forces (and stiffening): volume_forces without the compression terms.
-double volume_term_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
-                          const LocalStiffening* local) {
-  if (m.volume.size() == 0) return stiff;
+// The volume terms' forces and stiffening, then the compression terms' forces and bound (its scratch after
+// the local rule's: compression_rows.hpp). The compression bound c (omega^2 / omega_rest^2, by Weyl) is added
+// to whichever rule gives the volume terms' part, and the local rule's gate counts it: the rows are scattered
+// where [s_springs + c, global + c] holds more than one sub-step count of the frame.
+double volume_and_compression(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
+                              const LocalStiffening* local) {
+  const Index n = m.num_nodes();
   const double w2 = m.omega_rest * m.omega_rest;
+  double* crows = local ? local->scratch + n + m.volume.size() : nullptr;
+  if (m.volume.size() == 0) return with_compression(m, X, Fo, stiffening, stiff, crows);
   if (stiffening && local && m.volume.rest_rows.size() == 4 * m.volume.packed.size() && w2 > 0) {
     // Local stiffening (docs/volumetric.md "Stable step"): with K_t(x) <= s_t K_t(x0) per term (the
     // assumption of the global rule), K(x) <= s_springs K(x0) + sum_t (s_t - 1)+ K_t(x0), so by Weyl
     // omega^2 <= s_springs omega_rest^2 + the Gershgorin bound of the sum, row_max. Never above the global
     // rule max(s_springs, s_terms), never below s_springs: scattered only where that range holds more
     // than one sub-step count (the same sub-steps as always scattering, without its cost elsewhere).
-    const Index n = m.num_nodes();
     const double sv = add_volume_forces_inc(m.volume, X, Fo, local->scratch + n);
     const double global = std::max(stiff, sv);
-    if (stable_substeps(m, global, local->frame_dt, local->safety) <=
-        stable_substeps(m, stiff, local->frame_dt, local->safety))
-      return global;
-    const double row_max = volume_row_max(m.volume, local->scratch + n, local->scratch, n);
-    return std::min(global, stiff + row_max / w2);
+    auto count = [&](double v) { return stable_substeps(m, v, local->frame_dt, local->safety); };
+    // The result is R + c: R in [stiff, global] the volume terms' rule (exact once their rows are
+    // scattered), c in [c_tr / 3, c_tr] the compression terms' block bound (c_tr: the blocks' traces, a
+    // cheap pass with the forces; exact after a second pass over the compressed terms). Each is refined only
+    // while the range left holds more than one sub-step count: the same sub-steps as computing both always.
+    const double ct =
+        m.compression.size() > 0
+            ? add_compression_forces_trace(m.compression, X, Fo, m.mass.data(), m.fixed.data(), crows, n) / w2
+            : 0.0;
+    if (count(global + ct) <= count(stiff + ct / 3)) return global + ct;
+    const double R =
+        std::min(global, stiff + volume_row_max(m.volume, local->scratch + n, local->scratch, n) / w2);
+    if (count(R + ct) <= count(R + ct / 3)) return R + ct;
+    return R + compression_block_bound(m.compression, X, m.mass.data(), m.fixed.data(), crows, n) / w2;
   }
   if (!stiffening && compression_fused(m)) {
     add_volume_and_compression_forces(m.volume, X, Fo);
     return stiff;
   }
   const double sv = add_volume_forces(m.volume, X, Fo, stiffening);
-  return stiffening ? std::max(stiff, sv) : stiff;
+  return with_compression(m, X, Fo, stiffening, stiffening ? std::max(stiff, sv) : stiff, crows);
 }
 
 }  // namespace
 
 double volume_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
                      const LocalStiffening* local) {
-  // then the compression stiffening's forces and bound (its scratch: the local rule's, free again here)
-  return with_compression(m, X, Fo, stiffening, volume_term_forces(m, X, Fo, stiffening, stiff, local),
-                          local ? local->scratch : nullptr);
+  return volume_and_compression(m, X, Fo, stiffening, stiff, local);
 }
 
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "compression_rows.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/parallel.hpp"
@@ -301,8 +302,8 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
   }
   if (s.integrator == Integrator::SymplecticEuler) detail::gather_ready(m, st);  // sizes its buffer now
   if ((m.volume.size() > 0 || m.compression.size() > 0) &&
-      st.stiff_rows.size() != m.num_nodes() + m.volume.size())
-    st.stiff_rows.setZero(m.num_nodes() + m.volume.size());
+      st.stiff_rows.size() != stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()))
+    st.stiff_rows.setZero(stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()));
   const int T = effective_threads(m, s);
   // one thread: the fused node-range step (threaded_step.hpp) for models beyond the gather pass
   if (T <= 1 && !fused_serial(m, s)) return;
@@ -354,10 +355,11 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   // volume terms: the local stiffening (scratch sized by prepare_step; a state without it gets the global
   // rule)
   const detail::LocalStiffening local{st.stiff_rows.data(), T, s.safety};
-  const detail::LocalStiffening* local_rule = (m.volume.size() > 0 || m.compression.size() > 0) &&
-                                                      st.stiff_rows.size() == m.num_nodes() + m.volume.size()
-                                                  ? &local
-                                                  : nullptr;
+  const detail::LocalStiffening* local_rule =
+      (m.volume.size() > 0 || m.compression.size() > 0) &&
+              st.stiff_rows.size() == stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size())
+          ? &local
+          : nullptr;
   const double t0 = st.t;
   double h = T / static_cast<double>(subs);
   double t = t0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "compression_rows.hpp"
 #include "medspring/core/binary.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/core/memory.hpp"
@@ -250,7 +251,7 @@ State make_state(const Model& m) {
   s.x_trial.setZero(n, 3);
   s.step_coef.setZero(n);
   if (m.volume.size() > 0 || m.compression.size() > 0)
-    s.stiff_rows.setZero(n + m.volume.size());  // the stable step's local stiffening (issue 23)
+    s.stiff_rows.setZero(stiff_rows_size(n, m.volume.size(), m.compression.size()));  // issue 23
   for (VecX* b : {&s.cg_r, &s.cg_z, &s.cg_p, &s.cg_q, &s.dv, &s.rhs, &s.jacobi}) b->setZero(3 * n);
   s.spring_a.setZero(ns);
   s.spring_b.setZero(ns);

@@ -98,17 +98,20 @@ TEST(VolumetricStep, LocalStiffeningBoundsTheLoadedOmegaAndIsTighterThanTheGloba
     const double global = detail::internal_forces(m, st.x, st.f_ext, f, true);
     const double omega_true = power_iteration_omega(m, st.x, 60, 1.0);
     EXPECT_GE(local, 1.0);
-    EXPECT_LE(local, global * (1 + 1e-12)) << load << " N";
+    // never more sub-steps than the global rule (the value itself may be a looser bound where the frame's
+    // sub-step count does not depend on it: forces.cpp refines the bounds only where it does)
+    EXPECT_LE(stable_substeps(m, local, 0.5, 0.8), stable_substeps(m, global, 0.5, 0.8)) << load << " N";
     EXPECT_GE(m.omega_rest * std::sqrt(local), omega_true) << load << " N";
     // The step scatters the local rows only where the range [s_springs, global] holds more than one
     // sub-step count of its frame: the same sub-steps as the rule always scattered (a frame of 1e12 ms
     // gives every value its own count, so the rows are always scattered), at the same state.
-    VecX scratch(m.num_nodes() + m.volume.size());
+    // State::stiff_rows' size (src/physics/compression_rows.hpp): #N + #T, and 6 #N for the compression bound
+    VecX scratch(m.num_nodes() + m.volume.size() + (m.compression.size() > 0 ? 6 : 0) * m.num_nodes());
     const detail::LocalStiffening gated{scratch.data(), 0.5, 0.8}, always{scratch.data(), 1e12, 0.8};
     const double s_gated = detail::internal_forces(m, st.x, st.f_ext, f, true, &gated);
     const double s_always = detail::internal_forces(m, st.x, st.f_ext, f, true, &always);
     EXPECT_LE(s_always, s_gated * (1 + 1e-12)) << load << " N";
-    EXPECT_LE(s_gated, global * (1 + 1e-12)) << load << " N";
+    EXPECT_LE(stable_substeps(m, s_gated, 0.5, 0.8), stable_substeps(m, global, 0.5, 0.8)) << load << " N";
     EXPECT_EQ(stable_substeps(m, s_gated, 0.5, 0.8), stable_substeps(m, s_always, 0.5, 0.8)) << load << " N";
     EXPECT_GE(m.omega_rest * std::sqrt(s_always), omega_true) << load << " N";
     std::cout << load << " N: always scattered " << s_always << ", gated " << s_gated << "\n";

@@ -52,11 +52,18 @@ struct CompressionTerms {
 /// range or repeated, kc is negative or not finite, or the rest tetrahedron is inverted or degenerate.
 void finalize_compression_terms(CompressionTerms& T, const MatX3& x0, const std::string& what);
 
-/// Adds the forces -dE/dx to f (flat 3N). With `mass` (#N), `fixed` (#N) and `rows` (scratch of #N doubles,
-/// overwritten), returns the Gershgorin bound of the terms' mass-scaled Hessian at x, max over free nodes i
-/// of sum over the compressed terms t at i and their free corners l of ||d^2E_t / dx_i dx_l|| / sqrt(m_i m_l)
-/// ((rad/ms)^2), each block bounded by kc (h'' |g_i| |g_l| / V0 + |h'| L_max / 3) (g = dV/dx); by Weyl the
-/// caller adds it to the others' omega^2 bound. Without them returns 0.
+/// Adds the forces -dE/dx to f (flat 3N). With `mass` (#N), `fixed` (#N) and `rows` (scratch of
+/// 6 #N doubles, overwritten: src/physics/compression_rows.hpp), returns a bound of the largest eigenvalue of
+/// the terms' mass-scaled Hessian M^-1/2 (sum_t H_t) M^-1/2 at x over the free DOFs ((rad/ms)^2); by Weyl the
+/// caller adds it to the others' omega^2 bound. Without them returns 0. The bound (docs/volumetric.md
+/// "Compression stiffening"): H_t = a g g^T + b d^2V with a = kc h''/V0 >= 0, b = kc h', g = dV/dx. By
+/// Cauchy-Schwarz with weights c_k = s_k |g_k| (s_k = m_k^-1/2, 0 when fixed), (sum_k s_k g_k.v_k)^2 <= sigma
+/// sum_k s_k/|g_k| (g_k.v_k)^2 (sigma = sum_k c_k), so the rank-one part is at most the block diagonal of the
+/// 3x3 blocks a sigma s_k / |g_k| g_k g_k^T; the blocks of d^2V are skew(edge)/6 (norm <= L_max/6) with zero
+/// diagonal, so that part is at most |b| L_max/6 s_k (sum_{l != k} s_l) I per corner. The per-node sum B_i of
+/// these 3x3 blocks dominates the matrix, so lambda_max <= max_i lambda_max(B_i) <= max_i tr/3 + sqrt(2/3)
+/// |dev B_i|_F. It is never above the former scalar Gershgorin row bound (the trace of the same blocks, with
+/// the d^2V blocks bounded by L_max/3), and tighter where the terms at a node pull in different directions.
 double add_compression_forces(const CompressionTerms& T, const double* x, double* f,
                               const double* mass = nullptr, const std::uint8_t* fixed = nullptr,
                               double* rows = nullptr, Index nodes = 0);
