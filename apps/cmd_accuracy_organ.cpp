@@ -389,8 +389,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                                 ep = fem::compare(on_organ_surface(o, up), c.u_fem, contact);
         const double ml = mean_err(lin[i], c.load, c.fem_mean), mp = mean_err(up, c.load, c.fem_mean);
         const Vec3 fd = c.load.force.normalized();  // the disk means along the load (compliance / |F|)
-        const auto along = [&](const MatX3& u) {
-          return fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, c.load, u).dot(fd);
+        const auto along = [&](const MatX3& uu) {
+          return fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, c.load, uu).dot(fd);
         };
         diag.push_back({{"site", c.site_index},
                         {"force_N", c.force},
