@@ -321,7 +321,7 @@ const std::vector<CommandSpec>& commands() {
              .def = "0",
              .help =
                  "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
-                 "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
+                 "the organ's own surface nodes (docs/accuracy-nonlinear.md, \"The load site\")"},
             {.name = "fit",
              .value = "nonlinear|small-strain",
              .def = "nonlinear; --quick: small-strain",
@@ -390,7 +390,7 @@ const std::vector<CommandSpec>& commands() {
              .def = "0",
              .help =
                  "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at "
-                 "the organ's own surface nodes (docs/accuracy.md, \"The load site\")"},
+                 "the organ's own surface nodes (docs/accuracy-nonlinear.md, \"The load site\")"},
             {.name = "fit",
              .value = "nonlinear|small-strain",
              .def = "nonlinear",

@@ -45,7 +45,7 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
   ASSERT_EQ(j["organs"].size(), 1u);
   const auto& o = j["organs"][0];
   EXPECT_GT(o["fem"]["nodes"].get<int>(), 1000);
-  // the strain the FEM reaches, per solved case (docs/accuracy.md, "Large strain"): nominal = contact
+  // the strain the FEM reaches, per solved case (docs/accuracy-nonlinear.md, "Large strain"): nominal = contact
   // displacement / thickness; the peak element strain lies above it
   ASSERT_EQ(o["fem"]["strain"].size(), 2u);  // --quick: 2 sites at 0.5 N
   for (const auto& c : o["fem"]["strain"]) {
@@ -64,7 +64,7 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
       }
       EXPECT_TRUE(std::isfinite(c["rms_mm"].get<double>()));
       EXPECT_GT(c["contact_fem_mm"].get<double>(), 0.0);
-      // the disk-mean read-out (docs/accuracy.md, "The load site"): every scored case has one
+      // the disk-mean read-out (docs/accuracy-nonlinear.md, "The load site"): every scored case has one
       const double dm = c.value("disk_mean_error_pct", -1.0);
       EXPECT_TRUE(std::isfinite(dm) && dm >= 0.0 && dm < 1000.0) << c.dump();
     }
@@ -112,7 +112,7 @@ TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// The aorta as a solid organ (issue 23, docs/accuracy.md "The aorta as a solid organ"): surface and
+// The aorta as a solid organ (issue 23, docs/accuracy-volumetric.md "The aorta as a solid organ"): surface and
 // volumetric kinds only (no skeleton for the hybrid kind), held by the facing bed + cut cap rule; the
 // volumetric kind from E and nu alone within the issue's 10 % RMS on the held-out site.
 TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {

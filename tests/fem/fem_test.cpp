@@ -127,7 +127,7 @@ TEST(TetMesh, BoxMeshIsConformingAndQuadratic) {
   EXPECT_NEAR(g[1] - g[0], 10.0 / 15.0, 1e-12);  // cells 1 : 2 : 4 : 8
 }
 
-// The large-strain tables' FEM strain (docs/accuracy.md, "Large strain"): an affine field gives its
+// The large-strain tables' FEM strain (docs/accuracy-nonlinear.md, "Large strain"): an affine field gives its
 // principal stretches exactly on every element, a large rigid rotation none, a local dent is found in its
 // element, and a field of the wrong shape or with a NaN is refused.
 TEST(TetMesh, PeakStrainIsThePrincipalStretchAndIgnoresRigidMotion) {
@@ -248,7 +248,7 @@ TEST(Matching, DiskLoadsCarryTheTotalForceAndQuadraticInterpolationIsExactOnLine
   }
 }
 
-// The load-site read-out (docs/accuracy.md, "The load site"): the disk load's weights on an off-centre disk
+// The load-site read-out (docs/accuracy-nonlinear.md, "The load site"): the disk load's weights on an off-centre disk
 // of a graded flat patch sum to 1 and have the disk's centre as their centroid, on both sides (linear and
 // quadratic faces), so the disk mean of a linear field u = A x + b is its value at the centre. Lumping the
 // load equally on the nodes inside the disk (a wrong rule) misses the centroid on the graded patch.

@@ -375,7 +375,7 @@ TEST(Volumetric, TetgenBuildAimsAtTheNodeCountAndKeepsTheSurface) {
   EXPECT_THROW(fem::volumetric_mesh(surf, {.target_nodes = 10}), InvalidInput);
 }
 
-// surface_subdivisions (docs/accuracy.md, "The load site"): the model's surface is the given one subdivided
+// surface_subdivisions (docs/accuracy-nonlinear.md, "The load site"): the model's surface is the given one subdivided
 // at edge midpoints (the same polyhedron, 4x the faces), its first #V nodes the given vertices, unmoved.
 TEST(Volumetric, SubdividedSurfaceKeepsTheGivenVerticesFirstAndTheSamePolyhedron) {
   const SurfaceMesh surf = kidney_phantom();
@@ -447,7 +447,7 @@ TEST(VolumetricStatics, ModifiedNewtonAndSmallStrainResponseAgreeWithFullNewton)
 }  // namespace
 }  // namespace medspring
 
-// The support rule of an organ that no single slab holds (docs/accuracy.md, "The aorta"): a bed of the
+// The support rule of an organ that no single slab holds (docs/accuracy-volumetric.md, "The aorta"): a bed of the
 // surface facing away from the load plus a cut cap; the FEM and the spring model hold the same region, and
 // a rule that holds a single point (every rotation about it free) is refused on both sides.
 TEST(SupportRule, AFacingBedAndACapHoldAVesselLikeOrganAndALonePointIsRefused) {

@@ -15,7 +15,7 @@ struct VolumetricMeshSettings {
   // midpoint subdivisions of the surface before meshing (0..3; subdivide_midpoint, organ.hpp): the same
   // polyhedron with 4^k times the faces, its first #V vertices the given ones, so a load spread over a
   // small disk (a tool tip, the accuracy tables' contact disk) falls on many nodes instead of a handful
-  // (docs/accuracy.md, "The load site"). target_nodes counts the refined surface's vertices.
+  // (docs/accuracy-nonlinear.md, "The load site"). target_nodes counts the refined surface's vertices.
   int surface_subdivisions = 0;
 };
 

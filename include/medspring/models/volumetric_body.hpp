@@ -36,7 +36,7 @@ struct VolumetricMesh {
   Index surface_nodes = 0;
 };
 
-/// VolumetricSettings::compression by default (docs/accuracy.md, "Compression stiffening").
+/// VolumetricSettings::compression by default (docs/accuracy-nonlinear.md, "Compression stiffening").
 inline constexpr double kDefaultVolumetricCompression = 32.0;
 
 struct VolumetricSettings {
