@@ -5,9 +5,10 @@
 namespace medspring::cli {
 
 int cmd_bench_gpu(const Args& args) {
-  args.require_known({"gpu", "sizes", "batch", "kidney", "cpu-max", "no-torch", "compact", "out", "device"});
+  args.require_known(
+      {"gpu", "sizes", "batch", "kidney", "cpu-max", "no-torch", "compact", "gather", "out", "device"});
   std::vector<std::string> a;
-  for (const char* name : {"sizes", "batch", "kidney", "cpu-max", "out", "device"})
+  for (const char* name : {"sizes", "batch", "kidney", "cpu-max", "gather", "out", "device"})
     if (const auto v = args.get(name)) {
       a.push_back(std::string("--") + name);
       a.push_back(*v);

@@ -35,7 +35,7 @@ const std::vector<CommandSpec>& commands() {
            "       medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
            "       medspring bench --gpu [--sizes N,N,..] [--batch B] [--kidney FILE] [--cpu-max N] "
            "[--no-torch] "
-           "[--compact] [--out DIR] [--device I]",
+           "[--compact] [--gather LIST] [--out DIR] [--device I]",
        .about =
            "Times one update of every benchmark case (ALGORITHMS.md D-18): 200 warm-up updates, then N "
            "timed\n"
@@ -87,7 +87,14 @@ const std::vector<CommandSpec>& commands() {
             {.name = "kidney",
              .value = "FILE",
              .help = "--gpu: the batch's hybrid kidney from a model package (.msm) [default: the phantom]"},
-            {.name = "compact", .help = "--gpu: also time each tube with compact parameters (fp64c, fp32c)"},
+            {.name = "compact",
+             .help =
+                 "--gpu: also time each tube and kidney case with compact parameters (fp64c, grid-compact)"},
+            {.name = "gather",
+             .value = "LIST",
+             .def = "1",
+             .help =
+                 "--gpu with --compact: the gather batches to time (0 automatic, 1, 2, 4; rows -g2, -gauto)"},
             {.name = "device", .value = "I", .def = "0", .help = "--gpu: CUDA device index"}},
        .run = cmd_bench},
       {.name = "info",
