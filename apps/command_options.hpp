@@ -33,6 +33,36 @@ inline const OptionSpec kScenes{.name = "scenes",
                                 .value = "DIR",
                                 .def = "the source tree's scenes/, then <prefix>/share/medspring/scenes",
                                 .help = "the bundled scene folder"};
+// The volumetric kind's options of `accuracy` and `calibrate` (docs/volumetric.md,
+// docs/accuracy-nonlinear.md).
+inline const OptionSpec kVolumetricNodes{
+    .name = "nodes", .value = "N", .def = "2000", .help = "node count of the volumetric model"};
+inline const OptionSpec kCompression{
+    .name = "compression",
+    .value = "C",
+    .def = "32",
+    .help = "volumetric kinds: compression stiffening c (units of mu; 0 = off; docs/volumetric.md)"};
+inline const OptionSpec kSurfaceSubdivisions{
+    .name = "surface-subdivisions",
+    .value = "K",
+    .def = "0",
+    .help =
+        "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at the "
+        "organ's own surface nodes (docs/accuracy-nonlinear.md, \"The load site\")"};
+inline OptionSpec fit_option(const char* def) {
+  return {.name = "fit",
+          .value = "nonlinear|small-strain",
+          .def = def,
+          .help =
+              "volumetric calibration: the small-strain fit refined with c on the full response, or the "
+              "small-strain fit alone (docs/accuracy-nonlinear.md)"};
+}
+inline const OptionSpec kTrainForce{
+    .name = "train-force",
+    .value = "F",
+    .unit = "N",
+    .def = "0.5, or the smallest of --forces",
+    .help = "the load of the two training sites (one of the forces); every other case is held out"};
 inline const OptionSpec kUnit{
     .name = "unit", .value = "mm|cm|m", .help = "length unit of the input's coordinates"};
 inline const OptionSpec kLabel{
