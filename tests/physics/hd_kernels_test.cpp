@@ -338,7 +338,9 @@ TEST(SpringTable, CompactClassesAreTheDistinctValues) {
 template <class R, bool Soft, bool Stiff>
 void expect_gather_batches_equal(const Model& m, bool compact) {
   SpringTableArrays<R> T = make_spring_table<R>(m);
-  if (compact) ASSERT_TRUE(compact_spring_params(T, 65536));
+  if (compact) {
+    ASSERT_TRUE(compact_spring_params(T, 65536));
+  }
   const hd::SpringTable<R> view = T.view();
   std::vector<R> x(3 * static_cast<std::size_t>(m.num_nodes()));
   std::mt19937 rng(7);
