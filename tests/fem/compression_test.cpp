@@ -199,7 +199,8 @@ TEST(Compression, FusedPassEqualsTheSeparatePasses) {
       const double scale = fs.cwiseAbs().maxCoeff();
       EXPECT_LE((ff - fs).cwiseAbs().maxCoeff(), 1e-12 * scale) << "trial " << trial;
       EXPECT_NEAR(a, b, 1e-12 * b) << "trial " << trial;
-      VecX scratch_f(n + m.volume.size()), scratch_s(n + m.volume.size());
+      const Index rows = stiff_rows_size(n, m.volume.size(), m.compression.size());  // as State::stiff_rows
+      VecX scratch_f(rows), scratch_s(rows);
       const detail::LocalStiffening lf{scratch_f.data(), 0.5, 0.9}, ls{scratch_s.data(), 0.5, 0.9};
       for (const bool local : {false, true}) {
         MatX3 vf = MatX3::Zero(n, 3), vs = MatX3::Zero(n, 3);
