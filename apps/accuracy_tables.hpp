@@ -112,9 +112,9 @@ std::optional<Organ> real_kidney(const std::filesystem::path& scenes, FileLoader
 /// `surface_nodes` nodes, no skeleton (surface and volumetric kinds only), held by the rule of
 /// aorta_support_rule; nullopt (and why) when the data file or the meshing layer is missing.
 std::optional<Organ> real_aorta(std::string& why, Index surface_nodes = 800);
-/// The aorta's supports (docs/accuracy-volumetric.md, "The aorta"): the surface facing away from the load (outward
-/// normal within 60 degrees of -e3, a bed along the whole vessel, as the aorta lies on the spine) and the
-/// cut cap where the segmentation met the scan's edge (within 1 mm of the lowest point, -z).
+/// The aorta's supports (docs/accuracy-volumetric.md, "The aorta"): the surface facing away from the load
+/// (outward normal within 60 degrees of -e3, a bed along the whole vessel, as the aorta lies on the spine)
+/// and the cut cap where the segmentation met the scan's edge (within 1 mm of the lowest point, -z).
 fem::SupportRule aorta_support_rule(const Frame& f);
 
 /// One row of the closed-form validation (fem/validation.hpp) as JSON.

@@ -357,7 +357,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       std::vector<fem::ContactLoad> loads;
       for (const auto& c : cases) loads.push_back(c.load);
       const std::vector<MatX3> lin = fem::spring_displacement_linear(*b, loads);
-      // the disk-mean read-out (docs/accuracy-nonlinear.md, "The load site"): |mean_model - mean_FEM| / |mean_FEM|
+      // the disk-mean read-out (docs/accuracy-nonlinear.md, "The load site"): |mean_model - mean_FEM| /
+      // |mean_FEM|
       auto mean_err = [&](const MatX3& u, const fem::ContactLoad& l, const Vec3& fm) {
         return 100 * (fem::disk_mean_linear(vm.X.topRows(vm.surface_nodes), vm.F, l, u) - fm).norm() /
                fm.norm();
@@ -454,8 +455,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
               training);
           fit = {{"small_strain_multipliers", {m(0), m(1)}}, {"nonlinear", false}};
           // then on the full response of the same training loads: the compression coefficient c, which the
-          // small-strain response cannot see, and the two scales (docs/accuracy-nonlinear.md, "Calibration of the
-          // nonlinear response")
+          // small-strain response cannot see, and the two scales (docs/accuracy-nonlinear.md, "Calibration of
+          // the nonlinear response")
           if (st.fit_nonlinear && o.compression > 0) {
             note(st, cat(o.name, ": small-strain fit springs x ", m(0), ", volume x ", m(1),
                          "; refining with c on the full response"));

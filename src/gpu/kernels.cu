@@ -60,7 +60,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
   const int row_block = A.models_first ? blockIdx.y : blockIdx.x;
   const int row_blocks = A.models_first ? gridDim.y : gridDim.x;
   const int r = row_block * blockDim.x + threadIdx.x;  // table row
-  const bool split = A.split.rows > 0;                  // the same for every thread of the launch
+  const bool split = A.split.rows > 0;                 // the same for every thread of the launch
   const int rows = split ? A.split.rows : A.nodes.nodes;
   R stiff = R(1);
   int code = hd::kNodeOk;
@@ -87,7 +87,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
     R* parts = A.parts + A.parts_stride * b;
     if (r < rows)
       code = hd::grid_split_gather<Soft, Stiff, U>(N, T, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off,
-                                                A.xo + off, A.vo + off, parts, stiff);
+                                                   A.xo + off, A.vo + off, parts, stiff);
     __syncwarp();
     if (r < rows) {
       const int c = hd::grid_split_finish(N, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
@@ -96,7 +96,7 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
     }
   } else if (r < rows) {
     code = hd::node_substep<Soft, Stiff, U>(N, T, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
-                                         A.vo + off, stiff);
+                                            A.vo + off, stiff);
   }
   if (code != hd::kNodeOk && A.guard) {
     atomicMin(&A.scalars->fail_first, A.substep);

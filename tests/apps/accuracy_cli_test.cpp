@@ -45,8 +45,8 @@ TEST(CliAccuracy, QuickRunWritesTablesJsonAndFiguresWithValidatedFem) {
   ASSERT_EQ(j["organs"].size(), 1u);
   const auto& o = j["organs"][0];
   EXPECT_GT(o["fem"]["nodes"].get<int>(), 1000);
-  // the strain the FEM reaches, per solved case (docs/accuracy-nonlinear.md, "Large strain"): nominal = contact
-  // displacement / thickness; the peak element strain lies above it
+  // the strain the FEM reaches, per solved case (docs/accuracy-nonlinear.md, "Large strain"): nominal =
+  // contact displacement / thickness; the peak element strain lies above it
   ASSERT_EQ(o["fem"]["strain"].size(), 2u);  // --quick: 2 sites at 0.5 N
   for (const auto& c : o["fem"]["strain"]) {
     const double nominal = c["nominal_strain_pct"].get<double>();
@@ -112,8 +112,8 @@ TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// The aorta as a solid organ (issue 23, docs/accuracy-volumetric.md "The aorta as a solid organ"): surface and
-// volumetric kinds only (no skeleton for the hybrid kind), held by the facing bed + cut cap rule; the
+// The aorta as a solid organ (issue 23, docs/accuracy-volumetric.md "The aorta as a solid organ"): surface
+// and volumetric kinds only (no skeleton for the hybrid kind), held by the facing bed + cut cap rule; the
 // volumetric kind from E and nu alone within the issue's 10 % RMS on the held-out site.
 TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   const fs::path out = medspring::testing::temp_dir("accuracy-aorta") / "acc";

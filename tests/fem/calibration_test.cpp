@@ -1,7 +1,7 @@
-// Calibration of the volumetric kind on the nonlinear response (issue 23, docs/accuracy-nonlinear.md "Calibration of
-// the nonlinear response"): fem::refine_multipliers on an analytic response, then the compression
-// coefficient c recovered from a synthetic target (the model itself with a known c under large local
-// compression), which the small-strain fit cannot see.
+// Calibration of the volumetric kind on the nonlinear response (issue 23, docs/accuracy-nonlinear.md
+// "Calibration of the nonlinear response"): fem::refine_multipliers on an analytic response, then the
+// compression coefficient c recovered from a synthetic target (the model itself with a known c under large
+// local compression), which the small-strain fit cannot see.
 #include <gtest/gtest.h>
 
 #include <cmath>

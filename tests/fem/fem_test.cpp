@@ -248,10 +248,11 @@ TEST(Matching, DiskLoadsCarryTheTotalForceAndQuadraticInterpolationIsExactOnLine
   }
 }
 
-// The load-site read-out (docs/accuracy-nonlinear.md, "The load site"): the disk load's weights on an off-centre disk
-// of a graded flat patch sum to 1 and have the disk's centre as their centroid, on both sides (linear and
-// quadratic faces), so the disk mean of a linear field u = A x + b is its value at the centre. Lumping the
-// load equally on the nodes inside the disk (a wrong rule) misses the centroid on the graded patch.
+// The load-site read-out (docs/accuracy-nonlinear.md, "The load site"): the disk load's weights on an
+// off-centre disk of a graded flat patch sum to 1 and have the disk's centre as their centroid, on both sides
+// (linear and quadratic faces), so the disk mean of a linear field u = A x + b is its value at the centre.
+// Lumping the load equally on the nodes inside the disk (a wrong rule) misses the centroid on the graded
+// patch.
 TEST(Matching, DiskLoadWeightsHaveTheDisksCentroidOnAGradedFlatPatch) {
   const TetMesh m = box_mesh(graded(-6, 6, 8, 1.6), graded(-6, 6, 7, 0.7), graded(-4, 0, 2));
   const MatX6i top = faces_on_plane(m, boundary_faces(m), 2, 0.0);

@@ -1,6 +1,6 @@
-// The large-strain load path of the volumetric kind (issue 23, item 4; docs/accuracy-nonlinear.md "Large strain"):
-// a contact disk pressed into a small cube, the base held, up to about 30 % nominal strain, through the
-// same static solve the accuracy tables use (fem::spring_displacement). With the default compression term
+// The large-strain load path of the volumetric kind (issue 23, item 4; docs/accuracy-nonlinear.md "Large
+// strain"): a contact disk pressed into a small cube, the base held, up to about 30 % nominal strain, through
+// the same static solve the accuracy tables use (fem::spring_displacement). With the default compression term
 // the response is finite, grows with the load and stiffens; the Duffing term (k' = eta k / L0^2) changes
 // nothing at a small load and only stiffens at a large one.
 #include <gtest/gtest.h>

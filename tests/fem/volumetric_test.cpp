@@ -375,8 +375,9 @@ TEST(Volumetric, TetgenBuildAimsAtTheNodeCountAndKeepsTheSurface) {
   EXPECT_THROW(fem::volumetric_mesh(surf, {.target_nodes = 10}), InvalidInput);
 }
 
-// surface_subdivisions (docs/accuracy-nonlinear.md, "The load site"): the model's surface is the given one subdivided
-// at edge midpoints (the same polyhedron, 4x the faces), its first #V nodes the given vertices, unmoved.
+// surface_subdivisions (docs/accuracy-nonlinear.md, "The load site"): the model's surface is the given one
+// subdivided at edge midpoints (the same polyhedron, 4x the faces), its first #V nodes the given vertices,
+// unmoved.
 TEST(Volumetric, SubdividedSurfaceKeepsTheGivenVerticesFirstAndTheSamePolyhedron) {
   const SurfaceMesh surf = kidney_phantom();
   const Index nv = surf.num_vertices(), nf = surf.num_faces();
@@ -447,9 +448,9 @@ TEST(VolumetricStatics, ModifiedNewtonAndSmallStrainResponseAgreeWithFullNewton)
 }  // namespace
 }  // namespace medspring
 
-// The support rule of an organ that no single slab holds (docs/accuracy-volumetric.md, "The aorta"): a bed of the
-// surface facing away from the load plus a cut cap; the FEM and the spring model hold the same region, and
-// a rule that holds a single point (every rotation about it free) is refused on both sides.
+// The support rule of an organ that no single slab holds (docs/accuracy-volumetric.md, "The aorta"): a bed of
+// the surface facing away from the load plus a cut cap; the FEM and the spring model hold the same region,
+// and a rule that holds a single point (every rotation about it free) is refused on both sides.
 TEST(SupportRule, AFacingBedAndACapHoldAVesselLikeOrganAndALonePointIsRefused) {
   SurfaceMesh s = icosphere(2, 10.0);
   s.V.col(0) *= 4.0;  // a 80 x 20 x 20 mm cigar

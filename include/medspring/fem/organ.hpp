@@ -96,7 +96,8 @@ MatX3 spring_displacement(const Body& body, const ContactLoad& load);
 
 /// The mean displacement over the load's disk, (1/A) ∫_disk u dA, of a field u (#V x 3) on the linear
 /// triangles (V, F): sum_i w_i u_i with the weights of disk_load_linear (its forces / |F|, summing to 1),
-/// the same read-out as OrganReference's disk_mean on the FEM side (docs/accuracy-nonlinear.md, "The load site").
+/// the same read-out as OrganReference's disk_mean on the FEM side (docs/accuracy-nonlinear.md, "The load
+/// site").
 Vec3 disk_mean_linear(const MatX3& V, const MatX3i& F, const ContactLoad& load, const MatX3& u);
 
 /// The DOFs of the model's free nodes: map[3 a + d] is the index of node a's component d among them (-1
@@ -159,11 +160,12 @@ double calibration_cost(const Response& response, const VecX& m,
                         const std::vector<CalibrationCase>& training);
 
 /// Refinement of multipliers on the full (nonlinear) response, from a start such as the small-strain fit of
-/// calibrate_scale_and_ratio (docs/accuracy-nonlinear.md, "Calibration of the nonlinear response"). Coordinate descent
-/// in log space, the families in order of their span (widest first), each by a golden-section search within a
-/// factor spans[f] of its current value (spans[f] <= 1: held), `probes` responses per family and sweep, each
-/// later sweep within the square root of the span. Only a probe that lowers the cost is taken, so the cost
-/// never rises above the start's. Families the start lacks (start.size() < spans.size()) start at 1.
+/// calibrate_scale_and_ratio (docs/accuracy-nonlinear.md, "Calibration of the nonlinear response").
+/// Coordinate descent in log space, the families in order of their span (widest first), each by a
+/// golden-section search within a factor spans[f] of its current value (spans[f] <= 1: held), `probes`
+/// responses per family and sweep, each later sweep within the square root of the span. Only a probe that
+/// lowers the cost is taken, so the cost never rises above the start's. Families the start lacks
+/// (start.size() < spans.size()) start at 1.
 struct RefineResult {
   VecX m;                 // the multipliers
   double start_cost = 0;  // calibration_cost at the start
@@ -173,14 +175,14 @@ struct RefineResult {
 RefineResult refine_multipliers(const Response& response, const VecX& start, const std::vector<double>& spans,
                                 const std::vector<CalibrationCase>& training, int probes = 8, int sweeps = 1);
 
-/// The volumetric kind's calibration on the full response (docs/accuracy-nonlinear.md, "Calibration of the nonlinear
-/// response"): the multipliers (springs, volume terms, compression coefficient c) that response(m, load)
-/// takes, fitted over (overall scale s, volume / spring ratio r, c multiplier), m = (s, s r, c). Two starts:
-/// the small-strain fit (calibrate_scale_and_ratio, c multiplier 1) and the closed forms (1, 1, 1). From
-/// each, c alone within a factor 32 (refine_multipliers, `probes` responses); then from the better of the
-/// two, all three for `sweeps` sweeps within factors 1.5 (s), 4 (r) and 4 (c). The small-strain fit alone is
-/// biased wherever the training loads compress beyond the linear range (it buys the missing stiffening with
-/// a larger volume multiplier), hence the second start.
+/// The volumetric kind's calibration on the full response (docs/accuracy-nonlinear.md, "Calibration of the
+/// nonlinear response"): the multipliers (springs, volume terms, compression coefficient c) that response(m,
+/// load) takes, fitted over (overall scale s, volume / spring ratio r, c multiplier), m = (s, s r, c). Two
+/// starts: the small-strain fit (calibrate_scale_and_ratio, c multiplier 1) and the closed forms (1, 1, 1).
+/// From each, c alone within a factor 32 (refine_multipliers, `probes` responses); then from the better of
+/// the two, all three for `sweeps` sweeps within factors 1.5 (s), 4 (r) and 4 (c). The small-strain fit alone
+/// is biased wherever the training loads compress beyond the linear range (it buys the missing stiffening
+/// with a larger volume multiplier), hence the second start.
 inline constexpr double kVolumetricRefineSpans[3] = {1.5, 4.0, 32.0};  // s, r and c, c first
 struct VolumetricFit {
   VecX m;                                               // springs, volume terms, c multiplier
