@@ -38,9 +38,9 @@ compile() {
   "$nvcc" -std=c++17 -O3 -gencode=arch=compute_90,code=sm_90 -I"$root/include" -I"$root/src/gpu" \
     -Xptxas -v -c "$root/src/gpu/kernels.cu" -o "$out/kernels.o" 2> "$out/ptxas.txt"
   # One line per kernel: name (template arguments: real type f/d, soft law, stiffening) and resources.
-  awk '/Compiling entry function/ { match($0, /(block_frame_kernel|substep_kernel)I[fd](Lb[01]E|Li[0-9]E)+/); k = substr($0, RSTART, RLENGTH) }
+  awk '/Compiling entry function/ { match($0, /(block_frame_kernel|substep_kernel|substep_models_kernel)I[fd](Lb[01]E|Li[0-9]E)+/); k = substr($0, RSTART, RLENGTH) }
        /bytes stack frame/ { match($0, /[0-9]+ bytes stack frame.*/); st = substr($0, RSTART) }
-       /Used [0-9]+ registers/ { match($0, /Used [0-9]+ registers.*/); printf "  %-26s %s; %s\n", k, substr($0, RSTART), st }' \
+       /Used [0-9]+ registers/ { match($0, /Used [0-9]+ registers.*/); printf "  %-33s %s; %s\n", k, substr($0, RSTART), st }' \
     "$out/ptxas.txt" | tee "$out/resources.txt"
   if command -v "$(dirname "$nvcc")/cuobjdump" >/dev/null; then
     "$(dirname "$nvcc")/cuobjdump" -sass "$out/kernels.o" > "$out/kernels.sass"

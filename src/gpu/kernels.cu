@@ -108,6 +108,87 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
   }
 }
 
+// M models per thread (SubstepArgs::models_per_thread, hd::node_substep_models): the block's group of
+// models g M .. g M + M - 1 (blockIdx.y, or x with models_first), each table entry loaded once for them.
+// A model of the group past its substeps (count_model) carries its state over as in substep_kernel.
+template <class R, bool Soft, bool Stiff, int M>
+__global__ void substep_models_kernel(SubstepArgs<R> A) {
+  if (A.scalars->fail_first < A.substep) return;
+  const int group = A.models_first ? blockIdx.x : blockIdx.y;
+  const int row_block = A.models_first ? blockIdx.y : blockIdx.x;
+  const int row_blocks = A.models_first ? gridDim.y : gridDim.x;
+  const int r = row_block * blockDim.x + threadIdx.x;
+  const int b0 = group * M;
+  const bool split = A.split.rows > 0;
+  const int rows = split ? A.split.rows : A.nodes.nodes;
+  const int n = A.nodes.nodes;
+  // The group's models: `mask` those that run this substep (uniform over the block).
+  unsigned mask = 0;
+  R h[M], stiff[M];
+#pragma unroll
+  for (int m = 0; m < M; ++m) {
+    stiff[m] = R(1);
+    h[m] = A.h;
+    const int b = b0 + m;
+    if (b >= A.batch) continue;
+    if (A.count_model) {
+      if (A.substep >= A.count_model[b]) {  // model b has taken its substeps: carry its state over
+        const long long off = 3ll * n * b;
+        for (int q = r; q < n; q += row_blocks * blockDim.x)
+          for (int c = 0; c < 3; ++c) {
+            A.xo[off + 3ll * q + c] = A.x[off + 3ll * q + c];
+            A.vo[off + 3ll * q + c] = A.v[off + 3ll * q + c];
+          }
+        continue;
+      }
+      h[m] = A.h_model[b];
+    }
+    mask |= 1u << m;
+  }
+  if (mask == 0) return;
+  hd::NodeArrays<R> N;
+  hd::SpringTable<R> T;
+  model_arrays(A, b0, N, T);  // the table's parameters are shared (entry_stride 0)
+  hd::ModelStrides S;
+  S.state = 3ll * n;
+  S.node = A.node_stride;
+  S.slot = A.slot_stride;
+  S.loads = 3ll * A.load_rows;
+  S.parts = A.parts_stride;
+  const long long off = 3ll * n * b0;
+  const R* loads = A.loads + 3ll * A.load_rows * b0;
+  int code = hd::kNodeOk;
+  if (split) {
+    R* parts = A.parts + A.parts_stride * b0;
+    if (r < rows)
+      code = hd::grid_split_gather_models<Soft, Stiff, M>(N, T, A.split, S, mask, r, h, A.vmax2, loads,
+                                                          A.x + off, A.v + off, A.xo + off, A.vo + off, parts,
+                                                          stiff);
+    __syncwarp();
+    if (r < rows) {
+      const int c = hd::grid_split_finish_models<M>(N, A.split, S, mask, r, h, A.vmax2, loads, A.x + off,
+                                                    A.v + off, A.xo + off, A.vo + off, parts);
+      code = c > code ? c : code;
+    }
+  } else if (r < rows) {
+    code = hd::node_substep_models<Soft, Stiff, M>(N, T, S, mask, r, h, A.vmax2, loads, A.x + off, A.v + off,
+                                                   A.xo + off, A.vo + off, stiff);
+  }
+  if (code != hd::kNodeOk && A.guard) {
+    atomicMin(&A.scalars->fail_first, A.substep);
+    atomicMax(&A.scalars->fail_code, code);
+  }
+  if constexpr (Stiff) {
+    __shared__ double warp_max[32];
+#pragma unroll
+    for (int m = 0; m < M; ++m) {
+      if (!((mask >> m) & 1u)) continue;
+      __syncthreads();  // warp 0 has read the previous model's warp maxima
+      block_max_into(static_cast<double>(stiff[m]), warp_max, A.stiff_bits + b0 + m);
+    }
+  }
+}
+
 // One block per model: `count` substeps with the model's state in shared memory (launch.hpp).
 template <class R, bool Soft>
 __global__ void __launch_bounds__(kBlockThreads, 2) block_frame_kernel(BlockArgs<R> A) {
@@ -171,8 +252,17 @@ template <class R, bool Soft, bool Stiff>
 cudaError_t launch(const SubstepArgs<R>& A, int block, cudaStream_t stream) {
   const int rows = A.split.rows > 0 ? A.split.rows : A.nodes.nodes;
   const auto row_blocks = static_cast<unsigned>((rows + block - 1) / block);
-  const auto models = static_cast<unsigned>(A.batch);
+  const int per_thread = A.models_per_thread == 4 || A.models_per_thread == 2 ? A.models_per_thread : 1;
+  const auto models = static_cast<unsigned>((A.batch + per_thread - 1) / per_thread);  // model groups
   const dim3 grid = A.models_first ? dim3(models, row_blocks) : dim3(row_blocks, models);
+  if (per_thread == 4) {  // several models per thread (Options::models_per_thread, validated by the engine)
+    substep_models_kernel<R, Soft, Stiff, 4><<<grid, block, 0, stream>>>(A);
+    return cudaGetLastError();
+  }
+  if (per_thread == 2) {
+    substep_models_kernel<R, Soft, Stiff, 2><<<grid, block, 0, stream>>>(A);
+    return cudaGetLastError();
+  }
   // The gather batch (Options::gather_batch, validated by the engine: 1, 2 or 4).
   if (A.gather == 4)
     substep_kernel<R, Soft, Stiff, 4><<<grid, block, 0, stream>>>(A);

@@ -7,6 +7,7 @@
 #include <cstddef>
 
 #include "medspring/physics/kernels.hpp"
+#include "medspring/physics/kernels_models.hpp"
 #include "medspring/physics/kernels_split.hpp"
 
 namespace medspring::gpu::detail {
@@ -38,12 +39,15 @@ struct SubstepArgs {
   // buffers (so every model's buffer parity stays the batch's). nullptr: every model runs, with h.
   const R* h_model = nullptr;
   const int* count_model = nullptr;
-  int substep = 0;                           // index within the batch of substeps
-  bool soft = false;                         // some spring is soft (clamped law)
-  bool stiff = false;                        // evaluate the stiffening into stiff_bits
-  bool guard = true;                         // flag |v| > v_max / non-finite into scalars
-  int gather = 1;                            // entries gathered at a time (hd::gather_spring_forces' U)
-  bool models_first = false;                 // grid x = model, y = row block (Options::batch_order)
+  int substep = 0;            // index within the batch of substeps
+  bool soft = false;          // some spring is soft (clamped law)
+  bool stiff = false;         // evaluate the stiffening into stiff_bits
+  bool guard = true;          // flag |v| > v_max / non-finite into scalars
+  int gather = 1;             // entries gathered at a time (hd::gather_spring_forces' U)
+  bool models_first = false;  // grid x = model, y = row block (Options::batch_order)
+  // Models per thread (Options::models_per_thread; 2 or 4, else 1): thread r of model group g takes row
+  // r of models g M .. g M + M - 1 (hd::node_substep_models; the spring table shared: entry_stride 0).
+  int models_per_thread = 1;
   unsigned long long* stiff_bits = nullptr;  // this substep's slots, model b at + b: double bits, atomicMax
   FrameScalars* scalars = nullptr;
   // The grid kernel's heavy rows split (hd::GridSplit, make_grid_split_table); split.rows == 0: one row
