@@ -35,7 +35,7 @@ const std::vector<CommandSpec>& commands() {
            "       medspring bench --scaling --out DIR [--threads N] [--quick] [--no-bullet]\n"
            "       medspring bench --gpu [--sizes N,N,..] [--batch B] [--kidney FILE] [--cpu-max N] "
            "[--no-torch] "
-           "[--compact] [--gather LIST] [--out DIR] [--device I]",
+           "[--compact] [--gather LIST] [--models-per-thread LIST] [--packed] [--out DIR] [--device I]",
        .about =
            "Times one update of every benchmark case (ALGORITHMS.md D-18): 200 warm-up updates, then N "
            "timed\n"
@@ -95,6 +95,13 @@ const std::vector<CommandSpec>& commands() {
              .def = "1",
              .help =
                  "--gpu with --compact: the gather batches to time (0 automatic, 1, 2, 4; rows -g2, -gauto)"},
+            {.name = "models-per-thread",
+             .value = "LIST",
+             .help = "--gpu: also time the kidney batch with M models per thread (2, 4; rows grid-m2, "
+                     "grid-compact-m2)"},
+            {.name = "packed",
+             .help = "--gpu: also time each tube and the kidney batch with the packed table (fp64p, "
+                     "grid-packed)"},
             {.name = "device", .value = "I", .def = "0", .help = "--gpu: CUDA device index"}},
        .run = cmd_bench},
       {.name = "info",

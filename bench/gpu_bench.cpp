@@ -61,6 +61,8 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
       o.torch = false;
     } else if (a == "--compact") {
       o.compact = true;
+    } else if (a == "--packed") {
+      o.packed = true;
     } else if (a == "--gather") {
       o.gathers.clear();
       std::stringstream ss(value(i));
@@ -69,6 +71,15 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
         require(g == 0 || g == 1 || g == 2 || g == 4,
                 "bench --gpu: --gather: each value must be 0 (automatic), 1, 2 or 4 (got ", g, ")");
         o.gathers.push_back(static_cast<int>(g));
+      }
+    } else if (a == "--models-per-thread") {
+      o.models_per_thread.clear();
+      std::stringstream ss(value(i));
+      for (std::string item; std::getline(ss, item, ',');) {
+        const long m = number(item, "--models-per-thread");
+        require(m == 1 || m == 2 || m == 4,
+                "bench --gpu: --models-per-thread: each value must be 1, 2 or 4 (got ", m, ")");
+        if (m > 1) o.models_per_thread.push_back(static_cast<int>(m));
       }
     } else if (a == "--out") {
       o.out = value(i);
@@ -79,8 +90,8 @@ GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args) {
     } else {
       throw InvalidInput(
           cat("bench --gpu: unknown argument '", a,
-              "' (expected --sizes, --batch, --kidney, --cpu-max, --no-torch, --compact, --gather, --out, "
-              "--device)"));
+              "' (expected --sizes, --batch, --kidney, --cpu-max, --no-torch, --compact, --gather, "
+              "--models-per-thread, --packed, --out, --device)"));
     }
   }
   return o;
@@ -282,20 +293,28 @@ struct KidneyVariant {
   int gather;
   gpu::Options::BatchOrder order;
   std::string name;
+  int models_per_thread = 1;  // gpu::Options::models_per_thread
+  bool packed = false;        // gpu::Options::packed_table
 };
 
 // The batch case's kernels: grid (rows first: a model's row blocks side by side; "grid-models": the same
 // rows of consecutive models side by side) and one block per model; with --compact the same with compact
-// parameters (as many classes as the kidney needs), the grid kernel for each --gather batch.
+// parameters (as many classes as the kidney needs), the grid kernel for each --gather batch; for each
+// --models-per-thread M the grid kernel with M models per thread ("grid-m2"; "grid-compact-m2" with
+// --compact).
 std::vector<KidneyVariant> kidney_variants(const GpuBenchOptions& o) {
   using K = gpu::Options::Kernel;
   constexpr auto rows = gpu::Options::BatchOrder::RowsFirst, models = gpu::Options::BatchOrder::ModelsFirst;
   std::vector<KidneyVariant> v{{K::Grid, false, 1, rows, "grid"},
                                {K::Grid, false, 1, models, "grid-models"},
                                {K::PerBlock, false, 1, rows, "block"}};
-  if (!o.compact) return v;
-  for (const int g : o.gathers) v.push_back({K::Grid, true, g, rows, "grid-compact" + gather_suffix(g)});
-  v.push_back({K::PerBlock, true, 1, rows, "block-compact"});
+  if (o.compact) {
+    for (const int g : o.gathers) v.push_back({K::Grid, true, g, rows, "grid-compact" + gather_suffix(g)});
+    v.push_back({K::PerBlock, true, 1, rows, "block-compact"});
+  }
+  for (const int m : o.models_per_thread)
+    v.push_back({K::Grid, o.compact, 1, rows, cat(o.compact ? "grid-compact-m" : "grid-m", m), m});
+  if (o.packed) v.push_back({K::Grid, true, 1, rows, "grid-packed", 1, true});
   return v;
 }
 
@@ -348,18 +367,27 @@ int run_gpu_bench(const GpuBenchOptions& o) {
       cpu_subs = static_cast<double>(st.substeps - before) / static_cast<double>(st.frames - frames_before);
     }
     // Variants: full parameter arrays (fp64, fp32), then with --compact compact parameters for each gather
-    // batch of --gather (fp64c, fp32c; fp64c-g4: four entries gathered at a time).
-    std::vector<std::pair<bool, int> > variants{{false, 1}};
+    // batch of --gather (fp64c, fp32c; fp64c-g4: four entries gathered at a time), with --packed the
+    // packed table (fp64p, fp32p).
+    struct TubeVariant {
+      bool compact;
+      int gather;
+      bool packed;
+    };
+    std::vector<TubeVariant> variants{{false, 1, false}};
     if (o.compact)
-      for (const int g : o.gathers) variants.emplace_back(true, g);
-    for (const auto& [compact, gather] : variants)
+      for (const int g : o.gathers) variants.push_back({true, g, false});
+    if (o.packed) variants.push_back({true, 1, true});
+    for (const auto& [compact, gather, packed] : variants)
       for (const gpu::Precision p : {gpu::Precision::Double, gpu::Precision::Float}) {
         gpu::Options go;
         go.precision = p;
         go.device = o.device;
         go.compact_params = compact;
         go.gather_batch = gather;
+        go.packed_table = packed;
         gpu::Engine e({&m}, s, go);
+        if (packed && !e.pack_report().fits) std::cout << e.packed_table_note() << "\n";  // ran unpacked
         e.set_loads(0, loads);
         for (int f = 0; f < 20; ++f) e.step();
         const std::uint64_t sub0 = e.substeps(), fr0 = e.frames();
@@ -373,7 +401,11 @@ int run_gpu_bench(const GpuBenchOptions& o) {
           torch_us = torch_step(m, loads, s.dt / subs, gpu::to_string(p), work / "torch_step", why);
         const double cpu_sub_us = cpu_us > 0 ? cpu_us / cpu_subs : -1;
         // fp64c: compact parameters; fp64c-g4: and four entries gathered at a time.
-        const std::string key = gpu::to_string(p) + (compact ? "c" : "") + gather_suffix(gather);
+        const std::string key = gpu::to_string(p) +
+                                (packed    ? "p"
+                                 : compact ? "c"
+                                           : "") +
+                                (packed ? "" : gather_suffix(gather));
         std::printf("%-10s %-5s %12.2f %12.2f %10.0f %7.0f%% %12s %12s\n", size_name(m.num_nodes()).c_str(),
                     key.c_str(), substep_us, frame_us, gbs, 100.0 * gbs / copy_gbs,
                     torch_us > 0 ? cat(torch_us).c_str() : "-",
@@ -416,8 +448,11 @@ int run_gpu_bench(const GpuBenchOptions& o) {
           go.compact_max_classes = 65536;  // the real kidney: a stiffness per spring (a per-spring table)
           go.gather_batch = kv.gather;
           go.batch_order = kv.order;
+          go.models_per_thread = kv.models_per_thread;
+          go.packed_table = kv.packed;
           const std::string kname = kv.name;
           gpu::Engine e(models, s, go);
+          if (kv.packed && !e.pack_report().fits) std::cout << e.packed_table_note() << "\n";
           for (int b = 0; b < batch; ++b) {
             PointLoad L;
             L.node = b % km.num_nodes();

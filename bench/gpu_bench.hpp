@@ -18,6 +18,12 @@ struct GpuBenchOptions {
   std::string kidney;           // a hybrid kidney model package (.msm) for the batch case ("" = the phantom)
   bool compact = false;         // also time each tube with compact parameters (gpu::Options::compact_params)
   std::vector<int> gathers{1};  // gather batches (gpu::Options::gather_batch) timed with compact parameters
+  // Models per thread (gpu::Options::models_per_thread, 2 or 4) of the extra kidney batch variants
+  // "grid-m2", "grid-m4" (with --compact "grid-compact-m2", ...); empty: none.
+  std::vector<int> models_per_thread;
+  // Also time each tube and the kidney batch with the packed table (gpu::Options::packed_table): rows
+  // fp64p, fp32p, grid-packed.
+  bool packed = false;
 };
 
 /// Runs the benchmark and prints the table. Throws gpu::GpuError (no device, ...) or InvalidInput.
@@ -25,7 +31,7 @@ struct GpuBenchOptions {
 int run_gpu_bench(const GpuBenchOptions& options);
 
 /// Parses "--sizes 1200,120000 --batch 2048 --kidney FILE.msm --cpu-max 1000000 --no-torch --compact
-/// --gather 1,2,4 --out DIR --device 0"
+/// --gather 1,2,4 --models-per-thread 2,4 --packed --out DIR --device 0"
 /// (argv-style, the program name excluded). Throws InvalidInput naming the bad argument.
 GpuBenchOptions parse_gpu_bench_args(const std::vector<std::string>& args);
 

@@ -92,7 +92,7 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     return grid_split ? make_grid_split_table<R>(m).table : make_spring_table<R>(m, RowOrder::HeavyLast);
   };
   // Topology from model 0, parameters from every model.
-  const SpringTableArrays<R> T0 =
+  SpringTableArrays<R> T0 =
       per_block ? std::move(S0.table) : (grid_split ? std::move(G0.table) : table_of(m0));
   entries = T0.entries();
   if (!T0.row_node.empty()) {
@@ -100,8 +100,6 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   }
   slice_begin.assign(T0.slice_begin, "allocating the spring table", "uploading the spring table");
   slice_width.assign(T0.slice_width, "allocating the spring table", "uploading the spring table");
-  other.allocate(entries, "allocating the spring table");
-  other.upload(T0.other.data(), entries, 0, "uploading the spring table");
   // Parameters shared by the batch: where every model's spring parameters (node arrays) equal model 0's
   // -- a batch of one model, or of copies of it with their own loads (the kidney batch of a dataset) --
   // they are stored once (stride 0) and read from L2 by every model, instead of B copies read from
@@ -134,11 +132,50 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
   }
   param_models[0] = nodes_shared ? 1 : B;
   param_models[1] = table_shared ? 1 : B;
+  if (o.packed_table) {  // packed entries (pack_spring_table): the grid kernel, one table for the batch
+    if (per_block)
+      throw GpuError(
+          "gpu::Options::packed_table applies to the grid kernel; this batch runs one block per "
+          "model: use kernel Grid (or Auto), or packed_table off");
+    if (o.models_per_thread > 1)
+      throw GpuError(cat("gpu::Options::packed_table is not combined with models_per_thread = ",
+                         o.models_per_thread, " (yet): use one of them"));
+    if (table_shared) {
+      pack = pack_spring_table(T0);
+      if (!pack.fits)  // the table is left as it is: the per-entry (or compact) path runs
+        pack_note = cat("packed table: '", m0.name, "' does not fit (", pack.classes, " classes in ",
+                        pack.class_bits, " bits, offsets up to ", pack.max_offset, " of at most ",
+                        pack.offset_limit, "): the unpacked table runs");
+    } else {
+      pack_note = "packed table: the batch's models differ in their springs: the unpacked table runs";
+    }
+  }
+  if (o.models_per_thread > 1) {  // several models per thread: one table for the batch, the grid kernel
+    if (per_block)
+      throw GpuError(cat("gpu::Options::models_per_thread = ", o.models_per_thread,
+                         " applies to the grid kernel; this batch runs one block per model: use kernel Grid "
+                         "(or Auto), or models_per_thread 1"));
+    if (!table_shared)
+      throw GpuError(cat("gpu::Options::models_per_thread = ", o.models_per_thread,
+                         " needs a batch that shares its spring parameters (copies of one model with their "
+                         "own loads); the models of this batch differ in rest lengths or stiffnesses: use "
+                         "models_per_thread 1"));
+  }
   const auto uBn = static_cast<std::size_t>(param_models[0]), uBt = static_cast<std::size_t>(param_models[1]);
   // Compact parameters (Options::compact_params, docs/gpu.md): shared parameters with few distinct
   // values are stored as a 2-byte class per entry (node) and the classes' values.
   bool compact_table = false, compact_nodes = false;
-  if (o.compact_params && table_shared) {
+  if (pack.fits) {  // the packed words and their classes; no per-entry other, L0, k, k', 1/k
+    packed.assign(T0.packed, "allocating the packed spring table", "uploading the packed spring table");
+    cL0.assign(T0.cL0, "allocating the spring classes", "uploading the spring classes");
+    ck.assign(T0.ck, "allocating the spring classes", "uploading the spring classes");
+    ckp.assign(T0.ckp, "allocating the spring classes", "uploading the spring classes");
+    cik.assign(T0.cik, "allocating the spring classes", "uploading the spring classes");
+  } else {
+    other.allocate(entries, "allocating the spring table");
+    other.upload(T0.other.data(), entries, 0, "uploading the spring table");
+  }
+  if (o.compact_params && table_shared && !pack.fits) {
     SpringTableArrays<R> Tc;
     Tc.k = T0.k;
     Tc.kp = T0.kp;
@@ -162,8 +199,8 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
       ckr.assign(Nc.ckr, "allocating the node classes", "uploading the node classes");
     }
   }
-  L0.allocate(entries * uBt, "allocating the spring table");
-  if (!compact_table)
+  if (!pack.fits) L0.allocate(entries * uBt, "allocating the spring table");
+  if (!compact_table && !pack.fits)
     for (DeviceArray<R>* a : {&k, &kp, &ik}) a->allocate(entries * uBt, "allocating the spring table");
   if (!compact_nodes)
     for (DeviceArray<R>* a : {&mass, &damping, &kr}) a->allocate(un * uBn, "allocating the node arrays");
@@ -180,7 +217,7 @@ Backend<R>::Backend(const std::vector<const Model*>& ms, const StepSettings& s, 
     soft = soft || m.has_soft_springs;
     const bool same = b == 0 || &m == &m0;
     const auto ub = static_cast<std::size_t>(b);
-    if (ub < uBt) {
+    if (ub < uBt && !pack.fits) {
       const SpringTableArrays<R> T = same ? SpringTableArrays<R>{} : table_of(m);
       const SpringTableArrays<R>& Tb = same ? T0 : T;
       L0.upload(Tb.L0.data(), entries, ub * entries, "uploading the spring table");
@@ -432,10 +469,11 @@ Engine::DeviceState Backend<R>::device_state() {
 template <class R>
 std::size_t Backend<R>::device_bytes() const {
   std::size_t total = 0;
-  for (const DeviceArray<R>* a : {&x0, &mass, &damping, &kr, &L0, &k, &kp, &ik, &ck, &ckp, &cik, &cmass,
-                                  &cdamping, &ckr, &xb[0], &xb[1], &vb[0], &vb[1], &grid_parts})
+  for (const DeviceArray<R>* a :
+       {&x0,  &mass, &damping, &kr,       &L0,  &k,     &kp,    &ik,    &ck,    &ckp,
+        &cik, &cL0,  &cmass,   &cdamping, &ckr, &xb[0], &xb[1], &vb[0], &vb[1], &grid_parts})
     total += a->n * sizeof(R);
-  total += (spring_cls.n + node_cls.n) * sizeof(unsigned short);
+  total += (spring_cls.n + node_cls.n) * sizeof(unsigned short) + packed.n * sizeof(unsigned);
   total += fixed.n + (load_slot.n + row_node.n + slice_begin.n + slice_width.n + other.n + part.n +
                       heavy_node.n + part_begin.n + lead.n) *
                          sizeof(int);

@@ -9,6 +9,7 @@
 #include <climits>
 #include <cstdint>
 #include <map>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -33,6 +34,8 @@ struct Engine::Impl {
   std::uint64_t frames = 0, substeps = 0;     // substeps: the batch's (per frame the most any model took)
   std::vector<std::uint64_t> model_substeps;  // per model, as its CPU run counts them
   Warnings warnings;
+  PackReport pack;        // Options::packed_table: what pack_spring_table found (fits: packed)
+  std::string pack_note;  // why a requested packed table was not used ("" otherwise)
 
   virtual void set_loads(int b, const std::vector<PointLoad>& loads) = 0;
   virtual void upload(int b, const State& st) = 0;
@@ -72,6 +75,10 @@ struct Backend final : Engine::Impl {
   // damping, kr), which are then left unallocated.
   DeviceArray<unsigned short> spring_cls, node_cls;
   DeviceArray<R> ck, ckp, cik, cmass, cdamping, ckr;
+  // Options::packed_table (shared table only, where it fits): one word per entry (offset, class) and the
+  // classes' (L0, k, k', 1/k) in cL0, ck, ckp, cik; other, L0, k, kp, ik then unallocated.
+  DeviceArray<unsigned> packed;
+  DeviceArray<R> cL0;
   DeviceArray<unsigned char> fixed;
   DeviceArray<int> load_slot, row_node, slice_begin, slice_width, other;
   // The block kernel's split rows (hd::SplitRows): chunk slot per row, split nodes, their slots.

@@ -43,6 +43,10 @@ Engine::Engine(const std::vector<const Model*>& models, const StepSettings& sett
   require(options.gather_batch == 0 || options.gather_batch == 1 || options.gather_batch == 2 ||
               options.gather_batch == 4,
           "gpu::Options::gather_batch: must be 0 (automatic), 1, 2 or 4 (got ", options.gather_batch, ")");
+  require(options.models_per_thread == 0 || options.models_per_thread == 1 ||
+              options.models_per_thread == 2 || options.models_per_thread == 4,
+          "gpu::Options::models_per_thread: must be 0 or 1 (one model per thread), 2 or 4 (got ",
+          options.models_per_thread, ")");
   require(options.compact_max_classes >= 1 && options.compact_max_classes <= 65536,
           "gpu::Options::compact_max_classes: must be in 1..65536 (got ", options.compact_max_classes, ")");
   const DeviceInfo dev = require_device(options.device);
@@ -53,6 +57,13 @@ Engine::Engine(const std::vector<const Model*>& models, const StepSettings& sett
 }
 
 Engine::~Engine() = default;
+
+PackReport Engine::pack_report() const {
+  return impl_->pack;
+}
+std::string Engine::packed_table_note() const {
+  return impl_->pack_note;
+}
 
 int Engine::batch() const {
   return static_cast<int>(impl_->models.size());

@@ -22,6 +22,15 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
     A.table.ckp = ckp.p;
     A.table.cik = cik.p;
   }
+  if (packed.p) {  // packed entries (shared: entry_stride 0)
+    A.table.other = nullptr;
+    A.table.packed = packed.p;
+    A.table.class_bits = pack.class_bits;
+    A.table.cL0 = cL0.p;
+    A.table.ck = ck.p;
+    A.table.ckp = ckp.p;
+    A.table.cik = cik.p;
+  }
   if (node_cls.p) {
     A.nodes.cls = node_cls.p;
     A.nodes.cmass = cmass.p;
@@ -55,6 +64,7 @@ detail::SubstepArgs<R> Backend<R>::args(int parity, long kk, R h, bool stiff) {
   // gridDim.y is at most 65,535 row blocks (16.7M rows of 256): larger models keep rows on x.
   A.models_first = B > 1 && options.batch_order == Options::BatchOrder::ModelsFirst &&
                    (table_rows + options.block - 1) / options.block <= 65535;
+  A.models_per_thread = options.models_per_thread > 1 ? options.models_per_thread : 1;
   A.stiff_bits = stiff_dev.p + (stiff ? kk * B : 0);
   A.scalars = scalars_dev.p;
   if (grid_rows > 0) {

@@ -50,7 +50,7 @@ __device__ inline void block_max_into(double s, double* warp_max, unsigned long 
   }
 }
 
-template <class R, bool Soft, bool Stiff, int U>
+template <class R, bool Soft, bool Stiff, int U, bool Packed = false>
 __global__ void substep_kernel(SubstepArgs<R> A) {
   if (A.scalars->fail_first < A.substep) return;  // an earlier substep failed: buffers left as they were
   // Block order (SubstepArgs::models_first): blockIdx.x the model and blockIdx.y the row block, so that
@@ -86,8 +86,8 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
     // the lead's warp (blockDim is a multiple of 32), so the warp's barrier orders them before phase 2.
     R* parts = A.parts + A.parts_stride * b;
     if (r < rows)
-      code = hd::grid_split_gather<Soft, Stiff, U>(N, T, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off,
-                                                   A.xo + off, A.vo + off, parts, stiff);
+      code = hd::grid_split_gather<Soft, Stiff, U, Packed>(N, T, A.split, r, h, A.vmax2, loads, A.x + off,
+                                                           A.v + off, A.xo + off, A.vo + off, parts, stiff);
     __syncwarp();
     if (r < rows) {
       const int c = hd::grid_split_finish(N, A.split, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
@@ -95,8 +95,8 @@ __global__ void substep_kernel(SubstepArgs<R> A) {
       code = c > code ? c : code;
     }
   } else if (r < rows) {
-    code = hd::node_substep<Soft, Stiff, U>(N, T, r, h, A.vmax2, loads, A.x + off, A.v + off, A.xo + off,
-                                            A.vo + off, stiff);
+    code = hd::node_substep<Soft, Stiff, U, Packed>(N, T, r, h, A.vmax2, loads, A.x + off, A.v + off,
+                                                    A.xo + off, A.vo + off, stiff);
   }
   if (code != hd::kNodeOk && A.guard) {
     atomicMin(&A.scalars->fail_first, A.substep);
@@ -255,6 +255,11 @@ cudaError_t launch(const SubstepArgs<R>& A, int block, cudaStream_t stream) {
   const int per_thread = A.models_per_thread == 4 || A.models_per_thread == 2 ? A.models_per_thread : 1;
   const auto models = static_cast<unsigned>((A.batch + per_thread - 1) / per_thread);  // model groups
   const dim3 grid = A.models_first ? dim3(models, row_blocks) : dim3(row_blocks, models);
+  if (A.table
+          .packed) {  // packed entries (Options::packed_table; the engine refuses it with models per thread)
+    substep_kernel<R, Soft, Stiff, 1, true><<<grid, block, 0, stream>>>(A);
+    return cudaGetLastError();
+  }
   if (per_thread == 4) {  // several models per thread (Options::models_per_thread, validated by the engine)
     substep_models_kernel<R, Soft, Stiff, 4><<<grid, block, 0, stream>>>(A);
     return cudaGetLastError();

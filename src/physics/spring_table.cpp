@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <type_traits>
@@ -374,6 +375,89 @@ bool compact_spring_params(SpringTableArrays<R>& T, int max_classes) {
   T.ik = {};
   return true;
 }
+
+template <class R>
+PackReport pack_spring_table(SpringTableArrays<R>& T, int max_class_bits) {
+  require(max_class_bits >= 0 && max_class_bits <= 24,
+          "pack_spring_table: max_class_bits must be in 0..24 (got ", max_class_bits, ")");
+  PackReport rep;
+  if (!T.packed.empty()) {
+    rep.fits = true;
+    rep.classes = static_cast<long long>(T.cL0.size());
+    rep.class_bits = T.class_bits;
+    return rep;
+  }
+  const std::size_t E = T.other.size();
+  const bool compact = !T.cls.empty();
+  auto param = [&](std::size_t e, int which) -> R {
+    if (which == 0) return T.L0[e];
+    if (compact) {
+      const auto c = T.cls[e];
+      return which == 1 ? T.ck[c] : which == 2 ? T.ckp[c] : T.cik[c];
+    }
+    return which == 1 ? T.k[e] : which == 2 ? T.kp[e] : T.ik[e];
+  };
+  // Classes: distinct bit patterns of (L0, k, k', 1/k), numbered in order of first appearance.
+  using Bits = std::conditional_t<sizeof(R) == 8, std::uint64_t, std::uint32_t>;
+  std::map<std::array<Bits, 4>, int> index;
+  std::vector<int> cls(E);
+  std::vector<std::array<R, 4>> values;
+  for (std::size_t e = 0; e < E; ++e) {
+    std::array<Bits, 4> key{};
+    std::array<R, 4> val{};
+    for (int w = 0; w < 4; ++w) {
+      val[static_cast<std::size_t>(w)] = param(e, w);
+      std::memcpy(&key[static_cast<std::size_t>(w)], &val[static_cast<std::size_t>(w)], sizeof(R));
+    }
+    const auto [it, added] = index.emplace(key, static_cast<int>(values.size()));
+    if (added) values.push_back(val);
+    cls[e] = it->second;
+  }
+  rep.classes = static_cast<long long>(values.size());
+  while ((1ll << rep.class_bits) < rep.classes) ++rep.class_bits;
+  rep.offset_limit = (1ll << (31 - rep.class_bits)) - 1;
+  // Offsets: entry e of slice s, lane l belongs to row s 32 + l (rows past the last: the last row's node,
+  // as the table pads them).
+  const long long rows = T.row_node.empty() ? T.nodes : static_cast<long long>(T.row_node.size());
+  std::vector<long long> offset(E, 0);
+  for (std::size_t sl = 0; sl < T.slice_begin.size(); ++sl)
+    for (int lane = 0; lane < hd::kSlice; ++lane) {
+      const long long r = std::min<long long>(static_cast<long long>(sl) * hd::kSlice + lane, rows - 1);
+      const long long a = T.row_node.empty() ? r : T.row_node[static_cast<std::size_t>(r)];
+      for (int j = 0; j < T.slice_width[sl]; ++j) {
+        const auto e = static_cast<std::size_t>(T.slice_begin[sl] + j * hd::kSlice + lane);
+        offset[e] = T.other[e] - a;
+        rep.max_offset = std::max(rep.max_offset, std::abs(offset[e]));
+      }
+    }
+  if (rep.class_bits > max_class_bits || rep.max_offset > rep.offset_limit) return rep;
+  rep.fits = true;
+  T.packed.resize(E);
+  for (std::size_t e = 0; e < E; ++e)
+    T.packed[e] = (static_cast<unsigned>(static_cast<int>(offset[e])) << rep.class_bits) |
+                  static_cast<unsigned>(cls[e]);
+  T.class_bits = rep.class_bits;
+  T.cL0.resize(values.size());
+  T.ck.resize(values.size());
+  T.ckp.resize(values.size());
+  T.cik.resize(values.size());
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    T.cL0[c] = values[c][0];
+    T.ck[c] = values[c][1];
+    T.ckp[c] = values[c][2];
+    T.cik[c] = values[c][3];
+  }
+  T.other = {};
+  T.L0 = {};
+  T.k = {};
+  T.kp = {};
+  T.ik = {};
+  T.cls = {};
+  return rep;
+}
+
+template PackReport pack_spring_table<double>(SpringTableArrays<double>&, int);
+template PackReport pack_spring_table<float>(SpringTableArrays<float>&, int);
 
 template <class R>
 bool compact_node_params(NodeArrayData<R>& N, int max_classes) {

@@ -91,6 +91,22 @@ struct Options {
   /// positions are fetched once per row block, far apart in time). The same arithmetic either way.
   enum class BatchOrder { RowsFirst, ModelsFirst };
   BatchOrder batch_order = BatchOrder::RowsFirst;
+  /// Models per thread of the grid kernel for a batch (0 or 1: one model per thread, as before; 2 or 4):
+  /// thread r takes row r of M consecutive models and loads each spring-table entry (other end, rest
+  /// length, parameters or class) once for them (hd::node_substep_models): the table's traffic divided
+  /// by M, M position gathers in flight per entry (gather_batch is then not used). The same arithmetic
+  /// per model (physics_tests HdModels.*: bit for bit). Needs a batch that shares its spring parameters
+  /// (copies of one model with their own loads; node parameters may differ) and the grid kernel:
+  /// GpuError otherwise. UNMEASURED on a device (docs/gpu.md): off until measured.
+  int models_per_thread = 0;
+  /// Packed spring table (docs/gpu.md, "Packed table"; pack_spring_table): each table entry one 32-bit
+  /// word -- the other end's offset from its row's node and a class of (L0, k, k', 1/k) -- instead of
+  /// 4 + 2 + sizeof(R) bytes (compact) or 4 + 4 sizeof(R): the grid kernel reads 4 bytes per entry and
+  /// the classes from L1; the same values, so the same results (physics_tests PackedTable.*). Where the
+  /// batch shares its springs and the table fits (2^16 classes at most, offsets in the other bits);
+  /// otherwise the unpacked table runs and pack_report() says why. Grid kernel only, not with
+  /// models_per_thread > 1 (GpuError). UNMEASURED on a device (docs/gpu.md): off until measured.
+  bool packed_table = false;
 };
 
 /// The kernel a batch of `batch` models of `nodes` nodes runs on `device` (docs/gpu.md): PerBlock when
@@ -183,6 +199,11 @@ class Engine {
   std::uint64_t substeps() const;       // the batch's launches: per frame the most substeps any model took
   std::uint64_t substeps(int b) const;  // model b's substeps (its CPU run's State::substeps)
   const Warnings& warnings() const;
+  /// Options::packed_table: whether the table was packed (fits), its classes, class bits and largest
+  /// offset; packed_table_note(): why a requested packed table was not used ("" when it was, or was not
+  /// requested).
+  PackReport pack_report() const;
+  std::string packed_table_note() const;
   /// Device bytes of the model and state arrays (the payload of one substep is about this much).
   std::size_t device_bytes() const;
 

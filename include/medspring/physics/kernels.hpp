@@ -173,7 +173,25 @@ struct SpringTable {
   const R* ck = nullptr;                // (classes) linear stiffness
   const R* ckp = nullptr;               // (classes) cubic stiffness
   const R* cik = nullptr;               // (classes) 1/k
+  // Packed entries (pack_spring_table, spring_table.hpp; gpu::Options::packed_table): when packed is set,
+  // entry e of row r (node a) is one 32-bit word: its other end's offset b - a (signed, the high
+  // 32 - class_bits bits) and its class (the low class_bits bits), a class being a distinct (L0, k, k',
+  // 1/k) -- cL0, ck, ckp, cik (other, L0, k, kp, ik, cls unused). 4 bytes per entry instead of 4 + 2 +
+  // sizeof(R) (compact) or 4 + 4 sizeof(R); the same values, so the same arithmetic. Read by the
+  // gather's Packed variant only (gather_spring_forces<..., Packed = true>).
+  const unsigned* packed = nullptr;  // (entries)
+  int class_bits = 0;
+  const R* cL0 = nullptr;  // (classes) rest length
 };
+
+/// A packed entry's class and other end (the node of its row is a): the low `bits` bits, and a plus the
+/// signed high bits (arithmetic shift).
+MEDSPRING_HD inline int packed_class(unsigned word, int bits) {
+  return static_cast<int>(word & ((1u << bits) - 1u));
+}
+MEDSPRING_HD inline int packed_other(unsigned word, int bits, int a) {
+  return a + (static_cast<int>(word) >> bits);
+}
 
 /// Entry e's stiffness parameters (k, k', 1/k), from the per-entry arrays or their compact classes.
 template <class R>
@@ -203,7 +221,9 @@ MEDSPRING_HD inline int row_node(const SpringTable<R>& T, int r) {
 /// independent gathers in flight instead of one (the gather is latency-bound once the table is compact);
 /// the forces are then added in entry order: the same terms in the same order for every U (equal to
 /// rounding: a compiler may contract f += t e into an FMA differently when it vectorises the batch).
-template <bool Soft, bool Stiff, int U = 1, class R>
+/// Packed (pack_spring_table): the entries are packed words (T.packed), one entry at a time (U unused);
+/// the same values in the same order, so the same sums.
+template <bool Soft, bool Stiff, int U = 1, bool Packed = false, class R>
 MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, int a, const R* x, R& stiff,
                                               R* f) {
   static_assert(U >= 1 && U <= 8, "gather batch: 1..8 entries");
@@ -211,6 +231,21 @@ MEDSPRING_HD inline void gather_spring_forces(const SpringTable<R>& T, int r, in
   const int w = T.slice_width[slice];
   int e = T.slice_begin[slice] + (r - slice * kSlice);
   const R xa = x[3 * a], ya = x[3 * a + 1], za = x[3 * a + 2];
+  if constexpr (Packed) {
+    const int bits = T.class_bits;
+    for (int j = 0; j < w; ++j, e += kSlice) {
+      const unsigned word = T.packed[e];
+      const int b = packed_other(word, bits, a), c = packed_class(word, bits);
+      R fx, fy, fz;
+      if (!spring_force<Soft, Stiff>(x[3 * b] - xa, x[3 * b + 1] - ya, x[3 * b + 2] - za, T.cL0[c], T.ck[c],
+                                     T.ckp[c], T.cik[c], stiff, fx, fy, fz))
+        continue;
+      f[0] += fx;
+      f[1] += fy;
+      f[2] += fz;
+    }
+    return;
+  }
   int j = 0;
   if constexpr (U > 1) {
     for (; j + U <= w; j += U, e += U * kSlice) {
@@ -337,7 +372,7 @@ MEDSPRING_HD inline int advance_node(const NodeArrays<R>& N, int a, R h, R vmax2
 /// springs) and symplectic update with implicit damping, reading x, v and writing xo, vo. x and xo are
 /// distinct buffers (every node reads its neighbours' old positions); v and vo may be one buffer (a node
 /// reads only its own velocity, before writing it). A pinned node keeps x and v. Returns a kNode* code.
-template <bool Soft, bool Stiff, int U = 1, class R>
+template <bool Soft, bool Stiff, int U = 1, bool Packed = false, class R>
 MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R>& T, int r, R h, R vmax2,
                                      const R* loads, const R* x, const R* v, R* xo, R* vo, R& stiff) {
   const int a = row_node(T, r);
@@ -346,13 +381,13 @@ MEDSPRING_HD inline int node_substep(const NodeArrays<R>& N, const SpringTable<R
     keep_node(q, x, v, xo, vo);
     if constexpr (Stiff) {  // its springs still count for the stability measure
       R g[3] = {R(0), R(0), R(0)};
-      gather_spring_forces<Soft, true, U>(T, r, a, x, stiff, g);
+      gather_spring_forces<Soft, true, U, Packed>(T, r, a, x, stiff, g);
     }
     return kNodeOk;
   }
   R g[3];
   load_and_return_force(N, a, loads, x, g);
-  gather_spring_forces<Soft, Stiff, U>(T, r, a, x, stiff, g);
+  gather_spring_forces<Soft, Stiff, U, Packed>(T, r, a, x, stiff, g);
   return advance_node(N, a, h, vmax2, x, v, g, xo, vo);
 }
 

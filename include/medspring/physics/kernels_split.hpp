@@ -20,10 +20,10 @@ struct SplitRows {
 };
 
 /// A chunk row's spring force sum (its springs in table order), written to out[0..2].
-template <bool Soft, bool Stiff, int U = 1, class R>
+template <bool Soft, bool Stiff, int U = 1, bool Packed = false, class R>
 MEDSPRING_HD inline void chunk_force(const SpringTable<R>& T, int r, const R* x, R& stiff, R* out) {
   R f[3] = {R(0), R(0), R(0)};  // registers
-  gather_spring_forces<Soft, Stiff, U>(T, r, row_node(T, r), x, stiff, f);
+  gather_spring_forces<Soft, Stiff, U, Packed>(T, r, row_node(T, r), x, stiff, f);
   out[0] = f[0];
   out[1] = f[1];
   out[2] = f[2];
@@ -96,14 +96,14 @@ struct GridSplit {
   const int* heavy_node = nullptr;  // (heavy) node
 };
 
-template <bool Soft, bool Stiff, int U = 1, class R>
+template <bool Soft, bool Stiff, int U = 1, bool Packed = false, class R>
 MEDSPRING_HD inline int grid_split_gather(const NodeArrays<R>& N, const SpringTable<R>& T, const GridSplit& G,
                                           int r, R h, R vmax2, const R* loads, const R* x, const R* v, R* xo,
                                           R* vo, R* parts, R& stiff) {
   const int p = G.part[r];
-  if (p == -1) return node_substep<Soft, Stiff, U>(N, T, r, h, vmax2, loads, x, v, xo, vo, stiff);
+  if (p == -1) return node_substep<Soft, Stiff, U, Packed>(N, T, r, h, vmax2, loads, x, v, xo, vo, stiff);
   if (p >= 0) {
-    chunk_force<Soft, Stiff, U>(T, r, x, stiff, parts + 3 * p);
+    chunk_force<Soft, Stiff, U, Packed>(T, r, x, stiff, parts + 3 * p);
   }
   return kNodeOk;
 }

@@ -22,7 +22,12 @@ struct SpringTableArrays {
   std::vector<R> L0, k, kp, ik;
   std::vector<unsigned short> cls;  // compact_spring_params: class of each entry (then k, kp, ik are empty)
   std::vector<R> ck, ckp, cik;      // the classes' k, k', 1/k
-  std::size_t entries() const { return other.size(); }
+  // pack_spring_table: each entry one word (other end's offset, class), classes of (L0, k, k', 1/k) in
+  // cL0, ck, ckp, cik; other, L0, k, kp, ik, cls then empty.
+  std::vector<unsigned> packed;
+  int class_bits = 0;
+  std::vector<R> cL0;
+  std::size_t entries() const { return packed.empty() ? other.size() : packed.size(); }
   hd::SpringTable<R> view() const {
     hd::SpringTable<R> T;
     T.nodes = nodes;
@@ -31,7 +36,16 @@ struct SpringTableArrays {
     T.slice_width = slice_width.data();
     T.other = other.data();
     T.L0 = L0.data();
-    if (cls.empty()) {
+    if (!packed.empty()) {
+      T.other = nullptr;
+      T.L0 = nullptr;
+      T.packed = packed.data();
+      T.class_bits = class_bits;
+      T.cL0 = cL0.data();
+      T.ck = ck.data();
+      T.ckp = ckp.data();
+      T.cik = cik.data();
+    } else if (cls.empty()) {
       T.k = k.data();
       T.kp = kp.data();
       T.ik = ik.data();
@@ -142,6 +156,23 @@ inline constexpr int kCompactClasses = 1024;
 /// false. The gather then reads the same values, so its results are bit-identical.
 template <class R>
 bool compact_spring_params(SpringTableArrays<R>& table, int max_classes = kCompactClasses);
+
+/// Packed entries (docs/gpu.md, "Packed table"): each entry of row r (node a) becomes one 32-bit word,
+/// its other end's offset b - a in the high 32 - class_bits bits (signed) and its class in the low
+/// class_bits bits, a class being a distinct (L0, k, k', 1/k) bit for bit (from the per-entry arrays or
+/// the compact classes). class_bits: the fewest bits that number the classes. Packs and returns fits =
+/// true when there are at most 2^max_class_bits classes and every offset fits in the remaining bits;
+/// otherwise leaves the table as it is and returns fits = false with the figures that did not fit (the
+/// caller keeps the unpacked table: say so). The gather then reads the same values: the same results.
+struct PackReport {
+  bool fits = false;
+  long long classes = 0;       // distinct (L0, k, k', 1/k)
+  int class_bits = 0;          // bits for the classes
+  long long max_offset = 0;    // largest |b - a| over the entries
+  long long offset_limit = 0;  // largest |b - a| the remaining bits hold: 2^(31 - class_bits) - 1
+};
+template <class R>
+PackReport pack_spring_table(SpringTableArrays<R>& table, int max_class_bits = 16);
 
 /// The same for the nodes' (mass, damping, k_r).
 template <class R>
