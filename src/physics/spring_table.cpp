@@ -402,6 +402,8 @@ PackReport pack_spring_table(SpringTableArrays<R>& T, int max_class_bits) {
   std::map<std::array<Bits, 4>, int> index;
   std::vector<int> cls(E);
   std::vector<std::array<R, 4>> values;
+  std::array<Bits, 4> last{};
+  int last_class = -1;  // neighbouring entries (a slice's lanes) mostly share a class: skip the lookup
   for (std::size_t e = 0; e < E; ++e) {
     std::array<Bits, 4> key{};
     std::array<R, 4> val{};
@@ -409,9 +411,13 @@ PackReport pack_spring_table(SpringTableArrays<R>& T, int max_class_bits) {
       val[static_cast<std::size_t>(w)] = param(e, w);
       std::memcpy(&key[static_cast<std::size_t>(w)], &val[static_cast<std::size_t>(w)], sizeof(R));
     }
-    const auto [it, added] = index.emplace(key, static_cast<int>(values.size()));
-    if (added) values.push_back(val);
-    cls[e] = it->second;
+    if (last_class < 0 || key != last) {
+      const auto [it, added] = index.emplace(key, static_cast<int>(values.size()));
+      if (added) values.push_back(val);
+      last = key;
+      last_class = it->second;
+    }
+    cls[e] = last_class;
   }
   rep.classes = static_cast<long long>(values.size());
   while ((1ll << rep.class_bits) < rep.classes) ++rep.class_bits;
