@@ -25,7 +25,9 @@
 #   scripts/gpu-check.sh              compile, then full when nvidia-smi sees a GPU.
 # GPU_CHECK_USE_DEPS=1 takes Eigen/GoogleTest/nlohmann_json from DEPS even where the system has them;
 # GPU_CHECK_CONFIGURE_ONLY=1 stops `full` after configuring (both: to try the GPU machine's path here);
-# GPU_BENCH_ARGS replaces the bench's arguments (default --batch 8448 --compact); GPU_CHECK_BENCH_S its time limit (200).
+# GPU_BENCH_ARGS replaces the bench's arguments (default --batch 8448 --compact --models-per-thread 2,4: the
+# kidney batch also with 2 and 4 models per thread, about 8 more batch runs); GPU_CHECK_BENCH_S its time limit
+# (200). The packed table (--packed) packs each tube on the host first: give it with --sizes 1200,1000000.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${OUT:-$root/build-gpu-check}
@@ -196,7 +198,7 @@ EOF
   # (1) the issue's table: tube sizes, precisions, bandwidth, PyTorch and CPU, the kidney batch.
   # shellcheck disable=SC2086
   want bench && run_stage bench "${GPU_CHECK_BENCH_S:-200}" "$build/bench/medspring_gpu_bench" --out "$out/gpu-bench" \
-    ${GPU_BENCH_ARGS:---batch 8448 --compact} "${kidney_args[@]}"
+    ${GPU_BENCH_ARGS:---batch 8448 --compact --models-per-thread 2,4} "${kidney_args[@]}"
   # (2) GPU against CPU, the study's batch path, the haptic loops (figures recorded in the XML and log).
   # shellcheck disable=SC2086
   want gpu_tests && run_stage gpu_tests 180 "$build/tests/gpu/gpu_tests" ${GPU_TESTS_ARGS:-} \
@@ -206,7 +208,7 @@ EOF
   fi
   # (3) the CPU-side twins of the kernels (block kernel, its split rows, the grid kernel's split rows).
   want cpu_kernel_tests && run_stage cpu_kernel_tests 60 "$build/tests/physics/physics_tests" \
-    --gtest_filter='HdKernels*:SpringTable*' --gtest_output="xml:$out/xml/physics_tests.xml"
+    --gtest_filter='HdKernels*:SpringTable*:HdModels*:PackedTable*' --gtest_output="xml:$out/xml/physics_tests.xml"
   want hybrid_gather_tests && run_stage hybrid_gather_tests 60 "$build/tests/models/hybrid_gather_tests" \
     --gtest_output="xml:$out/xml/hybrid_gather_tests.xml"
   # (4) optional (GPU_CHECK_STAGES=...,python): medspring.gpu from Python, (B, N, 3) arrays and DLPack
