@@ -58,8 +58,9 @@ TEST(PackedTable, WordsDecodeToTheTableEntriesSmallTubes) {
   }
 }
 
-// The GPU benchmark's 1M-node tube (1,000 rings of 1,000 spokes, bench --gpu): it packs (a few classes,
-// offsets up to about one ring), and every word decodes to its entry.
+// The GPU benchmark's 1M-node tube (1,000 rings of 1,000 spokes, bench --gpu): it packs (830 classes in 10
+// bits here: the chords' rest lengths differ in their last bits around the ring; offsets up to about one
+// ring), and every word decodes to its entry.
 TEST(PackedTable, MillionNodeTubePacksAndDecodes) {
   const auto t0 = std::chrono::steady_clock::now();
   const Model m = tube_of(1000, 1000, false);
