@@ -399,6 +399,9 @@ TEST(CliBench, GpuWithoutADeviceFailsClearly) {
   EXPECT_EQ(r.out.find("tube_1.2k"), std::string::npos) << r.out;  // nothing was timed
   EXPECT_NE(medspring("bench --gpu --sizes 5").rc, 0);
   EXPECT_NE(medspring("bench --gpu --bogus 1").rc, 0);
+  const Result m = medspring("bench --gpu --models-per-thread 3");  // 1, 2 or 4
+  EXPECT_NE(m.rc, 0);
+  EXPECT_NE(m.err.find("--models-per-thread"), std::string::npos) << m.err;
 }
 
 TEST(CliThreads, BadThreadCountsFailWithOneLine) {
