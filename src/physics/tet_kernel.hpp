@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 
 #include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/kernels.hpp"
@@ -25,6 +26,50 @@ inline void cross3(const double* u, const double* v, double* w) {
   w[0] = u[1] * v[2] - u[2] * v[1];
   w[1] = u[2] * v[0] - u[0] * v[2];
   w[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+/// Output of the fused compression bound's traces (tet_record with Trace): per node s_i = m_i^-1/2 (0 on a
+/// fixed node) and the rows tr B_i the corners' shares are added to.
+struct CompTrace {
+  const double* s;
+  double* rows;
+};
+
+/// The fused compression bound's traces: the share of each corner k of a compressed term in the trace of its
+/// node's 3x3 block B_i of the block bound (compression_terms.cpp, block_term), tr = a sigma s_k |g_k| + 3 hb
+/// s_k (S - s_k) with a = kc h''(J) / V0, hb = |kc h'(J)| L_max / 6, g_k = dV/dx_k, sigma = sum_l s_l |g_l|
+/// and S = sum_l s_l; 0 where J >= 1. c: 6 dV/dx of corners b, c, d; l2: the longest edge squared.
+[[gnu::always_inline]] inline void compression_trace(const std::int32_t n[4], const double c[3][3],
+                                                     double dv6, double V06, double kc6, double l2,
+                                                     const CompTrace& out) {
+  constexpr double jm = kCompressionJMin, d2m = 1.0 / (jm * jm) - 1.0;
+  const double u = dv6 / V06;  // J - 1
+  const double J = 1.0 + u;
+  const double uc = u < 0.0 ? u : 0.0;
+  const double ul = uc > jm - 1.0 ? uc : jm - 1.0;
+  const double below = J < jm ? J - jm : 0.0;
+  const double d1 = -ul * ul / (1.0 + ul) + d2m * below;                     // h'(J), 0 from J = 1 on
+  const double Jl = 1.0 + ul;                                                // J clamped to [J_min, 1]
+  const double d2 = u < 0.0 ? (J < jm ? d2m : 1.0 / (Jl * Jl) - 1.0) : 0.0;  // h''(J), 0 from J = 1 on
+  const double a = 36.0 * kc6 / V06 * d2;                                    // kc h'' / V0
+  const double hb = std::abs(kc6 * d1) * std::sqrt(l2);                      // |kc h'| L_max / 6
+  double gn[4];                                                              // |dV/dx_k|
+  for (int k = 0; k < 3; ++k)
+    gn[k + 1] = std::sqrt(c[k][0] * c[k][0] + c[k][1] * c[k][1] + c[k][2] * c[k][2]);
+  {
+    const double c0[3] = {c[0][0] + c[1][0] + c[2][0], c[0][1] + c[1][1] + c[2][1],
+                          c[0][2] + c[1][2] + c[2][2]};
+    gn[0] = std::sqrt(c0[0] * c0[0] + c0[1] * c0[1] + c0[2] * c0[2]);
+  }
+  double sk[4], S = 0.0, sigma = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    gn[k] *= 1.0 / 6.0;
+    sk[k] = out.s[n[k]];
+    S += sk[k];
+    sigma += sk[k] * gn[k];
+  }
+  const double as = a * sigma, h3 = 3.0 * hb;
+  for (int k = 0; k < 4; ++k) out.rows[n[k]] += sk[k] * (as * gn[k] + h3 * (S - sk[k]));
 }
 
 /// The fused compression term's share of the force scalar s of tet_record (f_k = s (6 dV/dx_k)):
@@ -53,10 +98,12 @@ inline void cross3(const double* u, const double* v, double* w) {
 /// With Comp: also the fused compression term's force (r.kc6, fuse_compression_terms), -kc h'(J) dV/dx, along
 /// the same dV/dx: its scalar joins the volume term's (no second gradient, no second scatter). Its curvature
 /// bound is not part of sv (add_compression_forces computes it).
-template <int Own, bool Soft, bool Stiff, bool Local = false, bool Comp = false>
+/// With Trace (and Stiff, Comp): also the compression term's shares in the traces of its bound's blocks
+/// (compression_trace), added to tr->rows.
+template <int Own, bool Soft, bool Stiff, bool Local = false, bool Comp = false, bool Trace = false>
 [[gnu::always_inline]] inline void tet_record(const VolumeTerms::Packed& r, const SpringParams& S,
                                               const double* x, double* f, double& ss, double& sv,
-                                              double* inc = nullptr) {
+                                              double* inc = nullptr, const CompTrace* tr = nullptr) {
   double P[4][3];
   for (int k = 0; k < 4; ++k) {
     const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
@@ -96,6 +143,7 @@ template <int Own, bool Soft, bool Stiff, bool Local = false, bool Comp = false>
       l2 = q > l2 ? q : l2;
     }
     const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (1.0 / 12.0);  // |V - V0| L / 2
+    if constexpr (Trace) compression_trace(r.n, c, dv6, r.V06, r.kc6, l2, *tr);
     if constexpr (Local) {  // branch-free: about half the terms stiffen, a branch would be unpredictable
       const double st = cur * r.iG0 - 1.0;
       *inc = st > 0.0 ? st : 0.0;

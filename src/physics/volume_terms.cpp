@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "compression_rows.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/compression_terms.hpp"
 #include "tet_kernel.hpp"
@@ -120,6 +121,19 @@ double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, d
   const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
   double ss = 1.0, sv = 1.0;
   for (const auto& r : T.packed) detail::tet_record<0, false, true, true>(r, none, x, f, ss, sv, inc++);
+  return sv;
+}
+
+double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
+                                             const double* s, double* trows, Index nodes) {
+  require(static_cast<Index>(T.packed.size()) == T.size() && T.kc.size() == T.packed.size(),
+          "volume terms: not finalized or no fused compression terms");
+  std::fill(trows, trows + nodes, 0.0);
+  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
+  const detail::CompTrace tr{s, trows};
+  double ss = 1.0, sv = 1.0;
+  for (const auto& r : T.packed)
+    detail::tet_record<0, false, true, true, true, true>(r, none, x, f, ss, sv, inc++, &tr);
   return sv;
 }
 
