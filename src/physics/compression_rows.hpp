@@ -40,4 +40,12 @@ double compression_block_bound(const CompressionTerms& T, const double* x, const
 double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
                                              const double* s, double* trows, Index nodes);
 
+/// compression_block_bound of the fused compression terms over the volume records (the step's last sub-step,
+/// where the blocks decide its sub-step count): the same bound to rounding, from `s` (m_i^-1/2, 0 on a fixed
+/// node) instead of the masses; `brows`: kCompressionRowsPerNode #N doubles (overwritten).
+double fused_compression_blocks(const VolumeTerms& T, const double* x, const double* s, double* brows,
+                                Index nodes);
+/// The bound max_i tr B_i / 3 + sqrt(2/3 |dev B_i|_F^2) >= lambda_max(B_i) of the 3x3 blocks in `rows`.
+double compression_block_max(const double* rows, Index nodes);
+
 }  // namespace medspring

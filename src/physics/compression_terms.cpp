@@ -261,6 +261,10 @@ double compression_block_bound(const CompressionTerms& T, const double* x, const
              : 0.0;
 }
 
+double compression_block_max(const double* rows, Index nodes) {
+  return block_rows_max(rows, nodes);
+}
+
 double compression_energy(const CompressionTerms& T, const MatX3& x) {
   double e = 0;
   for (Index t = 0; t < T.size(); ++t) {

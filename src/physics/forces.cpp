@@ -145,6 +145,7 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
     const double R =
         std::min(global, stiff + volume_row_max(m.volume, local->scratch + n, local->scratch, n) / w2);
     if (!comp || count(R + ct) <= count(R + ct / 3)) return R + ct;
+    if (fused) return R + fused_compression_blocks(m.volume, X, trows + n, crows, n) / w2;
     return R + compression_block_bound(m.compression, X, m.mass.data(), m.fixed.data(), crows, n) / w2;
   }
   if (!stiffening && compression_fused(m)) {

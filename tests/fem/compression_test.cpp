@@ -516,6 +516,17 @@ TEST(Compression, FusedTracesEqualTheTracePass) {
       ASSERT_GT(tmax, 0.0) << "trial " << trial;  // compressed
     }
     EXPECT_LE((t1 - t2).cwiseAbs().maxCoeff(), 1e-12 * tmax) << "trial " << trial;
+    // the blocks over the volume records against the pass over the compression terms
+    VecX b1(kCompressionRowsPerNode * n), b2(kCompressionRowsPerNode * n);
+    const double bf = fused_compression_blocks(m.volume, x.data(), s.data(), b1.data(), n);
+    const double bs =
+        compression_block_bound(m.compression, x.data(), m.mass.data(), m.fixed.data(), b2.data(), n);
+    EXPECT_NEAR(bf, bs, 1e-12 * bs) << "trial " << trial;
+    EXPECT_LE((b1 - b2).cwiseAbs().maxCoeff(), 1e-12 * b2.cwiseAbs().maxCoeff()) << "trial " << trial;
+    if (trial > 0) {
+      EXPECT_GE(tmax * (1 + 1e-12), bs) << "trial " << trial;  // the block bound lies in [trace / 3, trace]
+      EXPECT_LE(tmax / 3, bs * (1 + 1e-12)) << "trial " << trial;
+    }
     // the step's value: frames of 0.5 ms (the traces or the volume rows decide) and 1e12 ms (every value its
     // own sub-step count: the blocks decide)
     for (const double frame : {0.5, 1e12}) {
