@@ -184,11 +184,12 @@ double block_rows_max(const double* rows, Index nodes) {
   return row_max;
 }
 
-// Adds the forces of the compressed terms; with bound = 1 the traces of the blocks into rows (#N), with
-// bound = 2 the blocks (6 #N); returns whether a term is compressed.
-template <int Bound>
+// Adds the forces of the compressed terms (when f is given); with Trace the traces of their 3x3 blocks into
+// trows (#N), with Blocks the blocks into brows (kCompressionRowsPerNode #N); returns whether a term is
+// compressed.
+template <bool Trace, bool Blocks>
 bool compression_pass(const CompressionTerms& T, const double* x, double* f, const double* mass,
-                      const std::uint8_t* fixed, double* rows) {
+                      const std::uint8_t* fixed, double* trows, double* brows) {
   bool any = false;
   for (Index t = 0; t < T.size(); ++t) {
     const auto i = static_cast<std::size_t>(t);
@@ -206,15 +207,14 @@ bool compression_pass(const CompressionTerms& T, const double* x, double* f, con
         o[2] += c * r.g[k].z();
       }
     }
-    if constexpr (Bound > 0) {
+    if constexpr (Trace || Blocks) {
       const BlockTerm bt = block_term(r, T.kc[i], T.V0[i], hj, mass, fixed);
       for (int k = 0; k < 4; ++k) {
         const Vec3& g = r.g[k];
-        if constexpr (Bound == 1) {
-          rows[r.id[k]] += bt.w[k] * g.squaredNorm() + 3.0 * bt.beta[k];
-        } else {
-          const double w = bt.w[k], beta = bt.beta[k];
-          double* B = rows + kCompressionRowsPerNode * r.id[k];
+        const double w = bt.w[k], beta = bt.beta[k];
+        if constexpr (Trace) trows[r.id[k]] += w * g.squaredNorm() + 3.0 * beta;
+        if constexpr (Blocks) {
+          double* B = brows + kCompressionRowsPerNode * r.id[k];
           B[0] += w * g.x() * g.x() + beta;
           B[1] += w * g.y() * g.y() + beta;
           B[2] += w * g.z() * g.z() + beta;
@@ -228,31 +228,41 @@ bool compression_pass(const CompressionTerms& T, const double* x, double* f, con
   return any;
 }
 
-}  // namespace
-
-double add_compression_forces(const CompressionTerms& T, const double* x, double* f, const double* mass,
-                              const std::uint8_t* fixed, double* rows, Index nodes) {
-  if (!(mass && fixed && rows)) {
-    compression_pass<0>(T, x, f, nullptr, nullptr, nullptr);
-    return 0.0;
-  }
-  std::fill(rows, rows + kCompressionRowsPerNode * nodes, 0.0);
-  return compression_pass<2>(T, x, f, mass, fixed, rows) ? block_rows_max(rows, nodes) : 0.0;
-}
-
-double add_compression_forces_trace(const CompressionTerms& T, const double* x, double* f, const double* mass,
-                                    const std::uint8_t* fixed, double* rows, Index nodes) {
-  std::fill(rows, rows + nodes, 0.0);
-  if (!compression_pass<1>(T, x, f, mass, fixed, rows)) return 0.0;
+double row_max(const double* rows, Index nodes) {
   double m = 0;
   for (Index n = 0; n < nodes; ++n) m = rows[n] > m ? rows[n] : m;
   return m;
 }
 
+}  // namespace
+
+double add_compression_forces(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                              const std::uint8_t* fixed, double* rows, Index nodes) {
+  if (!(mass && fixed && rows)) {
+    compression_pass<false, false>(T, x, f, nullptr, nullptr, nullptr, nullptr);
+    return 0.0;
+  }
+  std::fill(rows, rows + kCompressionRowsPerNode * nodes, 0.0);
+  return compression_pass<false, true>(T, x, f, mass, fixed, nullptr, rows) ? block_rows_max(rows, nodes)
+                                                                            : 0.0;
+}
+
+double add_compression_forces_trace(const CompressionTerms& T, const double* x, double* f, const double* mass,
+                                    const std::uint8_t* fixed, double* rows, Index nodes) {
+  std::fill(rows, rows + nodes, 0.0);
+  return compression_pass<true, false>(T, x, f, mass, fixed, rows, nullptr) ? row_max(rows, nodes) : 0.0;
+}
+
 double compression_block_bound(const CompressionTerms& T, const double* x, const double* mass,
                                const std::uint8_t* fixed, double* rows, Index nodes) {
   std::fill(rows, rows + kCompressionRowsPerNode * nodes, 0.0);
-  return compression_pass<2>(T, x, nullptr, mass, fixed, rows) ? block_rows_max(rows, nodes) : 0.0;
+  return compression_pass<false, true>(T, x, nullptr, mass, fixed, nullptr, rows)
+             ? block_rows_max(rows, nodes)
+             : 0.0;
+}
+
+double compression_block_max(const double* rows, Index nodes) {
+  return block_rows_max(rows, nodes);
 }
 
 double compression_energy(const CompressionTerms& T, const MatX3& x) {

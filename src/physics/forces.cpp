@@ -115,21 +115,37 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
     // omega^2 <= s_springs omega_rest^2 + the Gershgorin bound of the sum, row_max. Never above the global
     // rule max(s_springs, s_terms), never below s_springs: scattered only where that range holds more
     // than one sub-step count (the same sub-steps as always scattering, without its cost elsewhere).
-    const double sv = add_volume_forces_inc(m.volume, X, Fo, local->scratch + n);
+    // With the compression terms fused (compression_fused), the volume pass also adds their forces, as on
+    // the other sub-steps, and the traces of their bound's blocks (below): no compression pass unless the
+    // blocks themselves decide the sub-step count.
+    const bool comp = m.compression.size() > 0, fused = compression_fused(m);
+    double* trows = comp ? crows + kCompressionRowsPerNode * n : nullptr;  // the traces after the blocks
+    double sv, ct = 0.0;
+    if (fused) {
+      double* s = trows + n;  // m_i^-1/2, 0 on a fixed node
+      for (Index i = 0; i < n; ++i)
+        s[i] = m.fixed[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
+      sv = add_volume_and_compression_forces_inc(m.volume, X, Fo, local->scratch + n, s, trows, n);
+      double tm = 0.0;
+      for (Index i = 0; i < n; ++i) tm = trows[i] > tm ? trows[i] : tm;
+      ct = tm / w2;
+    } else {
+      sv = add_volume_forces_inc(m.volume, X, Fo, local->scratch + n);
+      if (comp)
+        ct = add_compression_forces_trace(m.compression, X, Fo, m.mass.data(), m.fixed.data(), trows, n) / w2;
+    }
     const double global = std::max(stiff, sv);
     auto count = [&](double v) { return stable_substeps(m, v, local->frame_dt, local->safety); };
     // The result is R + c: R in [stiff, global] the volume terms' rule (exact once their rows are
-    // scattered), c in [c_tr / 3, c_tr] the compression terms' block bound (c_tr: the blocks' traces, a
-    // cheap pass with the forces; exact after a second pass over the compressed terms). Each is refined only
-    // while the range left holds more than one sub-step count: the same sub-steps as computing both always.
-    const double ct =
-        m.compression.size() > 0
-            ? add_compression_forces_trace(m.compression, X, Fo, m.mass.data(), m.fixed.data(), crows, n) / w2
-            : 0.0;
+    // scattered), c in [c_tr / 3, c_tr] the compression terms' block bound (c_tr: the largest trace of the
+    // blocks, with the forces; the blocks themselves take a pass over the compressed terms). Each is refined
+    // only while the range left holds more than one sub-step count: the same sub-steps as computing both
+    // always.
     if (count(global + ct) <= count(stiff + ct / 3)) return global + ct;
     const double R =
         std::min(global, stiff + volume_row_max(m.volume, local->scratch + n, local->scratch, n) / w2);
-    if (count(R + ct) <= count(R + ct / 3)) return R + ct;
+    if (!comp || count(R + ct) <= count(R + ct / 3)) return R + ct;
+    if (fused) return R + fused_compression_blocks(m.volume, X, trows + n, crows, n) / w2;
     return R + compression_block_bound(m.compression, X, m.mass.data(), m.fixed.data(), crows, n) / w2;
   }
   if (!stiffening && compression_fused(m)) {

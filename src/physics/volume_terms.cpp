@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "compression_rows.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/compression_terms.hpp"
 #include "tet_kernel.hpp"
@@ -121,6 +122,82 @@ double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, d
   double ss = 1.0, sv = 1.0;
   for (const auto& r : T.packed) detail::tet_record<0, false, true, true>(r, none, x, f, ss, sv, inc++);
   return sv;
+}
+
+double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
+                                             const double* s, double* trows, Index nodes) {
+  require(static_cast<Index>(T.packed.size()) == T.size() && T.kc.size() == T.packed.size(),
+          "volume terms: not finalized or no fused compression terms");
+  std::fill(trows, trows + nodes, 0.0);
+  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
+  const detail::CompTrace tr{s, trows};
+  double ss = 1.0, sv = 1.0;
+  for (const auto& r : T.packed)
+    detail::tet_record<0, false, true, true, true, true>(r, none, x, f, ss, sv, inc++, &tr);
+  return sv;
+}
+
+double fused_compression_blocks(const VolumeTerms& T, const double* x, const double* s, double* brows,
+                                Index nodes) {
+  require(static_cast<Index>(T.packed.size()) == T.size() && T.kc.size() == T.packed.size(),
+          "volume terms: not finalized or no fused compression terms");
+  constexpr int R6 = kCompressionRowsPerNode;
+  std::fill(brows, brows + R6 * nodes, 0.0);
+  bool any = false;
+  for (const auto& r : T.packed) {
+    double P[4][3];
+    for (int k = 0; k < 4; ++k) {
+      const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
+      P[k][0] = p[0];
+      P[k][1] = p[1];
+      P[k][2] = p[2];
+    }
+    double e[3][3], c[4][3];  // c[k]: 6 dV/dx of corner k
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) e[k][d] = P[k + 1][d] - P[0][d];
+    detail::cross3(e[1], e[2], c[1]);
+    detail::cross3(e[2], e[0], c[2]);
+    detail::cross3(e[0], e[1], c[3]);
+    for (int d = 0; d < 3; ++d) c[0][d] = -(c[1][d] + c[2][d] + c[3][d]);
+    const double dv6 = e[0][0] * c[1][0] + e[0][1] * c[1][1] + e[0][2] * c[1][2] - r.V06;
+    if (!(dv6 < 0.0)) continue;  // J >= 1: no curvature (the blocks' pass runs where most are compressed)
+    any = true;
+    double l2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double a = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
+      l2 = a > l2 ? a : l2;
+      const int j = (k + 1) % 3;
+      double q = 0;
+      for (int d = 0; d < 3; ++d) q += (e[j][d] - e[k][d]) * (e[j][d] - e[k][d]);
+      l2 = q > l2 ? q : l2;
+    }
+    const detail::CompDh h = detail::compression_dh6(dv6, r.V06);
+    const double iJ = r.V06 * r.V06 * h.r;
+    const double d2 = detail::max_nb(iJ * iJ - 1.0, 0.0);
+    const double a = 36.0 * r.kc6 * (h.W * h.r) * d2;          // kc h'' / V0
+    const double hb = std::abs(r.kc6 * h.d1) * std::sqrt(l2);  // |kc h'| L_max / 6
+    double gn[4], sk[4], S = 0.0, sigma = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      gn[k] = std::sqrt(c[k][0] * c[k][0] + c[k][1] * c[k][1] + c[k][2] * c[k][2]) * (1.0 / 6.0);
+      sk[k] = s[r.n[k]];
+      S += sk[k];
+      sigma += sk[k] * gn[k];
+    }
+    for (int k = 0; k < 4; ++k) {
+      // w g g^T + beta I with g = c / 6, w = a sigma s_k / |g_k| (block_term): w / 36 c c^T
+      const double w36 = gn[k] > 0.0 ? a * sigma * sk[k] / gn[k] * (1.0 / 36.0) : 0.0;
+      const double beta = hb * sk[k] * (S - sk[k]);
+      const double* g = c[k];
+      double* B = brows + R6 * static_cast<std::ptrdiff_t>(r.n[k]);
+      B[0] += w36 * g[0] * g[0] + beta;
+      B[1] += w36 * g[1] * g[1] + beta;
+      B[2] += w36 * g[2] * g[2] + beta;
+      B[3] += w36 * g[0] * g[1];
+      B[4] += w36 * g[0] * g[2];
+      B[5] += w36 * g[1] * g[2];
+    }
+  }
+  return any ? compression_block_max(brows, nodes) : 0.0;
 }
 
 bool fuse_compression_terms(VolumeTerms& T, const CompressionTerms& C) {

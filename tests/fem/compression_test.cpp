@@ -481,6 +481,66 @@ TEST(Compression, BlockBoundIsAboveTheTrueEigenvalueAndTighterThanTheFormerOne) 
             << " on average\n";
 }
 
+// The step's last sub-step (forces.cpp, local rule) with the compression terms fused: the volume pass adds
+// their forces and the traces of their bound's blocks (tet_kernel.hpp, compression_trace), which the separate
+// trace pass (add_compression_forces_trace) accumulates: the same rows to rounding, node by node, from
+// tension to pushed through; and the step's stiffening equals the separate passes' where the blocks decide it
+// too.
+TEST(Compression, FusedTracesEqualTheTracePass) {
+  const VolumetricMesh vm = fem::volumetric_mesh(box_surface(4, 20), {.target_nodes = 300});
+  VolumetricSettings st = cube_settings(0.45, 32.0);
+  st.fixed = {0, 1, 2, 3};
+  const VolumetricBody body(vm, st, "cube");
+  const Model& m = body.model();
+  ASSERT_EQ(m.volume.kc.size(), static_cast<std::size_t>(m.volume.size()));
+  Model sep = m;  // the compression terms in their own passes
+  sep.volume.kc.clear();
+  const Index n = m.num_nodes();
+  VecX s(n);
+  for (Index i = 0; i < n; ++i)
+    s[i] = m.fixed[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> N(0.0, 1.0);
+  for (int trial = 0; trial < 6; ++trial) {
+    MatX3 x = m.x0;
+    const double sz = 1.1 - 0.25 * trial;  // 1.1 .. -0.15: tension to pushed through
+    for (Index a = 0; a < n; ++a) x(a, 2) *= x(a, 0) > 10 ? sz : 1.0;
+    x += (0.6 * trial) * MatX3::NullaryExpr(n, 3, [&] { return N(rng); });
+    VecX f1 = VecX::Zero(3 * n), f2 = VecX::Zero(3 * n), inc(m.volume.size()), t1(n), t2(n);
+    add_volume_and_compression_forces_inc(m.volume, x.data(), f1.data(), inc.data(), s.data(), t1.data(), n);
+    add_volume_forces_inc(m.volume, x.data(), f2.data(), inc.data());
+    const double tmax = add_compression_forces_trace(m.compression, x.data(), f2.data(), m.mass.data(),
+                                                     m.fixed.data(), t2.data(), n);
+    EXPECT_LE((f1 - f2).cwiseAbs().maxCoeff(), 1e-12 * f2.cwiseAbs().maxCoeff()) << "trial " << trial;
+    if (trial > 0) {
+      ASSERT_GT(tmax, 0.0) << "trial " << trial;  // compressed
+    }
+    EXPECT_LE((t1 - t2).cwiseAbs().maxCoeff(), 1e-12 * tmax) << "trial " << trial;
+    // the blocks over the volume records against the pass over the compression terms
+    VecX b1(kCompressionRowsPerNode * n), b2(kCompressionRowsPerNode * n);
+    const double bf = fused_compression_blocks(m.volume, x.data(), s.data(), b1.data(), n);
+    const double bs =
+        compression_block_bound(m.compression, x.data(), m.mass.data(), m.fixed.data(), b2.data(), n);
+    EXPECT_NEAR(bf, bs, 1e-12 * bs) << "trial " << trial;
+    EXPECT_LE((b1 - b2).cwiseAbs().maxCoeff(), 1e-12 * b2.cwiseAbs().maxCoeff()) << "trial " << trial;
+    if (trial > 0) {
+      EXPECT_GE(tmax * (1 + 1e-12), bs) << "trial " << trial;  // the block bound lies in [trace / 3, trace]
+      EXPECT_LE(tmax / 3, bs * (1 + 1e-12)) << "trial " << trial;
+    }
+    // the step's value: frames of 0.5 ms (the traces or the volume rows decide) and 1e12 ms (every value its
+    // own sub-step count: the blocks decide)
+    for (const double frame : {0.5, 1e12}) {
+      VecX rf = VecX::Zero(stiff_rows_size(n, m.volume.size(), m.compression.size())), rs = rf;
+      const detail::LocalStiffening lf{rf.data(), frame, 0.9}, ls{rs.data(), frame, 0.9};
+      MatX3 ff = MatX3::Zero(n, 3), fs = MatX3::Zero(n, 3);
+      const double a = detail::volume_forces(m, x.data(), ff.data(), true, 1.0, &lf);
+      const double b = detail::volume_forces(sep, x.data(), fs.data(), true, 1.0, &ls);
+      EXPECT_NEAR(a, b, 1e-12 * b) << "trial " << trial << ", frame " << frame;
+      EXPECT_LE((ff - fs).cwiseAbs().maxCoeff(), 1e-12 * fs.cwiseAbs().maxCoeff()) << "trial " << trial;
+    }
+  }
+}
+
 // An inverted tetrahedron during a run is counted in the step's warnings; the state stays finite, with the
 // compression term alone (no volume term: nu < 1/4) and with both.
 TEST(Compression, InversionDuringARunIsCountedNotNaN) {

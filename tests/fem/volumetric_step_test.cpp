@@ -9,6 +9,7 @@
 #include <iostream>
 #include <random>
 
+#include "compression_rows.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/volumetric.hpp"
 #include "medspring/geometry/phantoms.hpp"
@@ -105,8 +106,8 @@ TEST(VolumetricStep, LocalStiffeningBoundsTheLoadedOmegaAndIsTighterThanTheGloba
     // The step scatters the local rows only where the range [s_springs, global] holds more than one
     // sub-step count of its frame: the same sub-steps as the rule always scattered (a frame of 1e12 ms
     // gives every value its own count, so the rows are always scattered), at the same state.
-    // State::stiff_rows' size (src/physics/compression_rows.hpp): #N + #T, and 6 #N for the compression bound
-    VecX scratch(m.num_nodes() + m.volume.size() + (m.compression.size() > 0 ? 6 : 0) * m.num_nodes());
+    // sized as State::stiff_rows (src/physics/compression_rows.hpp)
+    VecX scratch = VecX::Zero(stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()));
     const detail::LocalStiffening gated{scratch.data(), 0.5, 0.8}, always{scratch.data(), 1e12, 0.8};
     const double s_gated = detail::internal_forces(m, st.x, st.f_ext, f, true, &gated);
     const double s_always = detail::internal_forces(m, st.x, st.f_ext, f, true, &always);
