@@ -326,7 +326,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     out["volumetric"] = {{"nodes", vm.X.rows()},
                          {"surface_nodes", vm.surface_nodes},
                          {"surface_subdivisions", o.surface_subdivisions},
-                         {"interior_sizing", fem::to_string(o.interior_sizing)},
+                         {"interior_sizing", to_string(o.interior_sizing)},
                          {"tetrahedra", vm.T.rows()},
                          {"target_nodes", st.volumetric_nodes},
                          {"compression", st.compression}};

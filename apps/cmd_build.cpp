@@ -384,7 +384,7 @@ int build_volumetric_cmd(const Args& args) {
                             {"input_kind", k.summary.input_kind},
                             {"nodes", vst.nodes},
                             {"target_nodes", nodes},
-                            {"interior_sizing", fem::to_string(sizing)},
+                            {"interior_sizing", to_string(sizing)},
                             {"surface_nodes", vst.surface_nodes},
                             {"interior_nodes", vst.interior_nodes},
                             {"tetrahedra", vst.tetrahedra},

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
@@ -83,16 +84,6 @@ TetgenSettings scaled(TetgenSettings ts, double f) {
 
 }  // namespace
 
-const char* to_string(MeshSizing s) {
-  return s == MeshSizing::Surface ? "surface" : "volume";
-}
-
-MeshSizing parse_mesh_sizing(const std::string& text) {
-  if (text == "volume") return MeshSizing::Volume;
-  if (text == "surface") return MeshSizing::Surface;
-  throw InvalidInput(cat("unknown interior sizing '", text, "' (expected volume or surface)"));
-}
-
 VolumetricMesh volumetric_mesh(const SurfaceMesh& given, const VolumetricMeshSettings& s) {
   require(s.surface_subdivisions >= 0 && s.surface_subdivisions <= 3,
           "volumetric mesh: surface_subdivisions must be in [0, 3] (got ", s.surface_subdivisions, ")");
@@ -120,10 +111,23 @@ VolumetricMesh volumetric_mesh(const SurfaceMesh& given, const VolumetricMeshSet
   if (s.sizing == MeshSizing::Surface) {
     // interior node count ~ 1 / size^3; the scale never goes below 1 (no tetrahedron at the surface smaller
     // than its edges), so a target above the 1x count gets the 1x mesh
-    const TetgenSettings base = surface_sizing(surface, s);
+    TetgenSettings base = surface_sizing(surface, s);
     double f = 1.0;
     for (int it = 0; it < s.attempts; ++it) {
-      const double got = keep(linear_mesh(surface, scaled(base, f)));
+      VolumetricMesh m;
+      try {
+        m = linear_mesh(surface, scaled(base, f));
+      } catch (const SolverError&) {
+        // TetGen 1.5.0 can abort locating a point in the background mesh (scoutpoint: "ori4 != 0"; seen on
+        // midpoint-subdivided surfaces, whose facets are coplanar in fours): the sizes at the surface
+        // vertices alone then size the interior (interpolated inside: no finer than the surface, not graded)
+        if (base.background_T.rows() == 0) throw;
+        base.background_T.resize(0, 4);
+        base.background_X.resize(0, 3);
+        base.background_sizes.clear();
+        m = linear_mesh(surface, scaled(base, f));
+      }
+      const double got = keep(std::move(m));
       if (best_err <= s.target_nodes / 20 || (f == 1.0 && got <= interior)) break;
       f = std::max(1.0, f * std::cbrt(got / interior));
     }

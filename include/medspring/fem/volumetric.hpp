@@ -10,16 +10,9 @@
 
 namespace medspring::fem {
 
-/// How the interior is sized (VolumetricMeshSettings::sizing, docs/volumetric.md "An interior no finer than
-/// the surface"). volume: one TetGen volume bound everywhere, rescaled until the node count is near
-/// target_nodes (the interior can be much finer than the surface). surface: TetGen's sizing function (-m):
-/// the size at each surface vertex is the mean length of its surface edges, growing inwards by `grading` per
-/// mm of depth through a background mesh, so the tetrahedra at the surface are not smaller than its edges
-/// and the interior is coarser; target_nodes is approached by scaling the sizes, never below 1x.
-enum class MeshSizing { Volume, Surface };
-const char* to_string(MeshSizing s);
-/// "volume" | "surface"; InvalidInput naming the text otherwise.
-MeshSizing parse_mesh_sizing(const std::string& text);
+// How the interior is sized: MeshSizing (models/volumetric_body.hpp, a scene parameter too).
+using ::medspring::MeshSizing;
+using ::medspring::parse_mesh_sizing;
 
 struct VolumetricMeshSettings {
   Index target_nodes = 2000;  // total nodes aimed at (surface + interior); at least the surface's
