@@ -67,7 +67,9 @@ Depth depth(const VolumetricMesh& m, const SurfaceMesh& s) {
 }
 
 // lambda / mu of the Poisson ratio nu
-double la_over(double nu) { return 2 * nu / (1 - 2 * nu); }
+double la_over(double nu) {
+  return 2 * nu / (1 - 2 * nu);
+}
 
 double mean(const std::vector<double>& v) {
   double s = 0;
@@ -168,7 +170,7 @@ TEST(VolumetricSizing, ThinTetrahedronLosesThroughThicknessShearAsTheSquareOfIts
   EXPECT_NEAR(ratio(regular, xy), 1.04, 0.02);
   EXPECT_LT(ratio(0.1, xz), 0.15);
   EXPECT_NEAR(ratio(0.05, xz) / ratio(0.1, xz), 0.25, 0.03);  // ~ (t/a)^2
-  EXPECT_GT(ratio(0.05, xy), 1.8);                             // the in-plane shear takes the budget
+  EXPECT_GT(ratio(0.05, xy), 1.8);                            // the in-plane shear takes the budget
   EXPECT_NEAR(ratio(0.05, zz), (la_over(0.45) - 1) / (la_over(0.45) + 2), 0.01);
 }
 
