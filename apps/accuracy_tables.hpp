@@ -16,6 +16,7 @@
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/validation.hpp"
 #include "medspring/fem/vessel.hpp"
+#include "medspring/fem/volumetric.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/scene/scene.hpp"
 #include "scene_support.hpp"
@@ -39,6 +40,7 @@ struct Organ {
   // (VolumetricMeshSettings::surface_subdivisions), held by the same rule (vsupport: its pinned nodes);
   // its first #V surface nodes are `surface`'s, where it is compared with the FEM
   mutable int surface_subdivisions = 0;
+  mutable fem::MeshSizing interior_sizing = fem::MeshSizing::Volume;  // --interior-sizing
   mutable std::vector<Index> vsupport;
   // VolumetricSettings::compression
   mutable double compression = kDefaultVolumetricCompression;
@@ -73,9 +75,10 @@ struct Settings {
   fem::Material material;
   double radius = 8.0;
   bool quick = false;
-  std::vector<std::string> kinds;  // --kinds: the bases to run (empty: all)
-  Index volumetric_nodes = 2000;   // --nodes
-  int surface_subdivisions = 0;    // --surface-subdivisions (volumetric kinds)
+  std::vector<std::string> kinds;                             // --kinds: the bases to run (empty: all)
+  Index volumetric_nodes = 2000;                              // --nodes
+  int surface_subdivisions = 0;                               // --surface-subdivisions (volumetric kinds)
+  fem::MeshSizing interior_sizing = fem::MeshSizing::Volume;  // --interior-sizing (volumetric kinds)
   // --compression (volumetric kinds)
   double compression = kDefaultVolumetricCompression;
   // --fit nonlinear (default) | small-strain: the volumetric calibration refined on the full response

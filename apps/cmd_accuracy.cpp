@@ -66,6 +66,7 @@ int cmd_accuracy(const Args& args) {
                       "no-indentation",
                       "compression",
                       "surface-subdivisions",
+                      "interior-sizing",
                       "fit",
                       "train-force"});
   const auto out = args.get("out");
@@ -227,7 +228,7 @@ int cmd_accuracy(const Args& args) {
 
 int cmd_calibrate(const Args& args) {
   args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
-                      "compression", "surface-subdivisions", "fit", "train-force"});
+                      "compression", "surface-subdivisions", "interior-sizing", "fit", "train-force"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));

@@ -49,8 +49,10 @@ namespace {
 
 const VolumetricMesh& volumetric_mesh_of(const Organ& o) {
   if (!o.vmesh)
-    o.vmesh = std::make_shared<const VolumetricMesh>(fem::volumetric_mesh(
-        o.surface, {.target_nodes = o.target_nodes, .surface_subdivisions = o.surface_subdivisions}));
+    o.vmesh = std::make_shared<const VolumetricMesh>(
+        fem::volumetric_mesh(o.surface, {.target_nodes = o.target_nodes,
+                                         .surface_subdivisions = o.surface_subdivisions,
+                                         .sizing = o.interior_sizing}));
   return *o.vmesh;
 }
 
@@ -148,6 +150,7 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   const long long sub = args.integer("surface-subdivisions", 0);
   require(sub >= 0 && sub <= 3, cmd, ": --surface-subdivisions must be in [0, 3] (got ", sub, ")");
   st.surface_subdivisions = static_cast<int>(sub);
+  st.interior_sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
   st.train_force = args.number("train-force", 0.0);
   require(std::isfinite(st.train_force) && (st.train_force > 0 || !args.get("train-force")), cmd,
           ": --train-force must be > 0 N (got ", st.train_force, ")");
@@ -315,6 +318,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   o.target_nodes = st.volumetric_nodes;
   o.compression = st.compression;
   o.surface_subdivisions = st.surface_subdivisions;
+  o.interior_sizing = st.interior_sizing;
   if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
     const VolumetricMesh& vm = volumetric_mesh_of(o);
     if (o.surface_subdivisions > 0)  // the same rule on the refined surface (its mid-edge points too)
@@ -322,6 +326,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     out["volumetric"] = {{"nodes", vm.X.rows()},
                          {"surface_nodes", vm.surface_nodes},
                          {"surface_subdivisions", o.surface_subdivisions},
+                         {"interior_sizing", to_string(o.interior_sizing)},
                          {"tetrahedra", vm.T.rows()},
                          {"target_nodes", st.volumetric_nodes},
                          {"compression", st.compression}};

@@ -358,7 +358,7 @@ int build_vessel_cmd(const Args& args) {
 // springs are on), surface.vtp and summary.json.
 int build_volumetric_cmd(const Args& args) {
   args.require_known({"json", "force", "mesh", "mask", "label", "unit", "close-holes", "nodes",
-                      "surface-nodes", "E-kPa", "nu", "out"});
+                      "surface-nodes", "interior-sizing", "E-kPa", "nu", "out"});
   KidneyBuildSettings st;
   st.source = organ_source(args);
   st.nodes = count_option(args, "surface-nodes", 458, 4);
@@ -375,7 +375,8 @@ int build_volumetric_cmd(const Args& args) {
   const auto t0 = std::chrono::steady_clock::now();
   const KidneyBuild k = build_kidney_model(st);
   const SurfaceMesh surface{k.model->rest_surface(), k.model->faces()};
-  const VolumetricMesh mesh = fem::volumetric_mesh(surface, {.target_nodes = nodes});
+  const fem::MeshSizing sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
+  const VolumetricMesh mesh = fem::volumetric_mesh(surface, {.target_nodes = nodes, .sizing = sizing});
   const auto body = std::make_shared<VolumetricBody>(mesh, vs, "volumetric organ");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const VolumetricStats& vst = body->stats();
@@ -383,6 +384,7 @@ int build_volumetric_cmd(const Args& args) {
                             {"input_kind", k.summary.input_kind},
                             {"nodes", vst.nodes},
                             {"target_nodes", nodes},
+                            {"interior_sizing", to_string(sizing)},
                             {"surface_nodes", vst.surface_nodes},
                             {"interior_nodes", vst.interior_nodes},
                             {"tetrahedra", vst.tetrahedra},

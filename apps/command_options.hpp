@@ -49,6 +49,13 @@ inline const OptionSpec kSurfaceSubdivisions{
     .help =
         "volumetric kinds: the model's surface subdivided K times (0..3) before meshing; scored at the "
         "organ's own surface nodes (docs/accuracy-nonlinear.md, \"The load site\")"};
+inline const OptionSpec kInteriorSizing{
+    .name = "interior-sizing",
+    .value = "volume|surface",
+    .def = "volume",
+    .help =
+        "volumetric kinds: one TetGen volume bound to about --nodes, or a sizing field no finer than the "
+        "surface's edges, coarser inside (--nodes: at most; docs/volumetric.md)"};
 inline OptionSpec fit_option(const char* def) {
   return {.name = "fit",
           .value = "nonlinear|small-strain",

@@ -125,6 +125,7 @@ CommandSpec build_command() {
                      "                              | --mask FILE [--label N]\n"
                      "                              [--nodes 2000] [--surface-nodes 458] [--E-kPa 10] "
                      "[--nu 0.45]\n"
+                     "                              [--interior-sizing volume|surface]\n"
                      "                              --out DIR [--json] [--force]",
             .about =
                 "The volumetric spring organ: the balloon surface of `build kidney` with --surface-nodes\n"
@@ -140,6 +141,7 @@ CommandSpec build_command() {
                  kLabel,
                  {.name = "nodes", .value = "N", .def = "2000", .help = "nodes in all (surface + interior)"},
                  {.name = "surface-nodes", .value = "N", .def = "458", .help = "surface nodes"},
+                 kInteriorSizing,
                  {.name = "E-kPa",
                   .value = "E",
                   .unit = "kPa",

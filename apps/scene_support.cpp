@@ -55,8 +55,8 @@ SceneFileAccess file_access() {
     return BalloonSurface{r.mesh, r.report.note_lines()};
   };
 #ifdef MEDSPRING_HAVE_FEM
-  a.tetrahedralize = [](const SurfaceMesh& organ, Index nodes) {
-    return fem::volumetric_mesh(organ, {.target_nodes = nodes});
+  a.tetrahedralize = [](const SurfaceMesh& organ, Index nodes, MeshSizing sizing) {
+    return fem::volumetric_mesh(organ, {.target_nodes = nodes, .sizing = sizing});
   };
 #endif
 #endif

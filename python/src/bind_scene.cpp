@@ -74,8 +74,8 @@ SceneFileAccess file_access() {
   };
 #endif
 #ifdef MEDSPRING_PYTHON_WITH_FEM
-  a.tetrahedralize = [](const SurfaceMesh& organ, Index nodes) {
-    return fem::volumetric_mesh(organ, {.target_nodes = nodes});
+  a.tetrahedralize = [](const SurfaceMesh& organ, Index nodes, MeshSizing sizing) {
+    return fem::volumetric_mesh(organ, {.target_nodes = nodes, .sizing = sizing});
   };
 #endif
 #ifdef MEDSPRING_PYTHON_WITH_BUILDERS

@@ -47,3 +47,29 @@ def test_volumetric_scene_bad_material_is_refused():
         doc = scene({"E_kPa": 10.0, "nu": 0.45})
         doc["model"]["atoms"] = 42
         ms.run_scene(doc)
+
+
+def test_volumetric_scene_mesh_sizing_surface_is_no_finer_than_the_surface():
+    """"mesh_sizing": "surface" (docs/volumetric-mesh.md): TetGen's sizing function keeps the interior no finer
+    than the surface's edges, so a node target above what the surface supports is not reached; "volume"
+    (the default) reaches it. An unknown value is refused naming the parameter."""
+    import json
+    import re
+
+    from medspring.scenes import scene_runner
+
+    def nodes(sizing):
+        doc = scene({"E_kPa": 10.0, "nu": 0.45}, nodes=2000)
+        doc["model"]["parameters"]["mesh_sizing"] = sizing
+        notes = scene_runner().model(json.dumps(doc))["notes"]
+        line = next(n for n in notes if n.startswith("volumetric: "))
+        assert f"interior sizing {sizing}" in line
+        return int(re.match(r"volumetric: (\d+) nodes", line).group(1))
+
+    volume, surface = nodes("volume"), nodes("surface")
+    assert abs(volume - 2000) < 500
+    assert 458 < surface < 0.6 * volume
+    bad = scene({"E_kPa": 10.0, "nu": 0.45})
+    bad["model"]["parameters"]["mesh_sizing"] = "fine"
+    with pytest.raises(ms.InvalidInput, match=r"mesh_sizing"):
+        ms.run_scene(bad)

@@ -35,6 +35,56 @@ int edge_slot(int a, int b) {
   return -1;
 }
 
+// The sizing function of -m: input.mtr (a size per input vertex, TetGen manual §5.2.8) and, when given, the
+// background mesh input.b.node / input.b.ele / input.b.mtr that TetGen interpolates sizes from.
+void write_sizing(const fs::path& dir, Index num_vertices, const TetgenSettings& s) {
+  auto positive = [](const std::vector<double>& v, const char* what) {
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (!(std::isfinite(v[i]) && v[i] > 0))
+        throw InvalidInput(cat("tet mesh: ", what, " ", i, " is ", v[i], " (sizes must be > 0 mm)"));
+  };
+  require(static_cast<Index>(s.vertex_sizes.size()) == num_vertices, "tet mesh: ", s.vertex_sizes.size(),
+          " vertex sizes for a surface of ", num_vertices, " vertices");
+  positive(s.vertex_sizes, "vertex size");
+  auto write_mtr = [](const fs::path& file, const std::vector<double>& h) {
+    std::ofstream out(file);
+    out << std::setprecision(17) << h.size() << " 1\n";
+    for (double x : h) out << x << '\n';
+    if (!out) throw IoError(cat("cannot write ", file.string()));
+  };
+  write_mtr(dir / "input.mtr", s.vertex_sizes);
+  if (s.background_T.rows() == 0) return;
+  const Index nb = static_cast<Index>(s.background_X.rows());
+  require(static_cast<Index>(s.background_sizes.size()) == nb, "tet mesh: ", s.background_sizes.size(),
+          " background sizes for ", nb, " background nodes");
+  positive(s.background_sizes, "background size");
+  require(s.background_X.allFinite(), "tet mesh: background nodes must be finite");
+  {
+    std::ofstream out(dir / "input.b.node");
+    out << std::setprecision(17) << nb << " 3 0 0\n";
+    for (Index i = 0; i < nb; ++i)
+      out << i + 1 << ' ' << s.background_X(i, 0) << ' ' << s.background_X(i, 1) << ' '
+          << s.background_X(i, 2) << '\n';
+    if (!out) throw IoError(cat("cannot write ", (dir / "input.b.node").string()));
+  }
+  {
+    std::ofstream out(dir / "input.b.ele");
+    out << s.background_T.rows() << " 4 0\n";
+    for (Index e = 0; e < s.background_T.rows(); ++e) {
+      out << e + 1;
+      for (int k = 0; k < 4; ++k) {
+        const Index v = s.background_T(e, k);
+        require(v >= 0 && v < nb, "tet mesh: background element ", e, ": node ", v, " out of range [0, ", nb,
+                ")");
+        out << ' ' << v + 1;
+      }
+      out << '\n';
+    }
+    if (!out) throw IoError(cat("cannot write ", (dir / "input.b.ele").string()));
+  }
+  write_mtr(dir / "input.b.mtr", s.background_sizes);
+}
+
 }  // namespace
 
 TetMesh make_quadratic(const MatX3& X, const MatX4i& T4) {
@@ -151,11 +201,14 @@ TetMesh tet_mesh_from_surface(const SurfaceMesh& surface, const TetgenSettings& 
     out << "0\n0\n";
     if (!out) throw IoError(cat("cannot write ", (dir.path() / "input.smesh").string()));
   }
+  const bool metric = !settings.vertex_sizes.empty();
+  if (metric) write_sizing(dir.path(), surface.num_vertices(), settings);
   std::ostringstream sw;
   sw << "-p";
   if (settings.radius_edge > 0) sw << "q" << settings.radius_edge;
   if (settings.max_volume > 0) sw << "a" << settings.max_volume;
   if (settings.preserve_surface) sw << "Y";
+  if (metric) sw << "m";
   sw << "Q input.smesh";
   const int rc = detail::run_in(dir.path(), exe, sw.str(), "tetgen.log");
   if (rc != 0 || !fs::exists(dir.path() / "input.1.ele"))

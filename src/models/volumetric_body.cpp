@@ -12,6 +12,16 @@
 
 namespace medspring {
 
+const char* to_string(MeshSizing s) {
+  return s == MeshSizing::Surface ? "surface" : "volume";
+}
+
+MeshSizing parse_mesh_sizing(const std::string& text) {
+  if (text == "volume") return MeshSizing::Volume;
+  if (text == "surface") return MeshSizing::Surface;
+  throw InvalidInput(cat("unknown interior sizing '", text, "' (expected volume or surface)"));
+}
+
 void lame_parameters(double E_kPa, double nu, double& mu, double& lambda, const std::string& where) {
   require(std::isfinite(E_kPa) && E_kPa > 0, where, ".E_kPa: must be > 0 (got ", E_kPa, ")");
   require(std::isfinite(nu) && nu > -1.0 && nu < 0.5, where, ".nu: must be in (-1, 0.5) (got ", nu, ")");

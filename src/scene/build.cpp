@@ -22,7 +22,7 @@ namespace medspring {
 
 namespace fs = std::filesystem;
 
-VolumetricMesh SceneLoader::tetrahedralize(const SurfaceMesh&, Index) {
+VolumetricMesh SceneLoader::tetrahedralize(const SurfaceMesh&, Index, MeshSizing) {
   throw InvalidInput(
       "a volumetric model needs a tetrahedral mesher (TetGen): the loader of the medspring command or of the "
       "Python module");
@@ -201,16 +201,18 @@ struct Builder {
     const SceneModel& m = scene.model;
     std::shared_ptr<VolumetricBody> b;
     try {
-      b = std::make_shared<VolumetricBody>(loader->tetrahedralize(surface, m.volumetric.mesh_nodes),
-                                           m.volumetric, name);
+      b = std::make_shared<VolumetricBody>(
+          loader->tetrahedralize(surface, m.volumetric.mesh_nodes, m.volumetric.mesh_sizing), m.volumetric,
+          name);
     } catch (const InvalidInput& e) {
       fail("model", e.what());
     }
     const VolumetricStats& st = b->stats();
     out.notes.push_back(cat("volumetric: ", st.nodes, " nodes (", st.surface_nodes, " on the surface), ",
-                            st.tetrahedra, " tetrahedra, ", st.springs, " springs; E = ", m.volumetric.E_kPa,
-                            " kPa, nu = ", m.volumetric.nu, ", return springs ",
-                            b->model().kr.maxCoeff() > 0 ? "on" : "off (supports)"));
+                            st.tetrahedra, " tetrahedra (interior sizing ",
+                            to_string(m.volumetric.mesh_sizing), "), ", st.springs,
+                            " springs; E = ", m.volumetric.E_kPa, " kPa, nu = ", m.volumetric.nu,
+                            ", return springs ", b->model().kr.maxCoeff() > 0 ? "on" : "off (supports)"));
     for (const std::string& w : b->warnings()) out.notes.push_back(w);
     return b;
   }

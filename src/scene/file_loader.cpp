@@ -52,9 +52,9 @@ SurfaceMesh CachingSceneLoader::balloon(const SurfaceMesh& organ, Index nodes,
   return std::move(r.mesh);
 }
 
-VolumetricMesh CachingSceneLoader::tetrahedralize(const SurfaceMesh& organ, Index nodes) {
-  if (!access_.tetrahedralize) return SceneLoader::tetrahedralize(organ, nodes);  // refuses, naming TetGen
-  return access_.tetrahedralize(organ, nodes);
+VolumetricMesh CachingSceneLoader::tetrahedralize(const SurfaceMesh& organ, Index nodes, MeshSizing sizing) {
+  if (!access_.tetrahedralize) return SceneLoader::tetrahedralize(organ, nodes, sizing);  // refuses (TetGen)
+  return access_.tetrahedralize(organ, nodes, sizing);
 }
 
 SurfaceMesh CachingSceneLoader::tree_surface(const CenterlineTree& tree, const SmrmTree& plain,

@@ -412,7 +412,22 @@ TEST(CliBuild, VolumetricWritesAPackageWithItsTetrahedraAtTheNodeCount) {
   const CliRun nu = run_cli(in + "--nu 0.5 --out \"" + (tmp / "w").string() + "\"", tmp);
   EXPECT_EQ(nu.code, 1);
   EXPECT_NE(nu.err.find("--nu: must be in (-1, 0.5)"), std::string::npos) << nu.err;
+  const CliRun sz = run_cli(in + "--interior-sizing fine --out \"" + (tmp / "w").string() + "\"", tmp);
+  EXPECT_EQ(sz.code, 1);
+  EXPECT_NE(sz.err.find("unknown interior sizing 'fine'"), std::string::npos) << sz.err;
   EXPECT_FALSE(fs::exists(tmp / "w"));
+
+  // --interior-sizing surface (docs/volumetric-mesh.md): no finer than the surface's edges, so --nodes 2000
+  // is not reached under a 200-node surface; the summary says which sizing built it
+  const CliRun s = run_cli(in + "--surface-nodes 200 --nodes 2000 --interior-sizing surface --out \"" +
+                               (tmp / "s").string() + "\" --json",
+                           tmp);
+  ASSERT_EQ(s.code, 0) << s.err;
+  const ModelPackage ps = read_model_package(tmp / "s" / "volumetric.msm");
+  EXPECT_EQ(ps.volumetric_mesh.surface_nodes, 200);
+  EXPECT_GT(ps.volumetric_mesh.X.rows(), 200);
+  EXPECT_LT(ps.volumetric_mesh.X.rows(), 1000);
+  EXPECT_NE(s.out.find("\"interior_sizing\": \"surface\""), std::string::npos) << s.out;
 }
 
 }  // namespace

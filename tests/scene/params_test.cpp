@@ -257,7 +257,8 @@ TEST(DeclaredParameters, LoadToolRecordAndVolumetricErrorsNameTheJsonPath) {
       {error(kVolumetric, "parameters", R"({"k_r": -1})"),
        "t.json: model.parameters.k_r: must be >= 0 (got -1)"},
       {error(kVolumetric, "parameters", R"({"E_kPa": 3})"),
-       "t.json: model.parameters.E_kPa: unknown key (expected one of: nodes, density, beta, k_r, "
+       "t.json: model.parameters.E_kPa: unknown key (expected one of: nodes, mesh_sizing, density, beta, "
+       "k_r, "
        "spring_scale, volume_scale, compression, mass_scaling_dt, min_mass_fraction, moduli_correction, "
        "duffing, fixed)"},
       {error(kVolumetric, "parameters", R"({"duffing": {"mode": "cubic"}})"),

@@ -45,6 +45,15 @@ struct TetgenSettings {
   /// -Y: no Steiner points on the surface (its vertices stay the first nodes); the volumetric kind.
   bool preserve_surface = false;
   std::string executable = "";  // default: $MEDSPRING_TETGEN, then `tetgen` on PATH
+  // -m: TetGen's mesh sizing function (manual §4.2.4, files .mtr and .b.node/.b.ele/.b.mtr, §5.2.8). Empty
+  // = none. vertex_sizes (one per surface vertex, mm > 0) bound the circumradius of the tetrahedra at that
+  // vertex and keep quality-driven Steiner points out of a ball of that radius around it; with a background
+  // mesh (background_X / background_T, linear tetrahedra covering the organ, background_sizes per node)
+  // the sizes of the points TetGen inserts are interpolated from it, else from the tetrahedron they split.
+  std::vector<double> vertex_sizes{};
+  MatX3 background_X{};
+  MatX4i background_T{};
+  std::vector<double> background_sizes{};
 };
 
 /// Tetrahedralises the inside of a closed, manifold, outward-oriented surface with TetGen (`tetgen -pq`,

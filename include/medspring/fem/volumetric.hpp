@@ -3,10 +3,16 @@
 // VolumetricBody (models/volumetric_body.hpp) whose first nodes are the surface's vertices.
 #pragma once
 
+#include <string>
+
 #include "medspring/fem/tet_mesh.hpp"
 #include "medspring/models/volumetric_body.hpp"
 
 namespace medspring::fem {
+
+// How the interior is sized: MeshSizing (models/volumetric_body.hpp, a scene parameter too).
+using ::medspring::MeshSizing;
+using ::medspring::parse_mesh_sizing;
 
 struct VolumetricMeshSettings {
   Index target_nodes = 2000;  // total nodes aimed at (surface + interior); at least the surface's
@@ -17,10 +23,13 @@ struct VolumetricMeshSettings {
   // small disk (a tool tip, the accuracy tables' contact disk) falls on many nodes instead of a handful
   // (docs/accuracy-nonlinear.md, "The load site"). target_nodes counts the refined surface's vertices.
   int surface_subdivisions = 0;
+  MeshSizing sizing = MeshSizing::Volume;
+  double grading = 0.3;  // sizing surface: size growth per mm of depth (mm/mm, >= 0)
 };
 
 /// Tetrahedralises the closed, outward surface keeping its vertices and faces (TetGen -pqY) with the
-/// volume bound that brings the node count nearest target_nodes (within the attempts). The surface
+/// volume bound (sizing volume) or the scale of the surface-sized field (sizing surface, at least 1) that
+/// brings the node count nearest target_nodes (within the attempts). The surface
 /// vertices are nodes [0, #V); with surface_subdivisions k > 0 the model's surface is the subdivided one
 /// (VolumetricMesh::F, surface_nodes), whose first #V vertices are still the given ones. Throws InvalidInput
 /// for an open/non-manifold/inward surface or a target below the surface's vertex count, SolverError when

@@ -39,6 +39,19 @@ struct VolumetricMesh {
 /// VolumetricSettings::compression by default (docs/accuracy-nonlinear.md, "Compression stiffening").
 inline constexpr double kDefaultVolumetricCompression = 32.0;
 
+/// How a build sizes the interior of the tetrahedral mesh (fem::volumetric_mesh, docs/volumetric-mesh.md).
+/// volume: one TetGen volume bound everywhere, rescaled until the node count is near the target (the interior
+/// can be much finer than the surface). surface: TetGen's sizing function (-m): the size at each surface
+/// vertex is the mean length of its surface edges, growing inwards with depth, so no tetrahedron at the
+/// surface is smaller than its edges and the interior is coarser; the node target is then an upper bound.
+enum class MeshSizing { Volume, Surface };
+const char* to_string(MeshSizing s);
+/// "volume" | "surface"; InvalidInput naming the text otherwise.
+MeshSizing parse_mesh_sizing(const std::string& text);
+inline MeshSizing parse_enum(const std::string& text, MeshSizing*) {
+  return parse_mesh_sizing(text);
+}
+
 struct VolumetricSettings {
   double E_kPa = 10.0;             // Young's modulus, kPa (> 0)
   double nu = 0.45;                // Poisson ratio, (-1, 0.5)
@@ -65,6 +78,7 @@ struct VolumetricSettings {
   DuffingSettings duffing{DuffingMode::Linear};  // Duffing term of the springs (off by default)
   std::vector<Index> fixed;                      // pinned surface nodes
   Index mesh_nodes = 2000;  // node count aimed at when a scene build tetrahedralises the surface (TetGen)
+  MeshSizing mesh_sizing = MeshSizing::Volume;  // how that build sizes the interior
 };
 
 /// The declaration of VolumetricSettings (core/params.hpp): the "parameters" of a volumetric model in a
@@ -74,6 +88,10 @@ template <ParamOf<VolumetricSettings> S, class V>
 void for_each_field(S& s, V&& v) {
   v(ParamSpec{"nodes", "", "node count aimed at when the surface is tetrahedralised (TetGen)"}.at_least(10),
     s.mesh_nodes);
+  v(ParamSpec{"mesh_sizing", "",
+              "interior of that mesh: volume (one volume bound, about `nodes`) or surface (no finer than the "
+              "surface's edges, coarser inside; `nodes` at most; docs/volumetric-mesh.md)"},
+    s.mesh_sizing);
   v(ParamSpec{"density", "g/mm^3", "tissue density (lumped: a quarter of each tetrahedron per corner)"}
         .positive(),
     s.density);

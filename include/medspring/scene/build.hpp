@@ -52,7 +52,7 @@ class SceneLoader {
   /// Linear tetrahedra of a closed surface with about `nodes` nodes, the surface's vertices first and its
   /// triangles as the boundary (TetGen -pqY; the volumetric model kind, issue 23). This default refuses
   /// (a loader without a tetrahedral mesher); the medspring command's and the Python module's mesh.
-  virtual VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes);
+  virtual VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes, MeshSizing sizing);
   /// The watertight junction surface of a vessel tree ("blend": true; the union of its closed path tubes
   /// with rings `spacing` mm apart, 0 = the atom spacing of `plain`, builders' blended_tree_surface);
   /// `notes` receives what it is. This default refuses (a loader without CGAL); the medspring command's

@@ -30,11 +30,11 @@ struct BalloonSurface {
 struct SceneFileAccess {
   std::function<SurfaceMesh(const std::filesystem::path&, LengthUnit)> read_mesh;  // io
   std::function<std::vector<Centerline>(const std::filesystem::path&, LengthUnit, const std::string&)>
-      read_centerlines;                                                        // io
-  std::function<LabelVolume(const std::filesystem::path&)> read_label_volume;  // io
-  std::function<SurfaceMesh(const MaskVolume&)> isosurface;                    // meshing
-  std::function<BalloonSurface(const SurfaceMesh&, Index)> balloon;            // meshing
-  std::function<VolumetricMesh(const SurfaceMesh&, Index)> tetrahedralize;     // fem
+      read_centerlines;                                                                 // io
+  std::function<LabelVolume(const std::filesystem::path&)> read_label_volume;           // io
+  std::function<SurfaceMesh(const MaskVolume&)> isosurface;                             // meshing
+  std::function<BalloonSurface(const SurfaceMesh&, Index)> balloon;                     // meshing
+  std::function<VolumetricMesh(const SurfaceMesh&, Index, MeshSizing)> tetrahedralize;  // fem
   std::function<SurfaceMesh(const CenterlineTree&, const SmrmTree&, double, std::vector<std::string>&)>
       tree_surface;  // builders (CGAL union of the path tubes)
   std::function<std::shared_ptr<const SmrmTree>(const OrganTreeRequest&, std::vector<std::string>&)>
@@ -51,7 +51,7 @@ class CachingSceneLoader : public SceneLoader {
   SurfaceMesh isosurface(const MaskVolume& mask) override;
   /// A balloon built earlier for the same organ and node count is reused (its notes say so).
   SurfaceMesh balloon(const SurfaceMesh& organ, Index nodes, std::vector<std::string>& notes) override;
-  VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes) override;
+  VolumetricMesh tetrahedralize(const SurfaceMesh& organ, Index nodes, MeshSizing sizing) override;
   SurfaceMesh tree_surface(const CenterlineTree& tree, const SmrmTree& plain, double spacing,
                            std::vector<std::string>& notes) override;
   std::shared_ptr<const SmrmTree> organ_tree(const OrganTreeRequest& request,
