@@ -155,6 +155,10 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   require(fit == "nonlinear" || fit == "small-strain", cmd,
           ": --fit must be nonlinear or small-strain (got '", fit, "')");
   st.fit_nonlinear = fit == "nonlinear";
+  const std::string site = args.get_or("site-readout", "node");
+  require(site == "node" || site == "disk-mean", cmd, ": --site-readout must be node or disk-mean (got '",
+          site, "')");
+  st.site_disk_mean = site == "disk-mean";
   st.compression = args.number("compression", st.compression);
   require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
           st.compression, ")");
@@ -285,9 +289,25 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         {"solve_s", secs}};
   }
 
-  std::vector<fem::CalibrationCase> training;
-  for (const auto& c : cases)
-    if (c.train) training.push_back({c.load, c.u_fem, sites[static_cast<std::size_t>(c.site_index)]});
+  // the training cases of kind k; with --site-readout disk-mean their site term is the disk mean on the
+  // model's own surface (a volumetric model's may be refined: its first rows are the organ's nodes)
+  auto training_for = [&](const Kind& k) {
+    std::vector<fem::CalibrationCase> training;
+    for (const auto& c : cases) {
+      if (!c.train) continue;
+      fem::CalibrationCase t{c.load, c.u_fem, sites[static_cast<std::size_t>(c.site_index)]};
+      if (st.site_disk_mean) {
+        t.fem_mean = c.fem_mean;
+        if (k.base == "volumetric") {
+          const VolumetricMesh& vm = volumetric_mesh_of(o);
+          t.mean_weights = fem::disk_mean_weights(vm.X.topRows(vm.surface_nodes), vm.F, c.load);
+        } else
+          t.mean_weights = fem::disk_mean_weights(o.surface.V, o.surface.F, c.load);
+      }
+      training.push_back(std::move(t));
+    }
+    return training;
+  };
 
   json rows = json::array();
   if (kinds.empty()) {
@@ -442,18 +462,22 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     for (bool calibrated : {false, true}) {
       VecX m = VecX::Ones(k.families());
       json fit = nullptr;
+      const std::vector<fem::CalibrationCase> training =
+          calibrated ? training_for(k) : std::vector<fem::CalibrationCase>{};
       if (calibrated) {
-        note(st, cat(o.name, ": calibrating ", k.label()));
+        note(st, cat(o.name, ": calibrating ", k.label(),
+                     " (site read-out: ", st.site_disk_mean ? "disk mean" : "contact node", ")"));
         if (k.base == "volumetric") {  // on the small-strain response: one factorisation per ratio
           const auto t0 = std::chrono::steady_clock::now();
           m = fem::calibrate_scale_and_ratio(
               [&](const VecX& mm, const std::vector<fem::ContactLoad>& ls) {
-                std::vector<MatX3> us = fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
-                for (MatX3& u : us) u = on_organ_surface(o, u);
-                return us;
+                // the model's own surface: the cost reads the organ's nodes (its first rows) and the disk
+                return fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
               },
               training);
-          fit = {{"small_strain_multipliers", {m(0), m(1)}}, {"nonlinear", false}};
+          fit = {{"small_strain_multipliers", {m(0), m(1)}},
+                 {"nonlinear", false},
+                 {"site_readout", st.site_disk_mean ? "disk-mean" : "node"}};
           // then on the full response of the same training loads: the compression coefficient c, which the
           // small-strain response cannot see, and the two scales (docs/accuracy-nonlinear.md, "Calibration of
           // the nonlinear response")
@@ -486,6 +510,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       const BodyPtr body = make_body(o, k, support, m);
       json errs = json::array();
       double sum_rms_rel_held = 0, n_held = 0, sum_rms_rel_sites = 0, n_sites = 0;
+      // held-out site errors (% of the FEM contact displacement / of the FEM disk mean): mean and max
+      double sum_node = 0, max_node = 0, sum_mean = 0, max_mean = 0, max_rms = 0;
       for (const auto& c : cases) {
         MatX3 u;
         double mean_pct = 0;
@@ -522,6 +548,10 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         if (!c.train) {
           sum_rms_rel_held += e.rel(e.rms);
           n_held += 1;
+          const double node_pct = 100 * e.rel(e.contact_error);
+          sum_node += node_pct, max_node = std::max(max_node, node_pct);
+          sum_mean += mean_pct, max_mean = std::max(max_mean, mean_pct);
+          max_rms = std::max(max_rms, 100 * e.rel(e.rms));
         }
         if (static_cast<std::size_t>(c.site_index) >= train_sites) {  // sites no training load touched
           sum_rms_rel_sites += e.rel(e.rms);
@@ -547,6 +577,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                       {"update_us", us},
                       {"held_out_mean_rms_pct", n_held > 0 ? 100 * sum_rms_rel_held / n_held : 0.0},
                       {"held_out_sites_mean_rms_pct", n_sites > 0 ? 100 * sum_rms_rel_sites / n_sites : 0.0},
+                      {"held_out_max_rms_pct", max_rms},
+                      {"held_out_mean_contact_pct", n_held > 0 ? sum_node / n_held : 0.0},
+                      {"held_out_max_contact_pct", max_node},
+                      {"held_out_mean_disk_mean_pct", n_held > 0 ? sum_mean / n_held : 0.0},
+                      {"held_out_max_disk_mean_pct", max_mean},
                       {"cases", errs}});
       if (!fit.is_null()) rows.back()["fit"] = fit;
     }
