@@ -268,6 +268,8 @@ int cmd_calibrate(const Args& args) {
   for (const auto& m : r["models"]) {
     if (!m["calibrated"].get<bool>()) {
       out["default_held_out_mean_rms_pct"] = m["held_out_mean_rms_pct"];
+      out["default_held_out_mean_disk_mean_pct"] = m["held_out_mean_disk_mean_pct"];
+      out["default_held_out_mean_contact_pct"] = m["held_out_mean_contact_pct"];
       continue;
     }
     const auto mult = m["multipliers"].get<std::vector<double>>();
@@ -290,8 +292,9 @@ int cmd_calibrate(const Args& args) {
       out["parameters"]["eta"] = mult[kind == "surface" ? 2 : 4];  // Duffing strength (D-3), default 1
     out["held_out_mean_rms_pct"] = m["held_out_mean_rms_pct"];
     out["held_out_sites_mean_rms_pct"] = m["held_out_sites_mean_rms_pct"];
-    for (const char* key : {"held_out_max_rms_pct", "held_out_mean_contact_pct", "held_out_max_contact_pct",
-                            "held_out_mean_disk_mean_pct", "held_out_max_disk_mean_pct"})
+    for (const char* key :
+         {"update_us", "held_out_max_rms_pct", "held_out_mean_contact_pct", "held_out_max_contact_pct",
+          "held_out_mean_disk_mean_pct", "held_out_max_disk_mean_pct"})
       out[key] = m[key];
     out["cases"] = m["cases"];
   }
