@@ -148,9 +148,18 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   const long long sub = args.integer("surface-subdivisions", 0);
   require(sub >= 0 && sub <= 3, cmd, ": --surface-subdivisions must be in [0, 3] (got ", sub, ")");
   st.surface_subdivisions = static_cast<int>(sub);
-  st.train_force = args.number("train-force", 0.0);
-  require(std::isfinite(st.train_force) && (st.train_force > 0 || !args.get("train-force")), cmd,
-          ": --train-force must be > 0 N (got ", st.train_force, ")");
+  if (auto tf = args.get("train-force")) {  // one force or a list (the training sites' loads)
+    std::stringstream ss(*tf);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(item.c_str(), &end);
+      require(end && end != item.c_str() && *end == '\0' && std::isfinite(v) && v > 0, cmd,
+              ": --train-force must be > 0 N or a list of such (got '", item, "')");
+      st.train_forces.push_back(v);
+    }
+    require(!st.train_forces.empty(), cmd, ": --train-force must list at least one force");
+  }
   const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
   require(fit == "nonlinear" || fit == "small-strain", cmd,
           ": --fit must be nonlinear or small-strain (got '", fit, "')");
@@ -180,12 +189,14 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                                      : st.quick         ? std::vector<double>{0.5}
                                                         : std::vector<double>{0.2, 0.5, 1.0};
   // training force: 0.5 N, or the smallest of --forces without it (large-strain runs train on small loads)
-  const double train_force = st.train_force > 0 ? st.train_force
-                             : std::find(forces.begin(), forces.end(), 0.5) != forces.end()
-                                 ? 0.5
-                                 : *std::min_element(forces.begin(), forces.end());
-  require(std::find(forces.begin(), forces.end(), train_force) != forces.end(), "accuracy: --train-force ",
-          train_force, " N is not one of the forces");
+  const std::vector<double> train_forces =
+      !st.train_forces.empty() ? st.train_forces
+      : std::find(forces.begin(), forces.end(), 0.5) != forces.end()
+          ? std::vector<double>{0.5}
+          : std::vector<double>{*std::min_element(forces.begin(), forces.end())};
+  for (double tf : train_forces)
+    require(std::find(forces.begin(), forces.end(), tf) != forces.end(), "accuracy: --train-force ", tf,
+            " N is not one of the forces");
   // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
   const std::size_t train_sites = st.quick ? 1 : 2;
   json out = {{"organ", o.name},
@@ -235,7 +246,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
              {},
              0,
              false};
-      c.train = si < train_sites && F == train_force;
+      c.train =
+          si < train_sites && std::find(train_forces.begin(), train_forces.end(), F) != train_forces.end();
       bool cached = false;
       note(st, cat(o.name, ": FEM site ", si, ", ", F, " N"));
       MatX3 u_nodes;
