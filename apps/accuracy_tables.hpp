@@ -83,7 +83,11 @@ struct Settings {
   double compression = kDefaultVolumetricCompression;
   // --fit nonlinear (default) | small-strain: the volumetric calibration refined on the full response
   bool fit_nonlinear = true;
-  double train_force = 0;      // --train-force (N): the training sites' load (0: 0.5 N or the smallest force)
+  // --train-force F[,F...] (N): the training sites' loads (empty: 0.5 N or the smallest force)
+  std::vector<double> train_forces;
+  // --site-readout node (default) | disk-mean: the site term of the calibration objective reads the contact
+  // node or the mean over the loaded disk (docs/accuracy-calibration.md)
+  bool site_disk_mean = false;
   std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;

@@ -68,7 +68,8 @@ int cmd_accuracy(const Args& args) {
                       "surface-subdivisions",
                       "interior-sizing",
                       "fit",
-                      "train-force"});
+                      "train-force",
+                      "site-readout"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -228,7 +229,8 @@ int cmd_accuracy(const Args& args) {
 
 int cmd_calibrate(const Args& args) {
   args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
-                      "compression", "surface-subdivisions", "interior-sizing", "fit", "train-force"});
+                      "compression", "surface-subdivisions", "interior-sizing", "fit", "train-force",
+                      "site-readout"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));
@@ -268,6 +270,8 @@ int cmd_calibrate(const Args& args) {
   for (const auto& m : r["models"]) {
     if (!m["calibrated"].get<bool>()) {
       out["default_held_out_mean_rms_pct"] = m["held_out_mean_rms_pct"];
+      out["default_held_out_mean_disk_mean_pct"] = m["held_out_mean_disk_mean_pct"];
+      out["default_held_out_mean_contact_pct"] = m["held_out_mean_contact_pct"];
       continue;
     }
     const auto mult = m["multipliers"].get<std::vector<double>>();
@@ -290,6 +294,10 @@ int cmd_calibrate(const Args& args) {
       out["parameters"]["eta"] = mult[kind == "surface" ? 2 : 4];  // Duffing strength (D-3), default 1
     out["held_out_mean_rms_pct"] = m["held_out_mean_rms_pct"];
     out["held_out_sites_mean_rms_pct"] = m["held_out_sites_mean_rms_pct"];
+    for (const char* key :
+         {"update_us", "held_out_max_rms_pct", "held_out_mean_contact_pct", "held_out_max_contact_pct",
+          "held_out_mean_disk_mean_pct", "held_out_max_disk_mean_pct"})
+      out[key] = m[key];
     out["cases"] = m["cases"];
   }
   if (args.flag("json")) {
@@ -311,11 +319,18 @@ int cmd_calibrate(const Args& args) {
             << " % of the FEM contact displacement (default parameters: "
             << out["default_held_out_mean_rms_pct"].get<double>()
             << " %); at the sites no training load touched: "
-            << out["held_out_sites_mean_rms_pct"].get<double>() << " %\n";
+            << out["held_out_sites_mean_rms_pct"].get<double>() << " %\n"
+            << "  held-out site error, mean / max: contact node "
+            << out["held_out_mean_contact_pct"].get<double>() << " / "
+            << out["held_out_max_contact_pct"].get<double>() << " %, disk mean "
+            << out["held_out_mean_disk_mean_pct"].get<double>() << " / "
+            << out["held_out_max_disk_mean_pct"].get<double>() << " %\n";
   for (const auto& c : out["cases"])
     if (c.contains("train") && !c["train"].get<bool>())
       std::cout << "  held out: site " << c["site"] << ", " << c["force_N"].get<double>() << " N: contact "
-                << c["contact_error_pct"].get<double>() << " %, RMS " << c["rms_pct"].get<double>() << " %\n";
+                << c["contact_error_pct"].get<double>() << " %, disk mean "
+                << c["disk_mean_error_pct"].get<double>() << " %, RMS " << c["rms_pct"].get<double>()
+                << " %\n";
   return 0;
 }
 

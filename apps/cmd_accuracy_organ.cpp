@@ -151,13 +151,26 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   require(sub >= 0 && sub <= 3, cmd, ": --surface-subdivisions must be in [0, 3] (got ", sub, ")");
   st.surface_subdivisions = static_cast<int>(sub);
   st.interior_sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
-  st.train_force = args.number("train-force", 0.0);
-  require(std::isfinite(st.train_force) && (st.train_force > 0 || !args.get("train-force")), cmd,
-          ": --train-force must be > 0 N (got ", st.train_force, ")");
+  if (auto tf = args.get("train-force")) {  // one force or a list (the training sites' loads)
+    std::stringstream ss(*tf);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(item.c_str(), &end);
+      require(end && end != item.c_str() && *end == '\0' && std::isfinite(v) && v > 0, cmd,
+              ": --train-force must be > 0 N or a list of such (got '", item, "')");
+      st.train_forces.push_back(v);
+    }
+    require(!st.train_forces.empty(), cmd, ": --train-force must list at least one force");
+  }
   const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
   require(fit == "nonlinear" || fit == "small-strain", cmd,
           ": --fit must be nonlinear or small-strain (got '", fit, "')");
   st.fit_nonlinear = fit == "nonlinear";
+  const std::string site = args.get_or("site-readout", "node");
+  require(site == "node" || site == "disk-mean", cmd, ": --site-readout must be node or disk-mean (got '",
+          site, "')");
+  st.site_disk_mean = site == "disk-mean";
   st.compression = args.number("compression", st.compression);
   require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
           st.compression, ")");
@@ -179,12 +192,14 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                                      : st.quick         ? std::vector<double>{0.5}
                                                         : std::vector<double>{0.2, 0.5, 1.0};
   // training force: 0.5 N, or the smallest of --forces without it (large-strain runs train on small loads)
-  const double train_force = st.train_force > 0 ? st.train_force
-                             : std::find(forces.begin(), forces.end(), 0.5) != forces.end()
-                                 ? 0.5
-                                 : *std::min_element(forces.begin(), forces.end());
-  require(std::find(forces.begin(), forces.end(), train_force) != forces.end(), "accuracy: --train-force ",
-          train_force, " N is not one of the forces");
+  const std::vector<double> train_forces =
+      !st.train_forces.empty() ? st.train_forces
+      : std::find(forces.begin(), forces.end(), 0.5) != forces.end()
+          ? std::vector<double>{0.5}
+          : std::vector<double>{*std::min_element(forces.begin(), forces.end())};
+  for (double tf : train_forces)
+    require(std::find(forces.begin(), forces.end(), tf) != forces.end(), "accuracy: --train-force ", tf,
+            " N is not one of the forces");
   // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
   const std::size_t train_sites = st.quick ? 1 : 2;
   json out = {{"organ", o.name},
@@ -234,7 +249,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
              {},
              0,
              false};
-      c.train = si < train_sites && F == train_force;
+      c.train =
+          si < train_sites && std::find(train_forces.begin(), train_forces.end(), F) != train_forces.end();
       bool cached = false;
       note(st, cat(o.name, ": FEM site ", si, ", ", F, " N"));
       MatX3 u_nodes;
@@ -288,9 +304,25 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         {"solve_s", secs}};
   }
 
-  std::vector<fem::CalibrationCase> training;
-  for (const auto& c : cases)
-    if (c.train) training.push_back({c.load, c.u_fem, sites[static_cast<std::size_t>(c.site_index)]});
+  // the training cases of kind k; with --site-readout disk-mean their site term is the disk mean on the
+  // model's own surface (a volumetric model's may be refined: its first rows are the organ's nodes)
+  auto training_for = [&](const Kind& k) {
+    std::vector<fem::CalibrationCase> training;
+    for (const auto& c : cases) {
+      if (!c.train) continue;
+      fem::CalibrationCase t{c.load, c.u_fem, sites[static_cast<std::size_t>(c.site_index)]};
+      if (st.site_disk_mean) {
+        t.fem_mean = c.fem_mean;
+        if (k.base == "volumetric") {
+          const VolumetricMesh& vm = volumetric_mesh_of(o);
+          t.mean_weights = fem::disk_mean_weights(vm.X.topRows(vm.surface_nodes), vm.F, c.load);
+        } else
+          t.mean_weights = fem::disk_mean_weights(o.surface.V, o.surface.F, c.load);
+      }
+      training.push_back(std::move(t));
+    }
+    return training;
+  };
 
   json rows = json::array();
   if (kinds.empty()) {
@@ -447,18 +479,22 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     for (bool calibrated : {false, true}) {
       VecX m = VecX::Ones(k.families());
       json fit = nullptr;
+      const std::vector<fem::CalibrationCase> training =
+          calibrated ? training_for(k) : std::vector<fem::CalibrationCase>{};
       if (calibrated) {
-        note(st, cat(o.name, ": calibrating ", k.label()));
+        note(st, cat(o.name, ": calibrating ", k.label(),
+                     " (site read-out: ", st.site_disk_mean ? "disk mean" : "contact node", ")"));
         if (k.base == "volumetric") {  // on the small-strain response: one factorisation per ratio
           const auto t0 = std::chrono::steady_clock::now();
           m = fem::calibrate_scale_and_ratio(
               [&](const VecX& mm, const std::vector<fem::ContactLoad>& ls) {
-                std::vector<MatX3> us = fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
-                for (MatX3& u : us) u = on_organ_surface(o, u);
-                return us;
+                // the model's own surface: the cost reads the organ's nodes (its first rows) and the disk
+                return fem::spring_displacement_linear(*make_body(o, k, support, mm), ls);
               },
               training);
-          fit = {{"small_strain_multipliers", {m(0), m(1)}}, {"nonlinear", false}};
+          fit = {{"small_strain_multipliers", {m(0), m(1)}},
+                 {"nonlinear", false},
+                 {"site_readout", st.site_disk_mean ? "disk-mean" : "node"}};
           // then on the full response of the same training loads: the compression coefficient c, which the
           // small-strain response cannot see, and the two scales (docs/accuracy-nonlinear.md, "Calibration of
           // the nonlinear response")
@@ -491,6 +527,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       const BodyPtr body = make_body(o, k, support, m);
       json errs = json::array();
       double sum_rms_rel_held = 0, n_held = 0, sum_rms_rel_sites = 0, n_sites = 0;
+      // held-out site errors (% of the FEM contact displacement / of the FEM disk mean): mean and max
+      double sum_node = 0, max_node = 0, sum_mean = 0, max_mean = 0, max_rms = 0;
       for (const auto& c : cases) {
         MatX3 u;
         double mean_pct = 0;
@@ -527,6 +565,10 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         if (!c.train) {
           sum_rms_rel_held += e.rel(e.rms);
           n_held += 1;
+          const double node_pct = 100 * e.rel(e.contact_error);
+          sum_node += node_pct, max_node = std::max(max_node, node_pct);
+          sum_mean += mean_pct, max_mean = std::max(max_mean, mean_pct);
+          max_rms = std::max(max_rms, 100 * e.rel(e.rms));
         }
         if (static_cast<std::size_t>(c.site_index) >= train_sites) {  // sites no training load touched
           sum_rms_rel_sites += e.rel(e.rms);
@@ -552,6 +594,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                       {"update_us", us},
                       {"held_out_mean_rms_pct", n_held > 0 ? 100 * sum_rms_rel_held / n_held : 0.0},
                       {"held_out_sites_mean_rms_pct", n_sites > 0 ? 100 * sum_rms_rel_sites / n_sites : 0.0},
+                      {"held_out_max_rms_pct", max_rms},
+                      {"held_out_mean_contact_pct", n_held > 0 ? sum_node / n_held : 0.0},
+                      {"held_out_max_contact_pct", max_node},
+                      {"held_out_mean_disk_mean_pct", n_held > 0 ? sum_mean / n_held : 0.0},
+                      {"held_out_max_disk_mean_pct", max_mean},
                       {"cases", errs}});
       if (!fit.is_null()) rows.back()["fit"] = fit;
     }

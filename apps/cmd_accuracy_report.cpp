@@ -137,7 +137,14 @@ std::string markdown(const json& j) {
            << " evaluations)";
       md << "; " << pct(f["seconds"].get<double>()) << " s. Held-out mean RMS "
          << pct(r["held_out_mean_rms_pct"].get<double>()) << " %, at the sites no training load touched "
-         << pct(r["held_out_sites_mean_rms_pct"].get<double>()) << " %.\n";
+         << pct(r["held_out_sites_mean_rms_pct"].get<double>()) << " %";
+      if (r.contains("held_out_mean_disk_mean_pct"))  // docs/accuracy-calibration.md
+        md << "; site error (fit on the " << f.value("site_readout", std::string("node"))
+           << " read-out), mean / max: contact node " << pct(r["held_out_mean_contact_pct"].get<double>())
+           << " / " << pct(r["held_out_max_contact_pct"].get<double>()) << " %, disk mean "
+           << pct(r["held_out_mean_disk_mean_pct"].get<double>()) << " / "
+           << pct(r["held_out_max_disk_mean_pct"].get<double>()) << " %";
+      md << ".\n";
     }
   }
   for (const auto& v : j.value("vessels", json::array())) {

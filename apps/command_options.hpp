@@ -66,10 +66,17 @@ inline OptionSpec fit_option(const char* def) {
 }
 inline const OptionSpec kTrainForce{
     .name = "train-force",
-    .value = "F",
+    .value = "F[,F...]",
     .unit = "N",
     .def = "0.5, or the smallest of --forces",
-    .help = "the load of the two training sites (one of the forces); every other case is held out"};
+    .help = "the load(s) of the two training sites (among the forces); every other case is held out"};
+inline const OptionSpec kSiteReadout{
+    .name = "site-readout",
+    .value = "node|disk-mean",
+    .def = "node",
+    .help =
+        "the calibration's site term: the contact node, or the mean displacement over the loaded disk "
+        "(the FEM's read-out; docs/accuracy-calibration.md)"};
 inline const OptionSpec kUnit{
     .name = "unit", .value = "mm|cm|m", .help = "length unit of the input's coordinates"};
 inline const OptionSpec kLabel{

@@ -133,6 +133,36 @@ Vec3 disk_mean_linear(const MatX3& V, const MatX3i& F, const ContactLoad& load, 
   return (u.transpose() * w);
 }
 
+std::vector<std::pair<Index, double>> disk_mean_weights(const MatX3& V, const MatX3i& F,
+                                                        const ContactLoad& load) {
+  const VecX w = disk_load_linear(V, F, load.centre, load.radius, Vec3(1, 0, 0)).col(0);
+  std::vector<std::pair<Index, double>> out;
+  for (Index i = 0; i < w.size(); ++i)
+    if (w[i] != 0) out.emplace_back(i, w[i]);
+  require(!out.empty(), "disk mean: the disk of radius ", load.radius, " mm at (", load.centre.transpose(),
+          ") covers no surface triangle");
+  return out;
+}
+
+Vec3 site_readout(const CalibrationCase& c, const MatX3& u) {
+  if (c.mean_weights.empty()) {
+    require(c.contact >= 0 && c.contact < u.rows(), "calibrate: contact node ", c.contact,
+            " is not among the ", u.rows(), " rows of the response");
+    return u.row(c.contact).transpose();
+  }
+  Vec3 m = Vec3::Zero();
+  for (const auto& [i, w] : c.mean_weights) {
+    require(i >= 0 && i < u.rows(), "calibrate: disk-mean weight on row ", i, ", the response has ",
+            u.rows());
+    m += w * u.row(i).transpose();
+  }
+  return m;
+}
+
+Vec3 fem_site_readout(const CalibrationCase& c) {
+  return c.mean_weights.empty() ? Vec3(c.u_fem.row(c.contact).transpose()) : c.fem_mean;
+}
+
 namespace {
 
 // The disk load as nodal forces on the model's degrees of freedom (through the body's force map).
@@ -289,11 +319,12 @@ double calibration_cost(const Response& response, const VecX& m,
     } catch (const SolverError&) {
       return std::numeric_limits<double>::infinity();
     }
-    require(u.rows() == t.u_fem.rows(), "calibrate: the response has ", u.rows(), " surface nodes, the FEM ",
+    require(u.rows() >= t.u_fem.rows(), "calibrate: the response has ", u.rows(), " surface nodes, the FEM ",
             t.u_fem.rows());
     const double scale = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
-    c += (u - t.u_fem).squaredNorm() / (scale * scale * static_cast<double>(u.rows()));
-    c += (u.row(t.contact) - t.u_fem.row(t.contact)).squaredNorm() / (scale * scale);
+    const Eigen::Index n = t.u_fem.rows();
+    c += (u.topRows(n) - t.u_fem).squaredNorm() / (scale * scale * static_cast<double>(n));
+    c += (site_readout(t, u) - fem_site_readout(t)).squaredNorm() / (scale * scale);
   }
   return c;
 }
@@ -339,22 +370,27 @@ VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<
     require(us.size() == training.size(), "calibrate: the response returned ", us.size(), " fields for ",
             training.size(), " loads");
     // the cost of a / c times u is quadratic in a: minimised in closed form
+    // the site read-out (node or disk mean) is linear in u, so it scales with a too
     double uu = 0, uU = 0;
     for (std::size_t i = 0; i < training.size(); ++i) {
       const auto& t = training[i];
-      const MatX3& u = us[i];
+      const Eigen::Index n = t.u_fem.rows();
+      require(us[i].rows() >= n, "calibrate: the response has ", us[i].rows(), " surface nodes, the FEM ", n);
+      const auto u = us[i].topRows(n);
+      const Vec3 site = site_readout(t, us[i]), site_fem = fem_site_readout(t);
       const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
-      const double wn = 1.0 / (s * s * static_cast<double>(u.rows())), wc = 1.0 / (s * s);
-      uu += wn * u.squaredNorm() + wc * u.row(t.contact).squaredNorm();
-      uU += wn * (u.array() * t.u_fem.array()).sum() + wc * u.row(t.contact).dot(t.u_fem.row(t.contact));
+      const double wn = 1.0 / (s * s * static_cast<double>(n)), wc = 1.0 / (s * s);
+      uu += wn * u.squaredNorm() + wc * site.squaredNorm();
+      uU += wn * (u.array() * t.u_fem.array()).sum() + wc * site.dot(site_fem);
     }
     const double a = uU > 0 && uu > 0 ? uU / uu : 1.0;  // a = 1 / c
     double cst = 0;
     for (std::size_t i = 0; i < training.size(); ++i) {
       const auto& t = training[i];
+      const Eigen::Index n = t.u_fem.rows();
       const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
-      cst += (a * us[i] - t.u_fem).squaredNorm() / (s * s * static_cast<double>(us[i].rows()));
-      cst += (a * us[i].row(t.contact) - t.u_fem.row(t.contact)).squaredNorm() / (s * s);
+      cst += (a * us[i].topRows(n) - t.u_fem).squaredNorm() / (s * s * static_cast<double>(n));
+      cst += (a * site_readout(t, us[i]) - fem_site_readout(t)).squaredNorm() / (s * s);
     }
     if (cst < best_cost) {
       best_cost = cst;

@@ -110,6 +110,12 @@ TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
   EXPECT_NE(run("accuracy --quick --E-kPa -3 --out '" + out.string() + "'", &err), 0);
   EXPECT_NE(err.find("E must be > 0"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(out));
+  // the calibration's site read-out and training loads (docs/accuracy-calibration.md), refused before a solve
+  EXPECT_NE(run("accuracy --quick --site-readout centre --out '" + out.string() + "'", &err), 0);
+  EXPECT_NE(err.find("--site-readout must be node or disk-mean (got 'centre')"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_NE(run("calibrate --organ phantom --kind volumetric --train-force 0.5,x", &err), 0);
+  EXPECT_NE(err.find("--train-force must be > 0 N or a list of such (got 'x')"), std::string::npos) << err;
 }
 
 // The aorta as a solid organ (issue 23, docs/accuracy-volumetric.md "The aorta as a solid organ"): surface

@@ -122,3 +122,87 @@ TEST(Calibration, NonlinearFitRecoversAKnownCompressionCoefficient) {
   EXPECT_NEAR(f.m(1), 1.0, 0.25);
   EXPECT_LT(r.cost, 0.1 * r.start_cost);
 }
+
+// The disk-mean site read-out of the calibration objective (docs/accuracy-calibration.md): with
+// mean_weights, the site term is |sum_i w_i u_i - fem_mean|^2 instead of the contact node's, the weights
+// may reach rows beyond the FEM-sampled ones (a refined model surface), and a fit on it matches the disk
+// mean where a fit on the node chases a node artefact.
+TEST(Calibration, DiskMeanReadoutIsTheObjectivesSiteTerm) {
+  // 4 FEM-sampled rows + 1 row of a refined model surface (only the disk mean reads it)
+  MatX3 A(5, 3);
+  A << 0, 0, -2.0,   //
+      0.1, 0, -1.5,  //
+      0, 0.2, -1.0,  //
+      0, 0, -0.3,    //
+      0, 0, -1.8;
+  const double s_true = 1.25;
+  const fem::Response r = [&](const VecX& m, const fem::ContactLoad&) -> MatX3 { return A / m(0); };
+  const fem::BatchResponse batch = [&](const VecX& m, const std::vector<fem::ContactLoad>& ls) {
+    return std::vector<MatX3>(ls.size(), A / m(0));
+  };
+  fem::CalibrationCase node;
+  node.u_fem = A.topRows(4) / s_true;
+  node.u_fem.row(0) *= 1.3;  // a node artefact: the FEM's contact node is off the model's family
+  node.contact = 0;
+  fem::CalibrationCase mean = node;
+  mean.mean_weights = {{0, 0.4}, {1, 0.2}, {4, 0.4}};
+  mean.fem_mean = (0.4 * A.row(0) + 0.2 * A.row(1) + 0.4 * A.row(4)).transpose() / s_true;
+
+  // the objective: the surface term over the 4 sampled rows plus the disk-mean term, by hand
+  VecX m(1);
+  m << 1.0;
+  const double scale = node.u_fem.rowwise().norm().maxCoeff();
+  const double surface = (A.topRows(4) - node.u_fem).squaredNorm() / (4 * scale * scale);
+  const Vec3 dm = (0.4 * A.row(0) + 0.2 * A.row(1) + 0.4 * A.row(4)).transpose() - mean.fem_mean;
+  EXPECT_NEAR(fem::calibration_cost(r, m, {mean}), surface + dm.squaredNorm() / (scale * scale), 1e-12);
+  const Vec3 dn = (A.row(0) - node.u_fem.row(0)).transpose();
+  EXPECT_NEAR(fem::calibration_cost(r, m, {node}), surface + dn.squaredNorm() / (scale * scale), 1e-12);
+  EXPECT_NEAR((fem::site_readout(mean, A) - fem::fem_site_readout(mean)).norm(), dm.norm(), 1e-12);
+
+  // fits on the two read-outs: the optimum of the scale s (u = A / s) in closed form, a = 1 / s minimising
+  // wn sum_i |a A_i - U_i|^2 + wc |a S - S_fem|^2 over the sampled rows i and the site read-out S. The
+  // artefact pulls the node fit far off s_true; the disk-mean fit only through row 0 of the surface term.
+  auto optimum = [&](const Vec3& S, const Vec3& S_fem) {
+    const double wn = 1.0 / 4, wc = 1.0;
+    const double num = wn * (A.topRows(4).array() * node.u_fem.array()).sum() + wc * S.dot(S_fem),
+                 den = wn * A.topRows(4).squaredNorm() + wc * S.squaredNorm();
+    return den / num;
+  };
+  const double s_mean = optimum(fem::site_readout(mean, A), mean.fem_mean),
+               s_node = optimum(A.row(0).transpose(), node.u_fem.row(0).transpose());
+  ASSERT_GT(std::abs(s_mean - s_node), 0.1);  // the two objectives differ
+  const VecX fm = fem::calibrate_scale_and_ratio(batch, {mean}),
+             fn = fem::calibrate_scale_and_ratio(batch, {node});
+  EXPECT_NEAR(fm(0), s_mean, 1e-9 * s_mean);  // closed form in the scale
+  EXPECT_NEAR(fn(0), s_node, 1e-9 * s_node);
+  EXPECT_NEAR(fem::calibrate_multipliers(r, 1, {mean})(0), s_mean, 1e-3 * s_mean);  // golden section
+  EXPECT_NEAR(fem::calibrate_multipliers(r, 1, {node})(0), s_node, 1e-3 * s_node);
+  EXPECT_LT(std::abs(s_mean - s_true), 0.5 * std::abs(s_node - s_true));
+
+  // a weight on a row the response lacks is refused, naming the row
+  fem::CalibrationCase bad = mean;
+  bad.mean_weights.push_back({7, 0.1});
+  EXPECT_THROW(fem::site_readout(bad, A), InvalidInput);
+  EXPECT_THROW(fem::calibration_cost(r, m, {bad}), InvalidInput);
+}
+
+// The disk-mean weights of a disk on the top face of a box: they sum to 1, sit on the top face's nodes
+// inside the disk's reach, and their centroid is the disk centre.
+TEST(Calibration, DiskMeanWeightsSumToOneOnTheDisk) {
+  const double L = 20;
+  const SurfaceMesh box = box_surface(8, L);
+  const fem::ContactLoad load{Vec3(10, 10, L), Vec3(0, 0, -0.5), 4.0};
+  const auto w = fem::disk_mean_weights(box.V, box.F, load);
+  double sum = 0;
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& [i, wi] : w) {
+    EXPECT_NEAR(box.V(i, 2), L, 1e-9);
+    EXPECT_LT((box.V.row(i).transpose() - load.centre).norm(), load.radius + 2.5 * L / 8);
+    sum += wi;
+    centroid += wi * box.V.row(i).transpose();
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+  EXPECT_LT((centroid - load.centre).norm(), 0.01);
+  EXPECT_THROW(fem::disk_mean_weights(box.V, box.F, {Vec3(100, 100, 100), Vec3(0, 0, -1), 1.0}),
+               InvalidInput);
+}

@@ -130,14 +130,32 @@ SurfaceError compare(const MatX3& u_model, const MatX3& u_fem, Index contact);
 /// Calibration (docs/accuracy.md): multipliers m (one per stiffness family of the model) fitted in log
 /// space by coordinate descent (golden section per family over [1e-3, 1e3], then a second sweep within
 /// a factor 10) to minimise, over the training loads, the mean squared surface error plus the squared
-/// contact-node error, both relative to the largest FEM displacement of the load. response(m, load) is
-/// the model's surface displacement (#S x 3) with its families scaled by m; a SolverError counts as an
+/// site error (CalibrationCase), both relative to the largest FEM displacement of the load. response(m, load)
+/// is the model's surface displacement (#S x 3) with its families scaled by m; a SolverError counts as an
 /// infinite cost. Returns the multipliers.
+///
+/// The site term reads the contact node by default. With `mean_weights` it reads the disk mean instead
+/// (docs/accuracy-calibration.md): the model's mean displacement over the loaded disk, sum_i w_i u_i over
+/// the response's rows, against the FEM's (`fem_mean`, OrganReference's disk_mean), as the FEM's own
+/// read-out is. The response may have more rows than u_fem (a refined model surface, the FEM-sampled nodes
+/// first): the surface and node terms use its first u_fem.rows() rows, the disk mean all of them.
 struct CalibrationCase {
   ContactLoad load;
-  MatX3 u_fem;        // FEM displacement of the surface nodes
-  Index contact = 0;  // surface node nearest the disk centre
+  MatX3 u_fem;                                           // FEM displacement of the surface nodes
+  Index contact = 0;                                     // surface node nearest the disk centre
+  std::vector<std::pair<Index, double>> mean_weights{};  // (response row, weight): the disk mean; empty: node
+  Vec3 fem_mean = Vec3::Zero();                          // the FEM's disk mean (with mean_weights)
 };
+
+/// The disk-mean weights of `load` on the linear triangles (V, F): the nonzero (vertex, w_i) of
+/// disk_load_linear / |F|, summing to 1 (disk_mean_linear's weights), for CalibrationCase::mean_weights.
+std::vector<std::pair<Index, double>> disk_mean_weights(const MatX3& V, const MatX3i& F,
+                                                        const ContactLoad& load);
+
+/// The case's site read-out of a response u: the contact node's displacement, or the disk mean when the case
+/// has mean_weights; and the FEM's (u_fem at the contact node, or fem_mean).
+Vec3 site_readout(const CalibrationCase& c, const MatX3& u);
+Vec3 fem_site_readout(const CalibrationCase& c);
 using Response = std::function<MatX3(const VecX& multipliers, const ContactLoad& load)>;
 VecX calibrate_multipliers(const Response& response, Index families,
                            const std::vector<CalibrationCase>& training, int sweeps = 2);
@@ -154,7 +172,8 @@ VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<
                                int evaluations = 18);
 
 /// The cost calibrate_multipliers minimises, of multipliers m over the training loads (mean squared surface
-/// error plus the squared contact-node error, each relative to the load's largest FEM displacement);
+/// error plus the squared site error, contact node or disk mean as the case reads it, each relative to the
+/// load's largest FEM displacement);
 /// infinite where the response throws SolverError.
 double calibration_cost(const Response& response, const VecX& m,
                         const std::vector<CalibrationCase>& training);
