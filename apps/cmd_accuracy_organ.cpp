@@ -118,68 +118,6 @@ double median_update_us(const BodyPtr& body, const Kind& k, Index contact, const
 
 }  // namespace
 
-// --kinds surface,hybrid,volumetric (default all) and --nodes N (volumetric node count, default 2000).
-void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
-  if (auto k = args.get("kinds")) {
-    std::stringstream ss(*k);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-      require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing" ||
-                  item == "volumetric-corrected",
-              cmd, ": --kinds: unknown kind '", item,
-              "' (expected surface, hybrid, volumetric, volumetric-duffing, volumetric-corrected)");
-      st.kinds.push_back(item);
-    }
-    require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
-  }
-  if (auto f = args.get("forces")) {
-    std::stringstream ss(*f);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-      char* end = nullptr;
-      const double v = std::strtod(item.c_str(), &end);
-      require(end && *end == '\0' && std::isfinite(v) && v > 0 && v <= 100, cmd, ": --forces: '", item,
-              "' is not a force in (0, 100] N");
-      st.forces.push_back(v);
-    }
-    require(!st.forces.empty(), cmd, ": --forces must list at least one force");
-  }
-  const long long nodes = args.integer("nodes", 2000);
-  require(nodes >= 10 && nodes <= 200000, cmd, ": --nodes must be in [10, 200000] (got ", nodes, ")");
-  st.volumetric_nodes = static_cast<Index>(nodes);
-  const long long sub = args.integer("surface-subdivisions", 0);
-  require(sub >= 0 && sub <= 3, cmd, ": --surface-subdivisions must be in [0, 3] (got ", sub, ")");
-  st.surface_subdivisions = static_cast<int>(sub);
-  st.interior_sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
-  if (auto tf = args.get("train-force")) {  // one force or a list (the training sites' loads)
-    std::stringstream ss(*tf);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-      char* end = nullptr;
-      const double v = std::strtod(item.c_str(), &end);
-      require(end && end != item.c_str() && *end == '\0' && std::isfinite(v) && v > 0, cmd,
-              ": --train-force must be > 0 N or a list of such (got '", item, "')");
-      st.train_forces.push_back(v);
-    }
-    require(!st.train_forces.empty(), cmd, ": --train-force must list at least one force");
-  }
-  const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
-  require(fit == "nonlinear" || fit == "small-strain", cmd,
-          ": --fit must be nonlinear or small-strain (got '", fit, "')");
-  st.fit_nonlinear = fit == "nonlinear";
-  const std::string site = args.get_or("site-readout", "node");
-  require(site == "node" || site == "disk-mean", cmd, ": --site-readout must be node or disk-mean (got '",
-          site, "')");
-  st.site_disk_mean = site == "disk-mean";
-  st.compression = args.number("compression", st.compression);
-  require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
-          st.compression, ")");
-}
-
-void note(const Settings& s, const std::string& line) {
-  if (!s.quiet) std::cerr << line << std::endl;
-}
-
 // Everything measured on one organ.
 json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind> kinds, bool convergence) {
   const Frame f = principal_frame(o.surface.V);

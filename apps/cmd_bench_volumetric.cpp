@@ -1,4 +1,4 @@
-// `medspring bench` cases of the volumetric spring kidney (issue 23, docs/volumetric.md "Speed"): the
+// `medspring bench` cases of the volumetric spring kidney (issue 23, docs/volumetric-speed.md): the
 // kidney phantom meshed inside by TetGen to about 500, 1,000 and 2,000 nodes, 10 kPa, nu = 0.45, supports on
 // the bottom 20 %, 0.5 N on the top node; one update = Simulation::update (a 0.5 ms frame with the sub-steps
 // its stable step needs). The same set-up as bench/volumetric_bench.cpp. Needs the fem layer (TetGen).

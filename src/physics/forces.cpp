@@ -110,7 +110,7 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
   double* crows = local ? local->scratch + n + m.volume.size() : nullptr;
   if (m.volume.size() == 0) return with_compression(m, X, Fo, stiffening, stiff, crows);
   if (stiffening && local && m.volume.rest_rows.size() == 4 * m.volume.packed.size() && w2 > 0) {
-    // Local stiffening (docs/volumetric.md "Stable step"): with K_t(x) <= s_t K_t(x0) per term (the
+    // Local stiffening (docs/volumetric-speed.md "Stable step"): with K_t(x) <= s_t K_t(x0) per term (the
     // assumption of the global rule), K(x) <= s_springs K(x0) + sum_t (s_t - 1)+ K_t(x0), so by Weyl
     // omega^2 <= s_springs omega_rest^2 + the Gershgorin bound of the sum, row_max. Never above the global
     // rule max(s_springs, s_terms), never below s_springs: scattered only where that range holds more

@@ -120,7 +120,7 @@ void finalize(Model& m) {
   }
   if (m.volume.size() > 0) {
     // The records alone: letting them own springs too (plan_owned_springs, the fused pass) measured
-    // slower than the packed volume pass followed by the plain spring pass (docs/volumetric.md, "Speed").
+    // slower than the packed volume pass followed by the plain spring pass (docs/volumetric-speed.md).
     finalize_volume_terms(m.volume, m.x0, w);
     set_volume_rest_rows(m.volume, m.x0, m.mass, m.fixed);  // the stable step's local stiffening
   }

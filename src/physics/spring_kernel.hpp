@@ -114,7 +114,7 @@ int advance_nodes(const Model& m, State& st, double h, double vmax2, const Index
 /// internal_forces (forces.hpp) with the stiffening max computed only when `stiffening` (else 1 is
 /// returned): the step needs it from the last force evaluation of a frame only.
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
-/// The local stiffening of a model with volume terms (issue 23, docs/volumetric.md "Stable step"):
+/// The local stiffening of a model with volume terms (issue 23, docs/volumetric-speed.md "Stable step"):
 /// scratch of stiff_rows_size(#N, #T, #C) doubles (State::stiff_rows: #N + #T for the volume terms' rule, 6
 /// #N for the compression terms' bound after it), and the frame step and safety of the step that will use the
 /// stiffening.

@@ -1,4 +1,4 @@
-// The per-tetrahedron kernel of the fused force pass (issue 23, docs/volumetric.md "Speed"): the volume
+// The per-tetrahedron kernel of the fused force pass (issue 23, docs/volumetric-speed.md): the volume
 // term of one tetrahedron and the springs it owns (0, 1 or 2), evaluated from its four corners loaded once
 // and scattered once. Shared by add_volume_forces (volume_terms.cpp, no springs) and the force pass of
 // models with volume terms (forces.cpp).

@@ -1,5 +1,5 @@
 // The surface-sized interior of the volumetric mesher (VolumetricMeshSettings::sizing, TetGen -m with a
-// background mesh; docs/volumetric.md, "An interior no finer than the surface").
+// background mesh; docs/volumetric-mesh.md, "An interior no finer than the surface").
 #include <gtest/gtest.h>
 
 #include <algorithm>
