@@ -133,10 +133,25 @@ function(medspring_shared_library_properties target)
   endif()
 endfunction()
 
+# medspring_pch_launcher(target): a target compiled with a precompiled header (MEDSPRING_PCH) keeps its
+# objects cacheable under ccache, which needs the sloppiness pch_defines,time_macros for them (its
+# manual; "could_not_use_precompiled_header" in its log otherwise). No-op without a ccache launcher.
+function(medspring_pch_launcher target)
+  if(CMAKE_CXX_COMPILER_LAUNCHER MATCHES "ccache")
+    set_property(TARGET ${target} PROPERTY CXX_COMPILER_LAUNCHER
+      ${CMAKE_COMMAND} -E env CCACHE_SLOPPINESS=pch_defines,time_macros ${CMAKE_CXX_COMPILER_LAUNCHER})
+  endif()
+endfunction()
+
 # medspring_add_test(NAME SOURCES ... DEPS ...): one GoogleTest executable, tests discovered by CTest.
 function(medspring_add_test name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main MedSpring::options medspring_test_support)
+  if(TARGET medspring_test_pch)
+    # One precompiled header for every test executable (tests/CMakeLists.txt): same flags, same PCH.
+    target_precompile_headers(${name} REUSE_FROM medspring_test_pch)
+    medspring_pch_launcher(${name})
+  endif()
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
 endfunction()
