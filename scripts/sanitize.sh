@@ -39,8 +39,8 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/scripts/lsan.supp:print_s
 # the same code run here (CI stays under 45 minutes: it took 48.7 min before the first seven below were
 # moved, 46.8 min on the CI machine before the last seven): the three real-aorta vessel builds (VTK + CGAL
 # meshing and the wall fit; their Y-phantom twins stay), the real kidney's spoke visibility and calibrated
-# tool press (the phantom's stay), the implicit 1000x-force tube (its kidney twin stays), the compressed cube's stiffening and the nonlinear calibration fit (the term's and the fit's
-# smaller tests stay), two slow balloon tests (the kidney balloon's paper targets and the refusals stay), and
+# tool press (the phantom's stay), the implicit 1000x-force tube (its kidney twin stays), the compressed
+# cube's stiffening and the nonlinear calibration fit (the term's and the fit's smaller tests stay), two slow balloon tests (the kidney balloon's paper targets and the refusals stay), and
 # six of the eight real-kidney model checks and one of the two real-kidney tool sweeps (20-32 s each, almost
 # all of it building the same real kidney under ASan; HasExactly458SurfaceNodesAnd42Atoms and
 # ForceThenReleaseReturnsToRest build and run it here, the other sweep, the press and the grasper stay).
