@@ -31,6 +31,21 @@ inline void cross3(const double* u, const double* v, double* w) {
   w[2] = u[0] * v[1] - u[1] * v[0];
 }
 
+/// The squared length of the longest of a tetrahedron's six edges, from the three edge vectors from
+/// corner 0 (e[k] = P[k+1] minus P[0]; the other three edges are e[j] minus e[k]).
+[[gnu::always_inline]] inline double max_edge2(const double (&e)[3][3]) {
+  double l2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double a = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
+    l2 = a > l2 ? a : l2;
+    const int j = (k + 1) % 3;
+    double q = 0;
+    for (int d = 0; d < 3; ++d) q += (e[j][d] - e[k][d]) * (e[j][d] - e[k][d]);
+    l2 = q > l2 ? q : l2;
+  }
+  return l2;
+}
+
 /// min and max that stay branch-free: GCC turned the selects of the compression scalar into a branch on
 /// J < 1 (about 60 % of the kidney's tetrahedra are compressed: mispredicted) with the division in one arm.
 [[gnu::always_inline]] inline double min_nb(double a, double b) {
@@ -156,19 +171,12 @@ template <int Own, bool Soft, bool Stiff, bool Local = false, bool Comp = false,
     F[0][d] = -(F[1][d] + F[2][d] + F[3][d]);
   }
   if constexpr (Stiff) {
-    double gg = 0, l2 = 0;
+    double gg = 0;
     for (int d = 0; d < 3; ++d) {
       const double c0 = c[0][d] + c[1][d] + c[2][d];
       gg += c[0][d] * c[0][d] + c[1][d] * c[1][d] + c[2][d] * c[2][d] + c0 * c0;
     }
-    for (int k = 0; k < 3; ++k) {
-      const double a = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
-      l2 = a > l2 ? a : l2;
-      const int j = (k + 1) % 3;
-      double q = 0;
-      for (int d = 0; d < 3; ++d) q += (e[j][d] - e[k][d]) * (e[j][d] - e[k][d]);
-      l2 = q > l2 ? q : l2;
-    }
+    const double l2 = max_edge2(e);
     const double cur = gg * (1.0 / 36.0) + std::abs(dv6) * std::sqrt(l2) * (1.0 / 12.0);  // |V - V0| L / 2
     if constexpr (Trace) compression_trace(r.n, c, ch, r.V06, r.kc6, l2, *tr);
     if constexpr (Local) {  // branch-free: about half the terms stiffen, a branch would be unpredictable

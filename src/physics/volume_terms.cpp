@@ -162,15 +162,7 @@ double fused_compression_blocks(const VolumeTerms& T, const double* x, const dou
     const double dv6 = e[0][0] * c[1][0] + e[0][1] * c[1][1] + e[0][2] * c[1][2] - r.V06;
     if (!(dv6 < 0.0)) continue;  // J >= 1: no curvature (the blocks' pass runs where most are compressed)
     any = true;
-    double l2 = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double a = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
-      l2 = a > l2 ? a : l2;
-      const int j = (k + 1) % 3;
-      double q = 0;
-      for (int d = 0; d < 3; ++d) q += (e[j][d] - e[k][d]) * (e[j][d] - e[k][d]);
-      l2 = q > l2 ? q : l2;
-    }
+    const double l2 = detail::max_edge2(e);
     const detail::CompDh h = detail::compression_dh6(dv6, r.V06);
     const double iJ = r.V06 * r.V06 * h.r;
     const double d2 = detail::max_nb(iJ * iJ - 1.0, 0.0);
