@@ -258,10 +258,10 @@ BENCHMARK(BM_VolumetricKidneyForcesUnfused)
     ->Args({2, 0})
     ->Unit(benchmark::kMicrosecond);
 
-// Where a default update's time goes (docs/volumetric.md "Where the time goes"), one phase per Arg, on the
-// 2,000-node kidney without mass scaling at a 2 % compressed state: 0 = the spring pass (return springs and
-// loads included; the model without its volume terms), 1 = the volume pass without the stiffening bound (the
-// frame's first sub-steps), 2 = with the global bound, 3 = with the local stiffening (the frame's last
+// Where a default update's time goes (docs/volumetric-speed.md "Where the time goes"), one phase per Arg, on
+// the 2,000-node kidney without mass scaling at a 2 % compressed state: 0 = the spring pass (return springs
+// and loads included; the model without its volume terms), 1 = the volume pass without the stiffening bound
+// (the frame's first sub-steps), 2 = with the global bound, 3 = with the local stiffening (the frame's last
 // sub-step: the pass with the increments, then the row scatter), 4 = the per-frame inversion count, 5 = the
 // pass with the increments alone (the frame's last sub-step where the local rule cannot save a sub-step).
 // The default model has compression terms (c = 32): 6 = the volume pass with them fused

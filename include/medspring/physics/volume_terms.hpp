@@ -95,9 +95,9 @@ bool fuse_compression_terms(VolumeTerms& T, const CompressionTerms& C);
 void set_volume_rest_rows(VolumeTerms& T, const MatX3& x0, const VecX& mass,
                           const std::vector<std::uint8_t>& fixed);
 
-/// The volume forces with the local stiffening (issue 23, docs/volumetric.md "Stable step"): adds -dE/dx to
-/// f like add_volume_forces and returns the terms' largest stiffening s_max (>= 1) as it does; in addition
-/// sets row_max = max over nodes i of sum over the terms t at i with s_t > 1 of (s_t - 1) r_t,i, the
+/// The volume forces with the local stiffening (issue 23, docs/volumetric-speed.md "Stable step"): adds
+/// -dE/dx to f like add_volume_forces and returns the terms' largest stiffening s_max (>= 1) as it does; in
+/// addition sets row_max = max over nodes i of sum over the terms t at i with s_t > 1 of (s_t - 1) r_t,i, the
 /// Gershgorin bound of the stiffening's increment to M^-1/2 K M^-1/2 ((rad/ms)^2). `rows` is scratch of
 /// `nodes` + #T doubles (overwritten). Needs T.rest_rows. The two halves are add_volume_forces_inc and
 /// volume_row_max.
