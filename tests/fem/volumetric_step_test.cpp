@@ -1,6 +1,7 @@
-// The stable step of the volumetric spring organ (issue 23, docs/volumetric-speed.md "Stable step"): the volume
-// term's curvature bound against its exact Hessian, and the local stiffening rule against the true omega_max
-// of a loaded TetGen kidney (Lanczos on the exact Hessian at the loaded state) and against the global rule.
+// The stable step of the volumetric spring organ (issue 23, docs/volumetric-speed.md "Stable step"): the
+// volume term's curvature bound against its exact Hessian, and the local stiffening rule against the true
+// omega_max of a loaded TetGen kidney (Lanczos on the exact Hessian at the loaded state) and against the
+// global rule.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
