@@ -370,12 +370,12 @@ int build_volumetric_cmd(const Args& args) {
   require(std::isfinite(vs.E_kPa) && vs.E_kPa > 0, "option --E-kPa: must be > 0 (got ", vs.E_kPa, ")");
   require(std::isfinite(vs.nu) && vs.nu > -1 && vs.nu < 0.5, "option --nu: must be in (-1, 0.5) (got ", vs.nu,
           ")");
+  const fem::MeshSizing sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
   const fs::path out = out_option(args);
   check_output_folder(out, args.flag("force"));
   const auto t0 = std::chrono::steady_clock::now();
   const KidneyBuild k = build_kidney_model(st);
   const SurfaceMesh surface{k.model->rest_surface(), k.model->faces()};
-  const fem::MeshSizing sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
   const VolumetricMesh mesh = fem::volumetric_mesh(surface, {.target_nodes = nodes, .sizing = sizing});
   const auto body = std::make_shared<VolumetricBody>(mesh, vs, "volumetric organ");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -43,13 +43,18 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/scripts/lsan.supp:print_s
 # cube's stiffening and the nonlinear calibration fit (the term's and the fit's smaller tests stay), two slow balloon tests (the kidney balloon's paper targets and the refusals stay), and
 # six of the eight real-kidney model checks and one of the two real-kidney tool sweeps (20-32 s each, almost
 # all of it building the same real kidney under ASan; HasExactly458SurfaceNodesAnd42Atoms and
-# ForceThenReleaseReturnsToRest build and run it here, the other sweep, the press and the grasper stay).
+# ForceThenReleaseReturnsToRest build and run it here, the other sweep, the press and the grasper stay),
+# the packed spring table on the 1M tube and on the real kidney (the small tables' decode and gather tests
+# stay), the compression block bound against dense eigenvalues (the fused-pass and finite-difference tests
+# of the same code stay) and the real aorta's 40x30 vessel (the phantom vessels' spoke marching stays).
 heavy='VesselTreeSkeleton\.RealAorta|CliBuildVessel\..*AortaSegmentation|SpokeVisibility\.NoSpokeOfTheRealKidney'
 heavy+='|RealKidneyTool\.CalibratedKidneySettles|ThousandfoldForce\..*/TubeImplicit'
 heavy+='|Compression\.CubeStiffensUnderLargeCompressionOnly|Calibration\.NonlinearFitRecovers'
 heavy+='|Balloon\.OtherTargetCountsAreHitExactly|Balloon\.KidneyBalloonIsBitIdenticalOnASecondRun'
 heavy+='|RealKidney\.(ModelSurfaceIsWithin|GatherFusedAndTwoPass|AtLeast85Percent|EveryAtomIs|WritesSurface|EveryAtomHas)'
 heavy+='|RealKidneyTool\.SweepEpisode2021'
+heavy+='|PackedTable\.MillionNodeTube|RealKidneyTable\.PackedTable|Compression\.BlockBoundIsAbove'
+heavy+='|SmrmRealData\.AortaSpokesMarched'
 ctest --test-dir "$build" -LE '^(long|web)$' -E "$heavy" --output-on-failure --parallel "$jobs" --timeout 1500
 t2=$(date +%s)
 
