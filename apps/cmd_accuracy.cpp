@@ -71,26 +71,25 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   require(sub >= 0 && sub <= 3, cmd, ": --surface-subdivisions must be in [0, 3] (got ", sub, ")");
   st.surface_subdivisions = static_cast<int>(sub);
   st.interior_sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
+  // the training forces and the site read-out: the rules are fem::parse_train_forces / SiteReadout's, the
+  // same as Python's medspring.calibrate(train_forces=, site_readout=)
   if (auto tf = args.get("train-force")) {  // one force or a list (the training sites' loads)
-    std::stringstream ss(*tf);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-      char* end = nullptr;
-      const double v = std::strtod(item.c_str(), &end);
-      require(end && end != item.c_str() && *end == '\0' && std::isfinite(v) && v > 0, cmd,
-              ": --train-force must be > 0 N or a list of such (got '", item, "')");
-      st.train_forces.push_back(v);
+    try {
+      st.train_forces = fem::parse_train_forces(*tf);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(cat(cmd, ": --train-force ", e.what()));
     }
-    require(!st.train_forces.empty(), cmd, ": --train-force must list at least one force");
   }
   const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
   require(fit == "nonlinear" || fit == "small-strain", cmd,
           ": --fit must be nonlinear or small-strain (got '", fit, "')");
   st.fit_nonlinear = fit == "nonlinear";
-  const std::string site = args.get_or("site-readout", "node");
-  require(site == "node" || site == "disk-mean", cmd, ": --site-readout must be node or disk-mean (got '",
-          site, "')");
-  st.site_disk_mean = site == "disk-mean";
+  try {
+    st.site_disk_mean = parse_enum(args.get_or("site-readout", "node"),
+                                   static_cast<fem::SiteReadout*>(nullptr)) == fem::SiteReadout::DiskMean;
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(cat(cmd, ": --site-readout ", e.what()));
+  }
   st.compression = args.number("compression", st.compression);
   require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
           st.compression, ")");

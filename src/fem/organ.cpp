@@ -3,9 +3,11 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <sstream>
 
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
@@ -161,6 +163,38 @@ Vec3 site_readout(const CalibrationCase& c, const MatX3& u) {
 
 Vec3 fem_site_readout(const CalibrationCase& c) {
   return c.mean_weights.empty() ? Vec3(c.u_fem.row(c.contact).transpose()) : c.fem_mean;
+}
+
+std::string_view to_string(SiteReadout r) {
+  return r == SiteReadout::DiskMean ? "disk-mean" : "node";
+}
+
+SiteReadout parse_enum(const std::string& text, SiteReadout*) {
+  if (text == "node") return SiteReadout::Node;
+  if (text == "disk-mean") return SiteReadout::DiskMean;
+  throw InvalidInput(cat("must be node or disk-mean (got '", text, "')"));
+}
+
+std::vector<double> checked_train_forces(const std::vector<double>& forces) {
+  if (forces.empty()) throw InvalidInput("must list at least one force");
+  for (double f : forces)
+    if (!(std::isfinite(f) && f > 0))
+      throw InvalidInput(cat("must be > 0 N or a list of such (got '", f, "')"));
+  return forces;
+}
+
+std::vector<double> parse_train_forces(const std::string& text) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (!(end && end != item.c_str() && *end == '\0'))
+      throw InvalidInput(cat("must be > 0 N or a list of such (got '", item, "')"));
+    out.push_back(v);
+  }
+  return checked_train_forces(out);
 }
 
 namespace {

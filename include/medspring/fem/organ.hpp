@@ -10,6 +10,7 @@
 #include <Eigen/SparseCore>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -156,6 +157,21 @@ std::vector<std::pair<Index, double>> disk_mean_weights(const MatX3& V, const Ma
 /// has mean_weights; and the FEM's (u_fem at the contact node, or fem_mean).
 Vec3 site_readout(const CalibrationCase& c, const MatX3& u);
 Vec3 fem_site_readout(const CalibrationCase& c);
+
+/// The calibration's site term (docs/accuracy-calibration.md), one declaration for `medspring accuracy` /
+/// `calibrate` (--site-readout) and Python's medspring.calibrate (site_readout=): the node under the disk
+/// centre, or the mean displacement over the loaded disk (CalibrationCase::mean_weights, the FEM's read-out).
+enum class SiteReadout { Node, DiskMean };
+/// "node", "disk-mean".
+std::string_view to_string(SiteReadout r);
+/// The text's read-out; InvalidInput "must be node or disk-mean (got 'TEXT')" otherwise.
+SiteReadout parse_enum(const std::string& text, SiteReadout*);
+
+/// The training forces of a calibration (N; CLI --train-force F[,F...], Python train_forces=[...]), checked
+/// once for both: at least one, each finite and > 0. InvalidInput "must be > 0 N or a list of such (got
+/// 'ITEM')" or "must list at least one force". The text form reads a comma list ("0.2,1").
+std::vector<double> checked_train_forces(const std::vector<double>& forces);
+std::vector<double> parse_train_forces(const std::string& text);
 using Response = std::function<MatX3(const VecX& multipliers, const ContactLoad& load)>;
 VecX calibrate_multipliers(const Response& response, Index families,
                            const std::vector<CalibrationCase>& training, int sweeps = 2);

@@ -1,0 +1,111 @@
+"""medspring.calibrate's site read-out and training forces (docs/accuracy-calibration.md, "From Python"):
+site_readout='node'|'disk-mean' and train_forces=[...] follow the rules of `medspring calibrate
+--site-readout --train-force` (one declaration, fem::SiteReadout and fem::checked_train_forces), the
+train_forces loads are the force rows rescaled, and the disk-mean fit reads the FEM's disk mean. The fits
+run on a coarse sphere (162 vertices, about 1 s per CalculiX solve); needs ccx and tetgen."""
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import medspring as ms
+
+pytestmark = pytest.mark.skipif(
+    not getattr(ms, "has_fem", False) or shutil.which("ccx") is None or shutil.which("tetgen") is None,
+    reason="needs the fem layer, ccx and tetgen")
+
+KW = dict(support_direction=(0, 0, -1), support_depth=3.0, radius=4.0, E_kPa=10.0)
+ATOMS = np.array([[-4.0, 0, 0], [0, 0, 0], [4.0, 0, 0]])
+EXE = Path(ms.__file__).resolve().parents[1].parent / "apps" / "medspring"
+
+
+def sphere():
+    s = ms.icosphere(2, 10.0)
+    return np.array(s.V), np.array(s.F)
+
+
+def test_bad_site_readout_and_training_forces_are_refused_with_the_clis_words():
+    V, F = sphere()
+    top = V[np.argmax(V[:, 2])][None, :]
+    down = np.array([[0.0, 0.0, -0.02]])
+    cases = [  # (keywords, the rule's words: the same text the CLI prints after its option's name)
+        (dict(site_readout="centre"), "must be node or disk-mean (got 'centre')"),
+        (dict(site_readout="Node"), "must be node or disk-mean (got 'Node')"),
+        (dict(train_forces=[0.2, -1.0]), "must be > 0 N or a list of such (got '-1')"),
+        (dict(train_forces=0.0), "must be > 0 N or a list of such (got '0')"),
+        (dict(train_forces=[0.2, float("nan")]), "must be > 0 N or a list of such (got 'nan')"),
+        (dict(train_forces=[]), "must list at least one force"),
+    ]
+    for kw, words in cases:
+        name = next(iter(kw))
+        with pytest.raises(ms.InvalidInput) as e:
+            ms.calibrate(V, F, ATOMS, top, down, **kw, **KW)
+        assert str(e.value) == f"calibrate: {name} {words}", kw
+    with pytest.raises(ms.InvalidInput, match="train_forces must be a force in N or a list of such"):
+        ms.calibrate(V, F, ATOMS, top, down, train_forces=["x"], **KW)
+    with pytest.raises(ms.InvalidInput, match=r"forces\[0\] is zero: with train_forces it gives the direction"):
+        ms.calibrate(V, F, ATOMS, top, np.zeros((1, 3)), train_forces=[0.1], **KW)
+    # with precomputed FEM displacements, the disk-mean read-out needs the FEM's disk means, and only it reads them
+    with pytest.raises(ms.InvalidInput, match="'disk-mean' with fem_displacements needs fem_disk_means"):
+        ms.calibrate(V, F, ATOMS, top, down, site_readout="disk-mean", fem_displacements=[np.zeros_like(V)], **KW)
+    with pytest.raises(ms.InvalidInput, match="fem_disk_means is read only with site_readout 'disk-mean'"):
+        ms.calibrate(V, F, ATOMS, top, down, fem_displacements=[np.zeros_like(V)], fem_disk_means=np.zeros((1, 3)),
+                     **KW)
+    with pytest.raises(ms.InvalidInput, match="fem_disk_means goes with fem_displacements"):
+        ms.calibrate(V, F, ATOMS, top, down, site_readout="disk-mean", fem_disk_means=np.zeros((1, 3)), **KW)
+    with pytest.raises(ms.InvalidInput, match="fem_disk_means"):  # one row per training load
+        ms.calibrate(V, F, ATOMS, top, down, site_readout="disk-mean", fem_displacements=[np.zeros_like(V)],
+                     fem_disk_means=np.zeros((2, 3)), **KW)
+    if EXE.is_file():  # the CLI prints the same words for the same values
+        for option, value, words in (("--site-readout", "centre", cases[0][1]),
+                                     ("--train-force", "0.2,-1", cases[2][1])):
+            r = subprocess.run([str(EXE), "calibrate", "--organ", "phantom", "--kind", "volumetric", option, value],
+                               capture_output=True, text=True)
+            assert r.returncode != 0
+            assert f"calibrate: {option} {words}" in r.stderr, r.stderr
+
+
+def test_train_forces_rescale_the_rows_and_the_disk_mean_fit_reads_the_fems_disk_mean(tmp_path, monkeypatch):
+    monkeypatch.setenv("MEDSPRING_FEM_CACHE", str(tmp_path))
+    V, F = sphere()
+    top = V[np.argmax(V[:, 2])]
+    mags = [0.01, 0.02]
+    # the FEM reference of both training loads, with its disk mean: the mean displacement over the disk lies
+    # between the loaded node's and a fraction of it (the disk is 4 mm wide on a 10 mm sphere)
+    refs = [ms.fem_reference(V, F, top, (0, 0, -f), level=1, **KW) for f in mags]
+    i = int(np.argmax(V[:, 2]))
+    for r in refs:
+        d, u = r["disk_mean"], r["displacement"][i]
+        assert d.shape == (3,) and d[2] < 0
+        assert 0.5 * abs(u[2]) < abs(d[2]) <= 1.02 * abs(u[2])
+    # train_forces: the one row's direction at each magnitude == the rows written out (bit for bit), and the
+    # FEM solved inside == the same FEM given as fem_displacements + fem_disk_means
+    fit = ms.calibrate(V, F, ATOMS, top[None, :], np.array([[0.0, 0.0, -5.0]]), train_forces=mags,
+                       site_readout="disk-mean", **KW)
+    assert fit["site_readout"] == "disk-mean" and fit["training_loads"] == 2
+    rows = np.array([[0.0, 0.0, -f] for f in mags])
+    given = dict(fem_displacements=[r["displacement"] for r in refs],
+                 fem_disk_means=np.array([r["disk_mean"] for r in refs]))
+    written = ms.calibrate(V, F, ATOMS, np.array([top, top]), rows, site_readout="disk-mean", **given, **KW)
+    for k in ("k_surf", "k_spoke", "k_cl", "k_r"):
+        assert written[k] == fit[k], k
+    # the site term reads the disk mean: a FEM disk mean 1.5x larger (a softer site) gives a softer fit at the
+    # site; the node read-out does not read it at all (refused above) and fits what it fitted before
+    soft = dict(given, fem_disk_means=1.5 * given["fem_disk_means"])
+    fit_soft = ms.calibrate(V, F, ATOMS, np.array([top, top]), rows, site_readout="disk-mean", **soft, **KW)
+
+    def site_displacement(p):
+        s = ms.HybridSettings()
+        s.k_surf, s.k_spoke, s.k_cl = p["k_surf"], p["k_spoke"], p["k_cl"]
+        s.surface_node.return_k = s.atom_node.return_k = p["k_r"]
+        s.fixed = list(p["support"])
+        body = ms.HybridKidney(ms.SurfaceMesh(V, F), ATOMS, s)
+        return abs(ms.spring_displacement(body, top, (0, 0, -mags[1]), radius=KW["radius"])[i, 2])
+
+    assert site_displacement(fit_soft) > 1.05 * site_displacement(fit)
+    node = ms.calibrate(V, F, ATOMS, np.array([top, top]), rows, fem_displacements=given["fem_displacements"], **KW)
+    assert node["site_readout"] == "node"
+    assert any(node[k] != fit[k] for k in ("k_surf", "k_spoke", "k_cl", "k_r"))
