@@ -7,7 +7,6 @@
 #include <limits>
 #include <map>
 #include <numbers>
-#include <sstream>
 
 #include "medspring/core/check.hpp"
 #include "medspring/core/error.hpp"
@@ -185,14 +184,19 @@ std::vector<double> checked_train_forces(const std::vector<double>& forces) {
 
 std::vector<double> parse_train_forces(const std::string& text) {
   std::vector<double> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
+  if (text.empty()) return checked_train_forces(out);
+  std::size_t begin = 0;
+  while (true) {  // every comma separates two items: "0.5," and ",0.5" hold an empty one
+    const std::size_t comma = text.find(',', begin);
+    const std::string item =
+        text.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin);
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
-    if (!(end && end != item.c_str() && *end == '\0'))
+    if (item.empty() || !(end && end != item.c_str() && *end == '\0'))
       throw InvalidInput(cat("must be > 0 N or a list of such (got '", item, "')"));
     out.push_back(v);
+    if (comma == std::string::npos) break;
+    begin = comma + 1;
   }
   return checked_train_forces(out);
 }

@@ -206,3 +206,32 @@ TEST(Calibration, DiskMeanWeightsSumToOneOnTheDisk) {
   EXPECT_THROW(fem::disk_mean_weights(box.V, box.F, {Vec3(100, 100, 100), Vec3(0, 0, -1), 1.0}),
                InvalidInput);
 }
+
+// The read-out and training-force rules that `medspring calibrate --site-readout --train-force` and Python's
+// medspring.calibrate(site_readout=, train_forces=) both call (docs/accuracy-calibration.md, "From Python").
+TEST(Calibration, SiteReadoutAndTrainingForceRulesRoundTripAndRefuseWithTheDefectNamed) {
+  for (fem::SiteReadout r : {fem::SiteReadout::Node, fem::SiteReadout::DiskMean})
+    EXPECT_EQ(parse_enum(std::string(to_string(r)), static_cast<fem::SiteReadout*>(nullptr)), r);
+  EXPECT_EQ(to_string(fem::SiteReadout::DiskMean), "disk-mean");
+  const auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message([] { parse_enum("centre", static_cast<fem::SiteReadout*>(nullptr)); }),
+            "must be node or disk-mean (got 'centre')");
+  EXPECT_EQ(fem::parse_train_forces("0.2,1"), (std::vector<double>{0.2, 1.0}));
+  EXPECT_EQ(fem::parse_train_forces("0.5"), (std::vector<double>{0.5}));
+  EXPECT_EQ(message([] { fem::parse_train_forces("0.5,x"); }), "must be > 0 N or a list of such (got 'x')");
+  EXPECT_EQ(message([] { fem::parse_train_forces("0.5,"); }), "must be > 0 N or a list of such (got '')");
+  EXPECT_EQ(message([] { fem::parse_train_forces("0.2,-1"); }), "must be > 0 N or a list of such (got '-1')");
+  EXPECT_EQ(message([] { fem::parse_train_forces(""); }), "must list at least one force");
+  EXPECT_EQ(message([] {
+              fem::checked_train_forces({0.2, std::nan("")});
+            }),
+            "must be > 0 N or a list of such (got 'nan')");
+  EXPECT_EQ(message([] { fem::checked_train_forces({0.0}); }), "must be > 0 N or a list of such (got '0')");
+}
