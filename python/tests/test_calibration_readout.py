@@ -109,3 +109,22 @@ def test_train_forces_rescale_the_rows_and_the_disk_mean_fit_reads_the_fems_disk
     node = ms.calibrate(V, F, ATOMS, np.array([top, top]), rows, fem_displacements=given["fem_displacements"], **KW)
     assert node["site_readout"] == "node"
     assert any(node[k] != fit[k] for k in ("k_surf", "k_spoke", "k_cl", "k_r"))
+
+
+def test_the_dask_calibration_passes_the_read_out_and_the_solved_disk_means(tmp_path, monkeypatch):
+    """medspring.study.fem.calibrate (here in this process, workers=0) gives medspring.calibrate's disk-mean fit
+    bit for bit: its solves return the FEM disk mean and it hands them over as fem_disk_means."""
+    from medspring.study import fem
+
+    monkeypatch.setenv("MEDSPRING_FEM_CACHE", str(tmp_path))
+    V, F = sphere()
+    top = V[np.argmax(V[:, 2])]
+    centres, rows = np.array([top, top]), np.array([[0.0, 0.0, -0.01], [0.0, 0.0, -0.02]])
+    serial = ms.calibrate(V, F, ATOMS, centres, rows, site_readout="disk-mean", **KW)
+    kw = {k: v for k, v in KW.items()}
+    dist = fem.calibrate(V, F, ATOMS, centres, rows, workers=0, site_readout="disk-mean", **kw)
+    assert dist["parameters"]["site_readout"] == "disk-mean"
+    for k in ("k_surf", "k_spoke", "k_cl", "k_r"):
+        assert dist["parameters"][k] == serial[k], k
+    refs = fem.references(V, F, [{"centre": top, "force": rows[1]}], workers=0, **KW)
+    assert refs[0]["disk_mean"].shape == (3,) and refs[0]["disk_mean"][2] < 0

@@ -53,8 +53,9 @@ def solve_case(vertices: np.ndarray, faces: np.ndarray, case: dict) -> dict:
     kw = {k: case[k] for k in CASE_KEYS if k in case}
     try:
         r = ms.fem_reference(vertices, faces, case["centre"], case["force"], **kw)
-        return {"ok": True, "error": "", "displacement": r["displacement"], "solve_seconds": r["solve_seconds"],
-                "fem_nodes": int(r["fem_nodes"]), "task_seconds": time.perf_counter() - t0}
+        return {"ok": True, "error": "", "displacement": r["displacement"], "disk_mean": r["disk_mean"],
+                "solve_seconds": r["solve_seconds"], "fem_nodes": int(r["fem_nodes"]),
+                "task_seconds": time.perf_counter() - t0}
     except Exception as e:  # recorded per case, not fatal to the others
         msg = f"{type(e).__name__}: {e}".splitlines()[0][:500]
         return {"ok": False, "error": msg, "displacement": None, "solve_seconds": 0.0, "fem_nodes": 0,
@@ -114,7 +115,8 @@ def references(
     support_direction, support_depth, level (fem_reference's arguments; `defaults` fills the rest).
     client / scheduler (tcp://HOST:PORT) / workers (a LocalCluster of N processes; 0: in this process).
     Returns one dict per case, in the order of the cases: ok, error, displacement (V, 3) or None,
-    solve_seconds, fem_nodes, task_seconds."""
+    disk_mean (3,) (the mean displacement over the loaded disk; only when ok), solve_seconds, fem_nodes,
+    task_seconds."""
     V = np.ascontiguousarray(vertices, dtype=float)
     F = np.ascontiguousarray(faces, dtype=np.int64)
     unknown = set(defaults) - set(CASE_KEYS)
@@ -162,6 +164,7 @@ def calibrate(
     client=None,
     scheduler: str | None = None,
     workers: int | None = None,
+    site_readout: str = "node",
 ) -> dict:
     """medspring.calibrate with its FEM reference solves run as Dask tasks: the training loads (force rows
     `forces` (L, 3) N over contact disks at `centres` (L, 3)) and the `held_out` cases (dicts with centre
@@ -169,7 +172,9 @@ def calibrate(
     solved, then evaluated on the held-out ones. Returns a dict: parameters (k_surf, k_spoke, k_cl, k_r,
     k_loc, support), training (one dict per training load: ok, error, solve_seconds), held_out (per case:
     ok, error, contact_fem, contact_model, contact_error, rms_error), fem_seconds (wall time of the solves).
-    A failed training solve is dropped from the fit and recorded; InvalidInput when none solved."""
+    A failed training solve is dropped from the fit and recorded; InvalidInput when none solved.
+    site_readout: 'node' or 'disk-mean', medspring.calibrate's (checked there, by the rules of `medspring
+    calibrate --site-readout`); with 'disk-mean' the solved disk means go in as fem_disk_means."""
     import medspring as ms
 
     C = np.asarray(centres, dtype=float).reshape(-1, 3)
@@ -191,7 +196,9 @@ def calibrate(
         raise InvalidInput(f"calibrate: every training solve failed (first: {train[0]['error']})")
     fit = ms.calibrate(V, F, atoms, C[good], Fs[good], E_kPa=E_kPa, nu=nu, radius=radius,
                        support_direction=support_direction, support_depth=support_depth, nonlinear=nonlinear,
-                       fem_displacements=[train[i]["displacement"] for i in good])
+                       fem_displacements=[train[i]["displacement"] for i in good], site_readout=site_readout,
+                       fem_disk_means=(np.array([train[i]["disk_mean"] for i in good])
+                                       if site_readout == "disk-mean" else None))
     rows = []
     if held_out:
         settings = ms.HybridSettings()
