@@ -88,7 +88,8 @@ struct Settings {
   // --site-readout node (default) | disk-mean: the site term of the calibration objective reads the contact
   // node or the mean over the loaded disk (docs/accuracy-calibration.md)
   bool site_disk_mean = false;
-  std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)
+  bool volume_term_variants = false;  // accuracy --volume-term-variants (docs/volumetric-mesh.md)
+  std::vector<double> forces;         // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;
 };

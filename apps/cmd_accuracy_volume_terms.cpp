@@ -146,8 +146,19 @@ json volume_term_variants(const VolumetricMesh& vm, const Body& full, const Body
         if (t.empty()) continue;
         const VecX mm = fem::calibrate_scale_and_ratio(
             [&](const VecX& x, const std::vector<fem::ContactLoad>& ls) { return solve(v, x, ls); }, t);
-        json r = held_out(solve(v, mm, loads)).to_json();
+        const std::vector<MatX3> us = solve(v, mm, loads);
+        json r = held_out(us).to_json();
         r["multipliers"] = {mm(0), mm(1)};
+        double cost = 0;  // the fit's training cost (fem::calibration_cost's), to compare the forms
+        for (std::size_t i = 0, q = 0; i < cases.size(); ++i) {
+          if (!cases[i].train) continue;
+          const fem::CalibrationCase& cc = t[q++];
+          const double s2 = std::pow(std::max(cc.u_fem.rowwise().norm().maxCoeff(), 1e-12), 2);
+          cost +=
+              (us[i].topRows(organ_nodes) - cc.u_fem).squaredNorm() / (s2 * static_cast<double>(organ_nodes));
+          cost += (fem::site_readout(cc, us[i]) - fem::fem_site_readout(cc)).squaredNorm() / s2;
+        }
+        r["train_cost"] = cost;
         row[disk_mean ? "fit_disk_mean" : "fit_node"] = r;
       }
     } catch (const Error& e) {
