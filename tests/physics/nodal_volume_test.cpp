@@ -145,6 +145,30 @@ TEST(NodalVolume, RestStiffnessIsTheForcesDerivative) {
   EXPECT_GT(es.eigenvalues().minCoeff(), -1e-12 * es.eigenvalues().maxCoeff());
 }
 
+// Cauchy-Schwarz per node: (sum_e dV_e)^2 <= sum_e V_e sum_e dV_e^2 / V_e, so with one modulus the nodal
+// rest stiffness is below the per-tetrahedron one in the Loewner order: the body can only get softer.
+TEST(NodalVolume, WithOneModulusTheRestStiffnessIsBelowThePerTetrahedronOne) {
+  MatX3 X;
+  MatX4i T;
+  grid(2, 3.0, X, T);
+  X = jitter(X, 0.4, 9);
+  const NodalVolumeTerms N = make_nodal_volume_terms(X, T, std::vector<double>(T.rows(), 0.02), "test");
+  VolumeTerms vt;
+  for (Index e = 0; e < N.T.rows(); ++e) vt.add(N.T(e, 0), N.T(e, 1), N.T(e, 2), N.T(e, 3), 0.02);
+  finalize_volume_terms(vt, X, "test");
+  std::vector<Eigen::Triplet<double>> tn, tt;
+  add_nodal_volume_stiffness_triplets(N, X, tn);
+  add_volume_stiffness_triplets(vt, X, tt);
+  const Index n3 = 3 * static_cast<Index>(X.rows());
+  Eigen::SparseMatrix<double> Kn(n3, n3), Kt(n3, n3);
+  Kn.setFromTriplets(tn.begin(), tn.end());
+  Kt.setFromTriplets(tt.begin(), tt.end());
+  const Eigen::MatrixXd D = Eigen::MatrixXd(Kt) - Eigen::MatrixXd(Kn);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(D);
+  EXPECT_GT(es.eigenvalues().minCoeff(), -1e-12 * Eigen::MatrixXd(Kt).norm());
+  EXPECT_GT(es.eigenvalues().maxCoeff(), 1e-3 * Eigen::MatrixXd(Kt).norm());  // and strictly softer
+}
+
 TEST(NodalVolume, BadTetrahedraAreRefusedWithTheDefectNamed) {
   MatX3 X(4, 3);
   X << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0;  // flat
