@@ -88,6 +88,8 @@ struct Settings {
   // --site-readout node (default) | disk-mean: the site term of the calibration objective reads the contact
   // node or the mean over the loaded disk (docs/accuracy-calibration.md)
   bool site_disk_mean = false;
+  // accuracy --volume-term-variants: the volume term per tetrahedron / per node (docs/volumetric-mesh.md)
+  bool volume_term_variants = false;
   std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)
   int level = 1;
   bool quiet = false;

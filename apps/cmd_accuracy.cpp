@@ -134,7 +134,8 @@ int cmd_accuracy(const Args& args) {
                       "interior-sizing",
                       "fit",
                       "train-force",
-                      "site-readout"});
+                      "site-readout",
+                      "volume-term-variants"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -148,6 +149,7 @@ int cmd_accuracy(const Args& args) {
   st.level = static_cast<int>(args.integer("level", 1));
   require(st.level >= 1 && st.level <= 3, "accuracy: --level must be 1, 2 or 3");
   read_kind_options(args, st, "accuracy");
+  st.volume_term_variants = args.flag("volume-term-variants");
   const bool force = args.flag("force");
   check_output_folder(*out, force);
 

@@ -16,6 +16,7 @@
 #include "accuracy_indentation.hpp"
 #include "accuracy_summary.hpp"
 #include "accuracy_tables.hpp"
+#include "accuracy_volume_terms.hpp"
 #include "commands.hpp"
 #include "medspring/builders/output_folder.hpp"
 #include "medspring/core/check.hpp"
@@ -402,6 +403,18 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                    " %; P1 FE on the same tetrahedra contact ", (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ",
                    (nh > 0 ? sums[3] / nh : 0.0), " %; disk-mean site error: springs ",
                    (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ", (nh > 0 ? sums[5] / nh : 0.0), " %"));
+      // --volume-term-variants: the volume term per tetrahedron, per node and blended
+      // (cmd_accuracy_volume_terms.cpp)
+      if (st.volume_term_variants) {
+        std::vector<VolumeTermCase> vc;
+        for (const auto& c : cases)
+          vc.push_back({c.load, c.u_fem, c.fem_mean, sites[static_cast<std::size_t>(c.site_index)], c.train});
+        VecX no_volume = VecX::Ones(2);
+        no_volume(1) = 0;
+        const BodyPtr springs = make_body(o, {"volumetric", false, false}, support, no_volume);
+        out["volumetric"]["volume_term_variants"] = volume_term_variants(
+            vm, *b, *springs, vb->stats().mu, vb->stats().lambda, o.surface.num_vertices(), vc);
+      }
     } catch (const Error& e) {  // a diagnosis, never the reason a run fails
       out["volumetric"]["small_strain"] = {{"error", e.what()}};
     }

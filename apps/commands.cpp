@@ -359,7 +359,10 @@ const std::vector<CommandSpec>& commands() {
             {.name = "indentation-only",
              .help = "only the force-indentation of a rigid sphere (issue 18; part of a full run): Hertz "
                      "validation of the FEM contact, then the real kidney: FEM vs the sphere tool"},
-            {.name = "no-indentation", .help = "leave the sphere indentation out of a full run"}},
+            {.name = "no-indentation", .help = "leave the sphere indentation out of a full run"},
+            {.name = "volume-term-variants",
+             .help = "volumetric kinds: also the small-strain diagnostic of the volume term per tetrahedron, "
+                     "per node and blended (docs/volumetric-mesh.md)"}},
        .run = cmd_accuracy},
       {.name = "calibrate",
        .summary = "fit spring stiffnesses to a tissue (E, nu) on FEM responses; held-out errors",

@@ -126,7 +126,7 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   std::string err;
   ASSERT_EQ(
       run("accuracy --quick --quiet --organs aorta --kinds volumetric,hybrid --nodes 1000 --no-validation "
-          "--no-vessel --out '" +
+          "--no-vessel --volume-term-variants --out '" +
               out.string() + "'",
           &err),
       0)
@@ -147,6 +147,28 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
     if (m["calibrated"].get<bool>()) continue;
     EXPECT_GT(m["held_out_mean_rms_pct"].get<double>(), 0.0);
     EXPECT_LT(m["held_out_mean_rms_pct"].get<double>(), 10.0);
+  }
+  // --volume-term-variants (docs/volumetric-mesh.md, "Locking and the nodal volume term"): the springs with
+  // the per-tetrahedron term (beta = 1) and P1 are the small-strain diagnostic's own rows, solved again; the
+  // nodal form (beta = 0) stores no more energy than the per-tetrahedron one, so it moves at least as far
+  const auto& ss = o["volumetric"]["small_strain"];
+  const auto& vt = o["volumetric"]["volume_term_variants"]["variants"];
+  ASSERT_EQ(vt.size(), 7u) << o["volumetric"].dump();
+  EXPECT_EQ(vt[0]["model"], "springs");
+  EXPECT_EQ(vt[0]["beta"].get<double>(), 1.0);
+  EXPECT_NEAR(vt[0]["from_E_nu"]["rms_pct"].get<double>(),
+              ss["held_out_mean_springs_linear_rms_pct"].get<double>(), 1e-6);
+  EXPECT_NEAR(vt[0]["from_E_nu"]["disk_mean_pct"].get<double>(),
+              ss["held_out_mean_springs_linear_disk_mean_pct"].get<double>(), 1e-6);
+  EXPECT_EQ(vt[5]["model"], "P1");
+  EXPECT_NEAR(vt[5]["from_E_nu"]["contact_pct"].get<double>(),
+              ss["held_out_mean_p1_contact_pct"].get<double>(), 1e-6);
+  EXPECT_EQ(vt[4]["beta"].get<double>(), 0.0);
+  EXPECT_GE(vt[4]["from_E_nu"]["disk_mean_ratio"].get<double>(),
+            vt[0]["from_E_nu"]["disk_mean_ratio"].get<double>() - 1e-9);
+  for (const auto& v : vt) {
+    EXPECT_FALSE(v.contains("error")) << v.dump();
+    EXPECT_TRUE(v.contains("fit_node") && v.contains("fit_disk_mean")) << v.dump();
   }
   // an unknown organ is refused with the name, nothing written
   const fs::path bad = medspring::testing::temp_dir("accuracy-aorta-bad") / "acc";
