@@ -9,7 +9,6 @@
 #include "medspring/core/check.hpp"
 #include "medspring/physics/compression_terms.hpp"
 #include "tet_kernel.hpp"
-#include "tet_simd.hpp"
 
 namespace medspring {
 
@@ -92,90 +91,8 @@ double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const V
   return (p1 - p0).dot((p2 - p0).cross(p3 - p0)) / 6.0;
 }
 
-namespace {
-
-template <bool Stiff, bool Comp>
-double volume_pass(const VolumeTerms& T, const double* x, double* f) {
-  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
-  double ss = 1.0, sv = 1.0;
-  for (const auto& r : T.packed) detail::tet_record<0, false, Stiff, false, Comp>(r, none, x, f, ss, sv);
-  return sv;
-}
-
-}  // namespace
-
-double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
-  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
-  return stiffening ? volume_pass<true, false>(T, x, f) : volume_pass<false, false>(T, x, f);
-}
-
-void add_volume_and_compression_forces(const VolumeTerms& T, const double* x, double* f) {
-  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
-  if (T.kc.empty())
-    volume_pass<false, false>(T, x, f);
-  else
-    volume_pass<false, true>(T, x, f);
-}
-
-double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc) {
-  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
-  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
-  double ss = 1.0, sv = 1.0;
-  for (const auto& r : T.packed) detail::tet_record<0, false, true, true>(r, none, x, f, ss, sv, inc++);
-  return sv;
-}
-
-namespace {
-
-// The records of T through tet_record<0, false, Stiff, Local, Comp, Trace>: with Simd (and a target with
-// AVX2), kTetLanes records at a time through tet_records_simd (tet_simd.hpp; the same numbers bit for bit),
-// the rest one by one.
-template <bool Simd, bool Stiff, bool Local, bool Comp, bool Trace>
-double volume_records(const VolumeTerms& T, const double* x, double* f, double* inc,
-                      const detail::CompTrace* tr) {
-  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
-  const VolumeTerms::Packed* p = T.packed.data();
-  const std::size_t nr = T.packed.size();
-  double ss = 1.0, sv = 1.0;
-  std::size_t i = 0;
-#if defined(MEDSPRING_TET_SIMD)
-  if constexpr (Simd) {
-    constexpr int W = detail::kTetLanes;
-    using V = detail::TetVec<W>::V;
-    V vsv = V{} + 1.0;
-    for (; i + W <= nr; i += W)
-      detail::tet_records_simd<W, Stiff, Local, Comp, Trace>(p + i, x, f, vsv, Local ? inc + i : nullptr, tr);
-    for (int l = 0; l < W; ++l) sv = vsv[l] > sv ? vsv[l] : sv;
-  }
-#endif
-  for (; i < nr; ++i)
-    detail::tet_record<0, false, Stiff, Local, Comp, Trace>(p[i], none, x, f, ss, sv,
-                                                            Local ? inc + i : nullptr, tr);
-  return sv;
-}
-
-template <bool Simd>
-double volume_and_compression_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
-                                  const double* s, double* trows, Index nodes) {
-  require(static_cast<Index>(T.packed.size()) == T.size() && T.kc.size() == T.packed.size(),
-          "volume terms: not finalized or no fused compression terms");
-  std::fill(trows, trows + nodes, 0.0);
-  const detail::CompTrace tr{s, trows};
-  return volume_records<Simd, true, true, true, true>(T, x, f, inc, &tr);
-}
-
-}  // namespace
-
-double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
-                                             const double* s, double* trows, Index nodes) {
-  return volume_and_compression_inc<true>(T, x, f, inc, s, trows, nodes);
-}
-
-double add_volume_and_compression_forces_inc_scalar(const VolumeTerms& T, const double* x, double* f,
-                                                    double* inc, const double* s, double* trows,
-                                                    Index nodes) {
-  return volume_and_compression_inc<false>(T, x, f, inc, s, trows, nodes);
-}
+// add_volume_forces, add_volume_and_compression_forces, add_volume_forces_inc and
+// add_volume_and_compression_forces_inc: volume_passes.cpp (compiled without FP contraction).
 
 double fused_compression_blocks(const VolumeTerms& T, const double* x, const double* s, double* brows,
                                 Index nodes) {

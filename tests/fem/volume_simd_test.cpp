@@ -1,15 +1,16 @@
-// The last sub-step's volume pass across tetrahedra (issue 23, item 5; src/physics/tet_simd.hpp): several
-// records at a time in vector registers, scattered lane by lane in the records' order, against the same pass
-// one record at a time (tet_record): forces, local-rule increments, compression traces and the stiffening
-// bound equal bit for bit, on a cube from tension to pushed through and on the real kidney
-// (kidney_left_hubmap_vhm.obj) meshed by TetGen at about 7,000 nodes, rest and squeezed.
+// The volume passes across tetrahedra (issue 23, item 5; src/physics/tet_simd.hpp, volume_passes.cpp):
+// several records at a time in vector registers, scattered lane by lane in the records' order, against the
+// same passes one record at a time (tet_record, the vector path switched off): forces, local-rule
+// increments, compression traces and the stiffening bound equal bit for bit, on a cube from tension to pushed
+// through and on the real kidney (kidney_left_hubmap_vhm.obj) meshed by TetGen at about 7,000 nodes, rest and
+// squeezed.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <random>
 
-#include "compression_rows.hpp"  // add_volume_and_compression_forces_inc(_scalar) (src/physics)
+#include "compression_rows.hpp"  // add_volume_and_compression_forces_inc, set_volume_simd (src/physics)
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/volumetric.hpp"
 #include "medspring/models/volumetric_body.hpp"
@@ -35,25 +36,41 @@ namespace {
   return ::testing::AssertionSuccess();
 }
 
-// Runs both paths at x (forces added to the same nonzero start, as in the step) and compares everything.
-// Returns the number of compressed tetrahedra (J < 1), so the callers can check the state exercises the
-// compression terms.
+// Runs each volume pass at x with the vector path on and off (forces added to the same nonzero start, as in
+// the step) and compares everything. Returns the number of compressed tetrahedra (J < 1), so the callers can
+// check the state exercises the compression terms.
 Index compare_paths(const Model& m, const MatX3& x, const std::string& label) {
   const Index n = m.num_nodes(), nt = m.volume.size();
   VecX s(n);
   for (Index i = 0; i < n; ++i)
     s[i] = m.fixed[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
-  VecX f1 = VecX::LinSpaced(3 * n, -1.0, 1.0), f2 = f1, i1 = VecX::Constant(nt, -7.0), i2 = i1;
-  VecX t1 = VecX::Constant(n, 3.0), t2 = t1;  // overwritten by the pass
-  const double sv1 =
-      add_volume_and_compression_forces_inc(m.volume, x.data(), f1.data(), i1.data(), s.data(), t1.data(), n);
-  const double sv2 = add_volume_and_compression_forces_inc_scalar(m.volume, x.data(), f2.data(), i2.data(),
-                                                                  s.data(), t2.data(), n);
-  EXPECT_TRUE(same_bits(f1, f2, "forces")) << label;
-  EXPECT_TRUE(same_bits(i1, i2, "increments")) << label;
-  EXPECT_TRUE(same_bits(t1, t2, "traces")) << label;
-  EXPECT_EQ(std::memcmp(&sv1, &sv2, sizeof(double)), 0) << label << ": " << sv1 << " vs " << sv2;
-  EXPECT_TRUE(std::isfinite(sv1)) << label;
+  struct Out {
+    VecX f, inc, t;
+    double sv = 0;
+  };
+  // pass 0: add_volume_and_compression_forces_inc (the last sub-step), 1: add_volume_and_compression_forces
+  // (the others), 2: add_volume_forces_inc, 3 and 4: add_volume_forces with and without the stiffening
+  auto run = [&](int pass, bool simd) {
+    Out o{VecX::LinSpaced(3 * n, -1.0, 1.0), VecX::Constant(nt, -7.0), VecX::Constant(n, 3.0)};
+    const bool was = detail::set_volume_simd(simd);
+    if (pass == 0)
+      o.sv = add_volume_and_compression_forces_inc(m.volume, x.data(), o.f.data(), o.inc.data(), s.data(),
+                                                   o.t.data(), n);
+    if (pass == 1) add_volume_and_compression_forces(m.volume, x.data(), o.f.data());
+    if (pass == 2) o.sv = add_volume_forces_inc(m.volume, x.data(), o.f.data(), o.inc.data());
+    if (pass == 3 || pass == 4) o.sv = add_volume_forces(m.volume, x.data(), o.f.data(), pass == 3);
+    detail::set_volume_simd(was);
+    return o;
+  };
+  for (int pass = 0; pass < 5; ++pass) {
+    const Out a = run(pass, true), b = run(pass, false);
+    const std::string l = label + ", pass " + std::to_string(pass);
+    EXPECT_TRUE(same_bits(a.f, b.f, "forces")) << l;
+    EXPECT_TRUE(same_bits(a.inc, b.inc, "increments")) << l;
+    EXPECT_TRUE(same_bits(a.t, b.t, "traces")) << l;
+    EXPECT_EQ(std::memcmp(&a.sv, &b.sv, sizeof(double)), 0) << l << ": " << a.sv << " vs " << b.sv;
+    EXPECT_TRUE(std::isfinite(a.sv)) << l;
+  }
   Index compressed = 0;
   for (Index t = 0; t < nt; ++t) {
     const Index c[4] = {m.volume.a[t], m.volume.b[t], m.volume.c[t], m.volume.d[t]};
@@ -69,11 +86,7 @@ Index compare_paths(const Model& m, const MatX3& x, const std::string& label) {
 }
 
 bool simd_compiled() {
-#if defined(MEDSPRING_TET_SIMD)
-  return true;
-#else
-  return false;
-#endif
+  return detail::volume_simd_compiled();
 }
 
 }  // namespace
