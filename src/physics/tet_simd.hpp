@@ -24,8 +24,9 @@ namespace medspring::detail {
 
 #if defined(MEDSPRING_TET_SIMD)
 
-/// Lanes of the widest vector pass the target has (8 with AVX-512F, 4 with AVX2).
-#if defined(__AVX512F__)
+/// Lanes of the widest vector pass the target has (8 with AVX-512F, 4 with AVX2; -DMEDSPRING_TET_SIMD_AVX2
+/// keeps 4 on an AVX-512 target, for a comparison).
+#if defined(__AVX512F__) && !defined(MEDSPRING_TET_SIMD_AVX2)
 inline constexpr int kTetLanes = 8;
 #else
 inline constexpr int kTetLanes = 4;
