@@ -1,5 +1,5 @@
 // The volume pass across tetrahedra (issue 23, item 5, docs/volumetric-speed.md): tet_record
-// (tet_kernel.hpp) without owned springs, evaluated for W records at once in vector registers (GCC vector
+// (tet_kernel.hpp) without owned springs, evaluated for W (4) records at once in vector registers (GCC vector
 // extensions): the corners gathered (AVX2 / AVX-512 gathers) straight from x, no intermediate buffers on
 // the way in; the volume, compression and stiffening scalars lane-wise, with the same operations in the same
 // order as the scalar kernel (no contraction: the build is ISO C++, -ffp-contract=off), so each lane is bit
@@ -24,9 +24,10 @@ namespace medspring::detail {
 
 #if defined(MEDSPRING_TET_SIMD)
 
-/// Lanes of the widest vector pass the target has (8 with AVX-512F, 4 with AVX2; -DMEDSPRING_TET_SIMD_AVX2
-/// keeps 4 on an AVX-512 target, for a comparison).
-#if defined(__AVX512F__) && !defined(MEDSPRING_TET_SIMD_AVX2)
+/// Lanes of the vector pass: 4 (AVX2, 256-bit). 8 (AVX-512F, 512-bit) with -DMEDSPRING_TET_SIMD_LANES8 on
+/// an AVX-512 target: slower on the Xeon it was measured on (docs/volumetric-speed.md, h23p: the last
+/// sub-step's pass 190 against 171 us, the other sub-steps' 127 against 120).
+#if defined(__AVX512F__) && defined(MEDSPRING_TET_SIMD_LANES8)
 inline constexpr int kTetLanes = 8;
 #else
 inline constexpr int kTetLanes = 4;
@@ -48,7 +49,7 @@ struct TetVec<4> {
   static V vsqrt(V a) { return (V)_mm256_sqrt_pd((__m256d)a); }
   static V vabs(V a) { return (V)_mm256_andnot_pd(_mm256_set1_pd(-0.0), (__m256d)a); }
 };
-#if defined(__AVX512F__)
+#if defined(__AVX512F__) && defined(MEDSPRING_TET_SIMD_LANES8)
 template <>
 struct TetVec<8> {
   typedef double V __attribute__((vector_size(64)));
