@@ -2,12 +2,12 @@
 // (tet_kernel.hpp) without owned springs, evaluated for W (4) records at once in vector registers (GCC vector
 // extensions): the corners gathered (AVX2 / AVX-512 gathers) straight from x, no intermediate buffers on
 // the way in; the volume, compression and stiffening scalars lane-wise, with the same operations in the same
-// order as the scalar kernel (no contraction: the build is ISO C++, -ffp-contract=off), so each lane is bit
-// for bit the scalar record; the one division and the five square roots of a record run W at a time
-// (vdivpd / vsqrtpd pipeline them, the scalar pass waits for each). The forces and the traces are then
-// scattered lane by lane, in the records' order: the sums at each node are those of the scalar pass, bit for
-// bit. Compiled only where the target has AVX2 (-march=native); the scalar kernel is the tail and the
-// fallback.
+// order as the scalar kernel (and no FMA contraction in either: volume_passes.cpp, their one user, is
+// compiled with -ffp-contract=off; GCC contracts them differently otherwise), so each lane is bit for bit the
+// scalar record; the one division and the five square roots of a record run W at a time (vdivpd / vsqrtpd
+// pipeline them, the scalar pass waits for each). The forces and the traces are then scattered lane by lane,
+// in the records' order: the sums at each node are those of the scalar pass, bit for bit. Compiled only where
+// the target has AVX2 (-march=native); the scalar kernel is the tail and the fallback.
 #pragma once
 
 #include <cstddef>
