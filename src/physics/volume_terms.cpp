@@ -103,12 +103,7 @@ double fused_compression_blocks(const VolumeTerms& T, const double* x, const dou
   bool any = false;
   for (const auto& r : T.packed) {
     double P[4][3];
-    for (int k = 0; k < 4; ++k) {
-      const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
-      P[k][0] = p[0];
-      P[k][1] = p[1];
-      P[k][2] = p[2];
-    }
+    detail::load_corners(r, x, P);
     double e[3][3], c[4][3];  // c[k]: 6 dV/dx of corner k
     for (int k = 0; k < 3; ++k)
       for (int d = 0; d < 3; ++d) e[k][d] = P[k + 1][d] - P[0][d];
