@@ -22,6 +22,13 @@
 namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
 }  // namespace medspring::detail
+namespace medspring {  // the last sub-step's volume pass (src/physics/compression_rows.hpp, internal)
+double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
+                                             const double* s, double* trows, Index nodes);
+namespace detail {  // the volume passes' vector path on or off (src/physics/compression_rows.hpp)
+bool set_volume_simd(bool on);
+}  // namespace detail
+}  // namespace medspring
 
 namespace {
 
@@ -156,6 +163,18 @@ BENCHMARK(BM_VolumetricKidneyUpdateLoad)
     ->Args({2000, 1000})
     ->Args({2000, 2000})
     ->Unit(benchmark::kMicrosecond);
+// BM_VolumetricKidneyUpdate with the volume passes one tetrahedron at a time (their vector path off): the
+// A/B of tet_simd.hpp in one binary.
+void BM_VolumetricKidneyUpdateScalar(benchmark::State& st) {
+  const bool was = detail::set_volume_simd(false);
+  kidney_update(st, static_cast<Index>(st.range(0)), 1e-3 * static_cast<double>(st.range(1)), 0.5);
+  detail::set_volume_simd(was);
+}
+BENCHMARK(BM_VolumetricKidneyUpdateScalar)
+    ->Args({500, 0})
+    ->Args({1000, 0})
+    ->Args({2000, 0})
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_VolumetricKidneyUpdate)
     ->Args({500, 0})
     ->Args({700, 0})
@@ -277,7 +296,11 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   x.col(2) *= 0.98;
   VecX rows(m.num_nodes() + m.volume.size());
   VecX crows(8 * m.num_nodes());  // the compression bound's scratch (a few doubles per node)
-  const int phase = static_cast<int>(st.range(0));
+  VecX msq(m.num_nodes());        // m_i^-1/2, 0 on a fixed node (phase 9)
+  for (Index i = 0; i < m.num_nodes(); ++i) msq[i] = m.fixed[i] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
+  // phases 10 + p: phase p with the volume passes one tetrahedron at a time (their vector path off)
+  const int phase = static_cast<int>(st.range(0)) % 10;
+  const bool simd_was = detail::set_volume_simd(st.range(0) < 10);
   double row_max = 0;
   for (auto _ : st) {
     if (phase == 0) detail::internal_forces(springs_only, x, fe, f, false);
@@ -295,12 +318,22 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
       benchmark::DoNotOptimize(add_compression_forces(
           m.compression, x.data(), f.data(), phase == 8 ? m.mass.data() : nullptr,
           phase == 8 ? m.fixed.data() : nullptr, phase == 8 ? crows.data() : nullptr, m.num_nodes()));
+    if (phase == 9)  // the last sub-step's pass: volume + compression forces, increments, bound's traces
+      benchmark::DoNotOptimize(add_volume_and_compression_forces_inc(m.volume, x.data(), f.data(),
+                                                                     rows.data() + m.num_nodes(), msq.data(),
+                                                                     crows.data(), m.num_nodes()));
     benchmark::DoNotOptimize(f.data());
   }
+  detail::set_volume_simd(simd_was);
   st.counters["tets"] = static_cast<double>(m.volume.size());
   st.counters["springs"] = static_cast<double>(m.num_springs());
 }
-BENCHMARK(BM_VolumetricKidneyPhases)->DenseRange(0, 8)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_VolumetricKidneyPhases)
+    ->DenseRange(0, 9)
+    ->Arg(15)
+    ->Arg(16)
+    ->Arg(19)
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 #endif

@@ -39,6 +39,16 @@ double compression_block_bound(const CompressionTerms& T, const double* x, const
 /// then needs a pass over the compression terms only where the blocks themselves decide its sub-step count.
 double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
                                              const double* s, double* trows, Index nodes);
+namespace detail {
+/// The volume passes (add_volume_forces, add_volume_and_compression_forces, add_volume_forces_inc,
+/// add_volume_and_compression_forces_inc; volume_passes.cpp) run kTetLanes records at a time where the target
+/// has AVX2 (tet_simd.hpp, volume_simd_compiled) unless this switch is off (on by default): the same numbers
+/// bit for bit either way. For the tests and the benchmark's A/B in one binary; not to be flipped while a
+/// pass runs. Returns the former setting.
+bool set_volume_simd(bool on);
+/// Whether the vector path was compiled (a target with AVX2 and GCC or Clang).
+bool volume_simd_compiled();
+}  // namespace detail
 
 /// compression_block_bound of the fused compression terms over the volume records (the step's last sub-step,
 /// where the blocks decide its sub-step count): the same bound to rounding, from `s` (m_i^-1/2, 0 on a fixed

@@ -31,6 +31,18 @@ inline void cross3(const double* u, const double* v, double* w) {
   w[2] = u[0] * v[1] - u[1] * v[0];
 }
 
+/// The four corners of record r: P[k] = the three coordinates of node r.n[k] in x (3 doubles a node).
+/// Loads only (tet_record, fused_compression_blocks).
+[[gnu::always_inline]] inline void load_corners(const VolumeTerms::Packed& r, const double* x,
+                                                double (&P)[4][3]) {
+  for (int k = 0; k < 4; ++k) {
+    const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
+    P[k][0] = p[0];
+    P[k][1] = p[1];
+    P[k][2] = p[2];
+  }
+}
+
 /// The squared length of the longest of a tetrahedron's six edges, from the three edge vectors from
 /// corner 0 (e[k] = P[k+1] minus P[0]; the other three edges are e[j] minus e[k]).
 [[gnu::always_inline]] inline double max_edge2(const double (&e)[3][3]) {
@@ -143,12 +155,7 @@ template <int Own, bool Soft, bool Stiff, bool Local = false, bool Comp = false,
                                               const double* x, double* f, double& ss, double& sv,
                                               double* inc = nullptr, const CompTrace* tr = nullptr) {
   double P[4][3];
-  for (int k = 0; k < 4; ++k) {
-    const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
-    P[k][0] = p[0];
-    P[k][1] = p[1];
-    P[k][2] = p[2];
-  }
+  load_corners(r, x, P);
   double e[3][3];
   for (int k = 0; k < 3; ++k)
     for (int d = 0; d < 3; ++d) e[k][d] = P[k + 1][d] - P[0][d];

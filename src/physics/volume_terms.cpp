@@ -91,51 +91,8 @@ double signed_tet_volume(const Vec3& p0, const Vec3& p1, const Vec3& p2, const V
   return (p1 - p0).dot((p2 - p0).cross(p3 - p0)) / 6.0;
 }
 
-namespace {
-
-template <bool Stiff, bool Comp>
-double volume_pass(const VolumeTerms& T, const double* x, double* f) {
-  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
-  double ss = 1.0, sv = 1.0;
-  for (const auto& r : T.packed) detail::tet_record<0, false, Stiff, false, Comp>(r, none, x, f, ss, sv);
-  return sv;
-}
-
-}  // namespace
-
-double add_volume_forces(const VolumeTerms& T, const double* x, double* f, bool stiffening) {
-  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
-  return stiffening ? volume_pass<true, false>(T, x, f) : volume_pass<false, false>(T, x, f);
-}
-
-void add_volume_and_compression_forces(const VolumeTerms& T, const double* x, double* f) {
-  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
-  if (T.kc.empty())
-    volume_pass<false, false>(T, x, f);
-  else
-    volume_pass<false, true>(T, x, f);
-}
-
-double add_volume_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc) {
-  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms: not finalized");
-  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
-  double ss = 1.0, sv = 1.0;
-  for (const auto& r : T.packed) detail::tet_record<0, false, true, true>(r, none, x, f, ss, sv, inc++);
-  return sv;
-}
-
-double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double* x, double* f, double* inc,
-                                             const double* s, double* trows, Index nodes) {
-  require(static_cast<Index>(T.packed.size()) == T.size() && T.kc.size() == T.packed.size(),
-          "volume terms: not finalized or no fused compression terms");
-  std::fill(trows, trows + nodes, 0.0);
-  const detail::SpringParams none{nullptr, nullptr, nullptr, nullptr};
-  const detail::CompTrace tr{s, trows};
-  double ss = 1.0, sv = 1.0;
-  for (const auto& r : T.packed)
-    detail::tet_record<0, false, true, true, true, true>(r, none, x, f, ss, sv, inc++, &tr);
-  return sv;
-}
+// add_volume_forces, add_volume_and_compression_forces, add_volume_forces_inc and
+// add_volume_and_compression_forces_inc: volume_passes.cpp (compiled without FP contraction).
 
 double fused_compression_blocks(const VolumeTerms& T, const double* x, const double* s, double* brows,
                                 Index nodes) {
@@ -146,12 +103,7 @@ double fused_compression_blocks(const VolumeTerms& T, const double* x, const dou
   bool any = false;
   for (const auto& r : T.packed) {
     double P[4][3];
-    for (int k = 0; k < 4; ++k) {
-      const double* p = x + 3 * static_cast<std::ptrdiff_t>(r.n[k]);
-      P[k][0] = p[0];
-      P[k][1] = p[1];
-      P[k][2] = p[2];
-    }
+    detail::load_corners(r, x, P);
     double e[3][3], c[4][3];  // c[k]: 6 dV/dx of corner k
     for (int k = 0; k < 3; ++k)
       for (int d = 0; d < 3; ++d) e[k][d] = P[k + 1][d] - P[0][d];
