@@ -128,3 +128,104 @@ double power_iteration_omega(const Model& m, const MatX3& x, int iterations, dou
 }
 
 }  // namespace medspring
+
+namespace medspring {
+
+namespace {
+
+// Largest eigenvalue of the symmetric tridiagonal (d[0..k), e[0..k-1)) by bisection on Sturm counts.
+double tridiagonal_max(const double* d, const double* e, int k) {
+  double lo = d[0], hi = d[0];
+  for (int i = 0; i < k; ++i) {
+    const double r = (i > 0 ? std::abs(e[i - 1]) : 0.0) + (i + 1 < k ? std::abs(e[i]) : 0.0);
+    lo = std::min(lo, d[i] - r);
+    hi = std::max(hi, d[i] + r);
+  }
+  auto below = [&](double lambda) {  // eigenvalues < lambda
+    int count = 0;
+    double q = d[0] - lambda;
+    for (int i = 0;; ++i) {
+      if (q < 0) ++count;
+      if (i + 1 == k) break;
+      if (q == 0) q = 1e-300;
+      q = d[i + 1] - lambda - e[i] * e[i] / q;
+    }
+    return count;
+  };
+  for (int it = 0; it < 200 && hi - lo > 1e-15 * std::max(std::abs(hi), std::abs(lo)); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (below(mid) == k ? hi : lo) = mid;
+  }
+  return hi;
+}
+
+}  // namespace
+
+void size_tangent_scratch(const Model& m, TangentScratch& z) {
+  const Index n = m.num_nodes(), ns = m.springs.size();
+  if (z.q.size() == 3 * n && z.ce.size() == ns) return;
+  for (VecX* v : {&z.q, &z.qprev, &z.y, &z.w}) v->setZero(3 * n);
+  z.sc.setZero(n);
+  z.ce.setZero(ns);
+  z.cb.setZero(ns);
+}
+
+double tangent_omega2(const Model& m, const MatX3& x, int iterations, TangentScratch& z) {
+  const Index n = m.num_nodes();
+  if (m.free_nodes.empty()) return 0.0;
+  const Springs& S = m.springs;
+  const Index ns = S.size();
+  size_tangent_scratch(m, z);
+  for (Index q = 0; q < ns; ++q) {  // as power_iteration_omega
+    const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
+    const double L2 = e.squaredNorm();
+    const double L = std::sqrt(L2);
+    if (L < 1e-9) {
+      z.ce[q] = z.cb[q] = 0;
+      continue;
+    }
+    const double d = L - S.L0[q];
+    z.cb[q] = spring_tension(S.k[q], S.kp[q], d) / L;
+    z.ce[q] = (spring_tension_derivative(S.k[q], S.kp[q], d) - z.cb[q]) / L2;
+  }
+  const double* X = x.data();
+  for (Index a = 0; a < n; ++a) z.sc[a] = m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]);
+  auto apply_A = [&](const VecX& qv, VecX& y) {
+    detail::stiffness_product<true>(m, x, z.sc.data(), qv, y, &z.w, false, [&](Index q, const Vec3& d) {
+      const Index i = 3 * S.i[q], j = 3 * S.j[q];
+      const double ex = X[j] - X[i], ey = X[j + 1] - X[i + 1], ez = X[j + 2] - X[i + 2];
+      const double g = z.ce[q] * (ex * d.x() + ey * d.y() + ez * d.z());
+      return Vec3(g * ex + z.cb[q] * d.x(), g * ey + z.cb[q] * d.y(), g * ez + z.cb[q] * d.z());
+    });
+  };
+  VecX &qv = z.q, &qprev = z.qprev, &y = z.y;
+  qprev.setZero();
+  std::uint64_t seed = 0x9E3779B97F4A7C15ull;  // power_iteration_omega's start
+  for (Index q = 0; q < 3 * n; ++q) {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    qv[q] = (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * z.sc[q / 3];
+  }
+  const double n0 = qv.norm();
+  if (n0 == 0) return 0.0;
+  qv /= n0;
+  constexpr int kMax = 64;
+  double alpha[kMax], beta[kMax];
+  int k = 0;
+  double beta_prev = 0;
+  iterations = std::clamp(iterations, 1, kMax);
+  for (int it = 0; it < iterations; ++it) {
+    apply_A(qv, y);
+    const double al = qv.dot(y);
+    y -= al * qv + beta_prev * qprev;
+    alpha[k++] = al;
+    const double be = y.norm();
+    if (!(be > 1e-12 * std::max(std::abs(al), 1e-300)) || it + 1 == iterations) break;
+    beta[k - 1] = be;
+    qprev.swap(qv);
+    qv = y / be;
+    beta_prev = be;
+  }
+  return std::max(tridiagonal_max(alpha, beta, k), 0.0);
+}
+
+}  // namespace medspring
