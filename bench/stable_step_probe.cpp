@@ -127,6 +127,16 @@ int main(int argc, char** argv) {
         step(m, st, sim.settings().step, &pl);
         stiff = st.stiffening;
       }
+      {  // the cost of one tangent refresh (15 Lanczos products, as integrators.cpp takes it)
+        TangentScratch z;
+        size_tangent_scratch(m, z);
+        const auto t0 = std::chrono::steady_clock::now();
+        double sink = 0;
+        for (int r = 0; r < 5; ++r) sink += tangent_omega2(m, x, 15, z);
+        const double us =
+            std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / 5;
+        std::printf("  one refresh (15 products): %.0f us wall (%.3g)\n", us, sink);
+      }
       const double w_rule = m.omega_rest * std::sqrt(std::max(stiff, 1.0));
       const double w_ref = m.omega_rest * std::sqrt(refined);
       const double w_true = power_iteration_omega(m, x, lanczos, 1.0);
