@@ -301,7 +301,7 @@ constexpr std::uint64_t kRefreshMaxAge = 200, kRefreshMinGap = 20;
 // The stable step's tangent refresh (docs/volumetric-speed.md "A tighter stable step"). B = st.stiffening is
 // the growth bound of the frame's last force pass (omega^2 <= B omega_rest^2: springs' kappa / k, the volume
 // terms' rows, the compression blocks, added by Weyl to the rest value). Where B asks for more sub-steps
-// than one, it is replaced by the same estimate as omega_rest (15 Lanczos products of the exact tangent x
+// than the rest value does, it is replaced by the same estimate as omega_rest (15 Lanczos products of the exact tangent x
 // 1.05) taken at a recent state x_r of this run, grown by B / B_r: s = s_r max(1, B / B_r), when smaller.
 // The reference is retaken when B leaves [B_r (1 - band), B_r (1 + band)] or after kRefreshMaxAge frames,
 // at most every kRefreshMinGap frames (else B is used as it is); a frame with a rollback drops it. So a
@@ -314,7 +314,9 @@ void refine_stiffening(const Model& m, State& st, double T, double safety, bool 
     return;
   }
   const double B = st.stiffening;
-  if (stable_substeps(m, B, T, safety) <= 1.0 || !(m.omega_rest > 0)) return;  // nothing to gain
+  // nothing to gain where B asks for no more sub-steps than the rest value (omega_max hardly falls below
+  // its rest value under load: docs/volumetric-speed.md)
+  if (stable_substeps(m, B, T, safety) <= stable_substeps(m, 1.0, T, safety) || !(m.omega_rest > 0)) return;
   const bool fresh = r.valid && st.frames - r.frame < kRefreshMaxAge && B <= r.b_ref * (1 + kRefreshBand) &&
                      B >= r.b_ref * (1 - kRefreshBand);
   if (!fresh) {
