@@ -144,8 +144,8 @@ int main(int argc, char** argv) {
       const double w15 = power_iteration_omega(m, x, 15, 1.0);
       const double wg = gershgorin_omega(m, x);
       if (std::abs(w_true - w_half) > 1e-6 * w_true)
-        std::fprintf(stderr, "note: Lanczos not converged at load %g: %d products %.9g, %d products %.9g\n", load,
-                     lanczos / 2, w_half, lanczos, w_true);
+        std::fprintf(stderr, "note: Lanczos not converged at load %g: %d products %.9g, %d products %.9g\n",
+                     load, lanczos / 2, w_half, lanczos, w_true);
       auto exact_subs = [&](double sf) {
         const double h = sf * 2.0 / w_true;
         return T > h * (1.0 + 1e-12) ? std::ceil(T / h) : 1.0;
@@ -164,12 +164,14 @@ int main(int argc, char** argv) {
         (stable_at(m, top, load, mid * 2.0 / w_true, steps) ? lo : hi) = mid;
       }
       const double hp = lo * 2.0 / w_true;
-      std::printf("  refresh: stiffening %.4f omega %.4f (/true %.3f), sub-steps taken %.0f (growth bound alone %.0f)\n",
-                  refined, w_ref, w_ref / w_true, subs, stable_substeps(m, stiff, T, safety));
-      std::printf("%.3g %.3g %ld %.0f %.4f %.4f %.4f %.4f %.4f %.3f %.3f %.0f %.0f %.4f %.4f %.4f %.3f\n", msdt,
-                  load, static_cast<long>(m.num_nodes()), stable_substeps(m, stiff, T, safety), stiff, w_rule, w_true, w15, wg, w_rule / w_true,
-                  wg / w_true, exact_subs(safety), exact_subs(1.0), dt_safe(m, stiff, safety), 2.0 / w_true, hp,
-                  hp * w_true);
+      std::printf(
+          "  refresh: stiffening %.4f omega %.4f (/true %.3f), sub-steps taken %.0f (growth bound alone "
+          "%.0f)\n",
+          refined, w_ref, w_ref / w_true, subs, stable_substeps(m, stiff, T, safety));
+      std::printf("%.3g %.3g %ld %.0f %.4f %.4f %.4f %.4f %.4f %.3f %.3f %.0f %.0f %.4f %.4f %.4f %.3f\n",
+                  msdt, load, static_cast<long>(m.num_nodes()), stable_substeps(m, stiff, T, safety), stiff,
+                  w_rule, w_true, w15, wg, w_rule / w_true, wg / w_true, exact_subs(safety), exact_subs(1.0),
+                  dt_safe(m, stiff, safety), 2.0 / w_true, hp, hp * w_true);
       std::fflush(stdout);
     }
   }

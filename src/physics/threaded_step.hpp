@@ -50,10 +50,10 @@ struct ThreadedStep {
   /// this handle already (a copied State starts without a reference, as it starts without a partition).
   struct TangentRefresh {
     TangentScratch scratch;
-    double s_ref = 0.0;         // 1.05^2 x the Lanczos omega^2 at the reference state / omega_rest^2
-    double b_ref = 0.0;         // the frame's growth bound (State::stiffening) at the reference state
-    std::uint64_t frame = 0;    // State::frames when it was taken
-    std::uint64_t tried = 0;    // State::frames + 1 of the last refresh (0: never)
+    double s_ref = 0.0;       // 1.05^2 x the Lanczos omega^2 at the reference state / omega_rest^2
+    double b_ref = 0.0;       // the frame's growth bound (State::stiffening) at the reference state
+    std::uint64_t frame = 0;  // State::frames when it was taken
+    std::uint64_t tried = 0;  // State::frames + 1 of the last refresh (0: never)
     bool valid = false;
   } tangent;
 
