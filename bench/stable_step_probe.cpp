@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
   int lanczos = 300, bisect = 7;
   for (int a = 1; a + 1 < argc; a += 2) {
     if (!std::strcmp(argv[a], "--nodes"))
-      nodes = std::atol(argv[a + 1]);
+      nodes = static_cast<Index>(std::atol(argv[a + 1]));
     else if (!std::strcmp(argv[a], "--loads"))
       loads = parse_list(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--mass-scaling"))
