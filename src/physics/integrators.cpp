@@ -298,13 +298,13 @@ constexpr double kRefreshSafety = 1.05;
 constexpr double kRefreshBand = 0.02;
 constexpr std::uint64_t kRefreshMaxAge = 200, kRefreshMinGap = 20;
 
-// The stable step's tangent refresh (docs/volumetric-speed.md "A tighter stable step"). B = st.stiffening is
-// the growth bound of the frame's last force pass (omega^2 <= B omega_rest^2: springs' kappa / k, the volume
-// terms' rows, the compression blocks, added by Weyl to the rest value). Where B asks for more sub-steps
-// than the rest value does, it is replaced by the same estimate as omega_rest (15 Lanczos products of the
-// exact tangent x 1.05) taken at a recent state x_r of this run, grown by B / B_r: s = s_r max(1, B / B_r),
-// when smaller. The reference is retaken when B leaves [B_r (1 - band), B_r (1 + band)] or after
-// kRefreshMaxAge frames, at most every kRefreshMinGap frames (else B is used as it is); a frame with a
+// The stable step's tangent refresh (docs/volumetric-speed.md "How tight the stable step is"). B =
+// st.stiffening is the growth bound of the frame's last force pass (omega^2 <= B omega_rest^2: springs' kappa
+// / k, the volume terms' rows, the compression blocks, added by Weyl to the rest value). Where B asks for
+// more sub-steps than the rest value does, it is replaced by the same estimate as omega_rest (15 Lanczos
+// products of the exact tangent x 1.05) taken at a recent state x_r of this run, grown by B / B_r: s = s_r
+// max(1, B / B_r), when smaller. The reference is retaken when B leaves [B_r (1 - band), B_r (1 + band)] or
+// after kRefreshMaxAge frames, at most every kRefreshMinGap frames (else B is used as it is); a frame with a
 // rollback drops it. So a loaded organ at rest under a constant load (the benchmark) takes one estimate and
 // the sub-steps of its true omega; a moving load takes B, or the estimate where B stays within its band.
 void refine_stiffening(const Model& m, State& st, double T, double safety, bool rolled_back) {
@@ -452,6 +452,7 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
         // the clock moves to the frame end so that time-driven loops and load schedules keep going.
         ++st.warnings.failed;
         status.code = StepCode::Failed;
+        if (st.threaded.p) st.threaded.p->tangent.valid = false;  // the tangent refresh starts again
         st.v.setZero();
         st.t = t0 + T;
         ++st.frames;
@@ -469,7 +470,8 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   }
   st.t = t0 + T;
   ++st.frames;
-  if (local_rule && !par && st.threaded.p && s.substep) refine_stiffening(m, st, T, s.safety, rollbacks > 0);
+  if (s.integrator == Integrator::SymplecticEuler && local_rule && !par && st.threaded.p && s.substep)
+    refine_stiffening(m, st, T, s.safety, rollbacks > 0);  // the stable step's tangent refresh
   if (m.volume.size() > 0)
     st.warnings.inverted_elements += count_inverted(m.volume, st.x);
   else if (m.compression.size() > 0)  // the same tetrahedra: counted once

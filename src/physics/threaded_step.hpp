@@ -46,8 +46,8 @@ struct ThreadedStep {
   std::vector<std::uint8_t> kind;
   bool has_boundary = false;
   /// Not the threaded step's: the stable step's tangent refresh of models with volume or compression terms
-  /// (integrators.cpp, docs/volumetric-speed.md "A tighter stable step"), kept here because the State holds
-  /// this handle already (a copied State starts without a reference, as it starts without a partition).
+  /// (integrators.cpp, docs/volumetric-speed.md "How tight the stable step is"), kept here because the State
+  /// holds this handle already (a copied State starts without a reference, as it starts without a partition).
   struct TangentRefresh {
     TangentScratch scratch;
     double s_ref = 0.0;       // 1.05^2 x the Lanczos omega^2 at the reference state / omega_rest^2

@@ -1,4 +1,4 @@
-// The stable step's tangent refresh (issue 23, docs/volumetric-speed.md "A tighter stable step"): the
+// The stable step's tangent refresh (issue 23, docs/volumetric-speed.md "How tight the stable step is"): the
 // allocation-free Lanczos estimate equals power_iteration_omega, and on a TetGen kidney under constant,
 // ramped and released loads up to large strain the refreshed step stays finite, never takes more sub-steps
 // than the growth bound, and its sub-step never exceeds 2 / omega_max of the state it starts from (Lanczos to
