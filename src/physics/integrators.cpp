@@ -29,6 +29,16 @@ std::string to_string(Integrator integrator) {
   return integrator == Integrator::ImplicitEuler ? "implicit_euler" : "symplectic_euler";
 }
 
+StableStep parse_stable_step(const std::string& text) {
+  if (text == "bound" || text == "Bound") return StableStep::Bound;
+  if (text == "refresh" || text == "Refresh") return StableStep::Refresh;
+  throw InvalidInput(cat("stable_step: unknown value '", text, "' (expected bound or refresh)"));
+}
+
+std::string to_string(StableStep rule) {
+  return rule == StableStep::Refresh ? "refresh" : "bound";
+}
+
 void validate_step_settings(const Model& model, const StepSettings& s) {
   static_assert(kMaxThreads == 256, "StepSettings::threads is declared 1..256 in integrators.hpp");
   validate_params(s, "step");  // the ranges declared in integrators.hpp
@@ -354,7 +364,8 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
       st.stiff_rows.size() != stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()))
     st.stiff_rows.setZero(stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()));
   const int T = effective_threads(m, s);
-  if (s.integrator == Integrator::SymplecticEuler && (m.volume.size() > 0 || m.compression.size() > 0) &&
+  if (s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh &&
+      (m.volume.size() > 0 || m.compression.size() > 0) &&
       T <= 1) {  // the stable step's tangent refresh (refine_stiffening): its scratch, sized now
     if (!st.threaded.p) st.threaded.p = std::make_shared<ThreadedStep>(1);
     size_tangent_scratch(m, st.threaded.p->tangent.scratch);
@@ -388,6 +399,11 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
     prepare_step(m, st, s);  // allocates only on the first fused step of this state
     par = st.threaded.p.get();
   }
+  // the opt-in tangent refresh (StepSettings::stable_step): a state not prepared for it is, once
+  if (!par && s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh &&
+      (m.volume.size() > 0 || m.compression.size() > 0) &&
+      (!st.threaded.p || st.threaded.p->tangent.scratch.q.size() == 0))
+    prepare_step(m, st, s);
   // the gather pass (spring_gather.hpp) for the serial symplectic step of a model that has one
   const bool gather = !par && s.integrator == Integrator::SymplecticEuler && detail::gather_ready(m, st);
   const double T = s.dt;
@@ -470,8 +486,9 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   }
   st.t = t0 + T;
   ++st.frames;
-  if (s.integrator == Integrator::SymplecticEuler && local_rule && !par && st.threaded.p && s.substep)
-    refine_stiffening(m, st, T, s.safety, rollbacks > 0);  // the stable step's tangent refresh
+  if (s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh && local_rule &&
+      !par && st.threaded.p && s.substep)
+    refine_stiffening(m, st, T, s.safety, rollbacks > 0);  // the stable step's tangent refresh (opt-in)
   if (m.volume.size() > 0)
     st.warnings.inverted_elements += count_inverted(m.volume, st.x);
   else if (m.compression.size() > 0)  // the same tetrahedra: counted once
