@@ -69,7 +69,7 @@ bool stable_at(const Model& m, Index top, double load, double h, long steps) {
 int main(int argc, char** argv) {
   Index nodes = 2000;
   std::vector<double> loads{0.5, 1.0, 2.0}, scalings{0.0, 0.25};
-  long steps = 10000;
+  long steps = 10000, frame_times = 0;
   int lanczos = 300, bisect = 7;
   for (int a = 1; a + 1 < argc; a += 2) {
     if (!std::strcmp(argv[a], "--nodes"))
@@ -82,6 +82,8 @@ int main(int argc, char** argv) {
       steps = std::atol(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--lanczos"))
       lanczos = std::atoi(argv[a + 1]);
+    else if (!std::strcmp(argv[a], "--frame-times"))
+      frame_times = std::atol(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--bisect"))
       bisect = std::atoi(argv[a + 1]);
     else {
@@ -92,6 +94,50 @@ int main(int argc, char** argv) {
   const SurfaceMesh surf = kidney_phantom();
   const VolumetricMesh vm = fem::volumetric_mesh(surf, {.target_nodes = nodes});
   const double zmin = surf.V.col(2).minCoeff(), zmax = surf.V.col(2).maxCoeff();
+  if (frame_times > 0) {  // wall time of each frame, stable_step bound and refresh alternated frame by frame
+    VolumetricSettings vs;  // 10 kPa, nu = 0.45, the bench's kidney (apps/cmd_bench_volumetric.cpp)
+    vs.fixed = fem::support_nodes(surf.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+    const auto body = std::make_shared<VolumetricBody>(vm, vs, "volumetric kidney");
+    Index top = 0;
+    for (Index i = 0; i < body->num_surface_nodes(); ++i)
+      if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
+    const double load = loads.empty() ? 0.5 : loads.front();
+    std::vector<std::unique_ptr<Simulation>> sims;
+    for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
+      SimulationSettings ss;
+      ss.normals = false;
+      ss.local.enabled = false;
+      ss.step.stable_step = rule;
+      sims.push_back(std::make_unique<Simulation>(body, ss));
+      sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
+    }
+    std::vector<std::vector<double>> us(2);
+    for (long f = 0; f < frame_times; ++f)
+      for (int k = 0; k < 2; ++k) {
+        const auto t0 = std::chrono::steady_clock::now();
+        sims[k]->update();
+        us[k].push_back(
+            std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+      }
+    std::printf(
+        "nodes %ld, load %g N, %ld frames from rest, frame wall time (us):
+        ",
+        static_cast<long>(body->model().num_nodes()),
+        load, frame_times);
+    for (int k = 0; k < 2; ++k) {
+      std::vector<double> v = us[k];
+      std::sort(v.begin(), v.end());
+      const auto at = [&](double q) {
+        return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
+      };
+      long slow = 0;
+      for (double x : v) slow += x > 5000.0 ? 1 : 0;
+      std::printf("  %-7s median %.0f  p99 %.0f  p99.9 %.0f  max %.0f  frames > 5 ms %ld  sub-steps %llu\n",
+                  k == 0 ? "bound" : "refresh", at(0.5), at(0.99), at(0.999), v.back(), slow,
+                  static_cast<unsigned long long>(sims[k]->state().substeps));
+    }
+    return 0;
+  }
   std::printf(
       "scaling_ms load_N nodes substeps_rule stiffening omega_rule omega_true omega_L15 omega_gersh "
       "rule/true gersh/true substeps_exact(0.8) substeps_exact(1.0) h_rule_ms 2/omega_true_ms "
