@@ -119,11 +119,8 @@ int main(int argc, char** argv) {
         us[k].push_back(
             std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
       }
-    std::printf(
-        "nodes %ld, load %g N, %ld frames from rest, frame wall time (us):
-        ",
-        static_cast<long>(body->model().num_nodes()),
-        load, frame_times);
+    std::printf("nodes %ld, load %g N, %ld frames from rest, frame wall time (us):\n",
+                static_cast<long>(body->model().num_nodes()), load, frame_times);
     for (int k = 0; k < 2; ++k) {
       std::vector<double> v = us[k];
       std::sort(v.begin(), v.end());
