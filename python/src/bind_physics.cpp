@@ -355,6 +355,12 @@ void bind_physics(py::module_& m) {
   integrator.value("SymplecticEuler", Integrator::SymplecticEuler, "default, §2.1")
       .value("ImplicitEuler", Integrator::ImplicitEuler, "§2.3, unconditionally stable, dissipative");
   enum_accepts_strings(integrator, &parse_integrator);
+  py::enum_<StableStep> stable_step(m, "StableStep",
+                                    "The symplectic step's stable-step rule (StepSettings.stable_step). "
+                                    "Strings accepted.");
+  stable_step.value("Bound", StableStep::Bound, "the growth bound (default)")
+      .value("Refresh", StableStep::Refresh, "tangent refresh: fewer sub-steps, offline runs");
+  enum_accepts_strings(stable_step, &parse_stable_step);
 
   py::class_<StepSettings> step_settings(m, "StepSettings",
                                          "Settings of one frame of time integration (§2).");

@@ -29,6 +29,16 @@ std::string to_string(Integrator integrator) {
   return integrator == Integrator::ImplicitEuler ? "implicit_euler" : "symplectic_euler";
 }
 
+StableStep parse_stable_step(const std::string& text) {
+  if (text == "bound" || text == "Bound") return StableStep::Bound;
+  if (text == "refresh" || text == "Refresh") return StableStep::Refresh;
+  throw InvalidInput(cat("stable_step: unknown value '", text, "' (expected bound or refresh)"));
+}
+
+std::string to_string(StableStep rule) {
+  return rule == StableStep::Refresh ? "refresh" : "bound";
+}
+
 void validate_step_settings(const Model& model, const StepSettings& s) {
   static_assert(kMaxThreads == 256, "StepSettings::threads is declared 1..256 in integrators.hpp");
   validate_params(s, "step");  // the ranges declared in integrators.hpp
@@ -289,6 +299,55 @@ bool implicit_scratch_ready(const Model& m, const State& st) {
 
 }  // namespace
 
+namespace {
+
+// Lanczos products of the tangent refresh (those of omega_rest), its safety on omega (as omega_rest's), the
+// band of the growth bound within which a reference stays in use, and its age limits in frames.
+constexpr int kRefreshProducts = 15;
+constexpr double kRefreshSafety = 1.05;
+constexpr double kRefreshBand = 0.02;
+constexpr std::uint64_t kRefreshMaxAge = 200, kRefreshMinGap = 20;
+
+// The stable step's tangent refresh (docs/volumetric-stable-step.md). B =
+// st.stiffening is the growth bound of the frame's last force pass (omega^2 <= B omega_rest^2: springs' kappa
+// / k, the volume terms' rows, the compression blocks, added by Weyl to the rest value). Where B asks for
+// more sub-steps than the rest value does, it is replaced by the same estimate as omega_rest (15 Lanczos
+// products of the exact tangent x 1.05) taken at a recent state x_r of this run, grown by B / B_r: s = s_r
+// max(1, B / B_r), when smaller. The reference is retaken when B leaves [B_r (1 - band), B_r (1 + band)] or
+// after kRefreshMaxAge frames, at most every kRefreshMinGap frames (else B is used as it is); a frame with a
+// rollback drops it. So a loaded organ at rest under a constant load (the benchmark) takes one estimate and
+// the sub-steps of its true omega; a moving load takes B, or the estimate where B stays within its band.
+void refine_stiffening(const Model& m, State& st, double T, double safety, bool rolled_back) {
+  ThreadedStep::TangentRefresh& r = st.threaded.p->tangent;
+  if (rolled_back) {
+    r.valid = false;
+    return;
+  }
+  const double B = st.stiffening;
+  // nothing to gain where B asks for no more sub-steps than the rest value (omega_max hardly falls below
+  // its rest value under load: docs/volumetric-speed.md)
+  if (stable_substeps(m, B, T, safety) <= stable_substeps(m, 1.0, T, safety) || !(m.omega_rest > 0)) return;
+  const bool fresh = r.valid && st.frames - r.frame < kRefreshMaxAge && B <= r.b_ref * (1 + kRefreshBand) &&
+                     B >= r.b_ref * (1 - kRefreshBand);
+  if (!fresh) {
+    if (r.tried > 0 && st.frames + 1 - r.tried < kRefreshMinGap) return;
+    const double w2 = tangent_omega2(m, st.x, kRefreshProducts, r.scratch);
+    r.tried = st.frames + 1;
+    if (!(w2 > 0) || !std::isfinite(w2)) {
+      r.valid = false;
+      return;
+    }
+    r.s_ref = kRefreshSafety * kRefreshSafety * w2 / (m.omega_rest * m.omega_rest);
+    r.b_ref = B;
+    r.frame = st.frames;
+    r.valid = true;
+  }
+  const double s = r.s_ref * std::max(1.0, B / r.b_ref);
+  if (s < B) st.stiffening = s;
+}
+
+}  // namespace
+
 void prepare_step(const Model& m, State& st, const StepSettings& s) {
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st)) {
     const Index n = m.num_nodes(), ns = m.num_springs();
@@ -305,6 +364,12 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
       st.stiff_rows.size() != stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()))
     st.stiff_rows.setZero(stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()));
   const int T = effective_threads(m, s);
+  if (s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh &&
+      (m.volume.size() > 0 || m.compression.size() > 0) &&
+      T <= 1) {  // the stable step's tangent refresh (refine_stiffening): its scratch, sized now
+    if (!st.threaded.p) st.threaded.p = std::make_shared<ThreadedStep>(1);
+    size_tangent_scratch(m, st.threaded.p->tangent.scratch);
+  }
   // one thread: the fused node-range step (threaded_step.hpp) for models beyond the gather pass
   if (T <= 1 && !fused_serial(m, s)) return;
   if (!st.threaded.p || st.threaded.p->pool.size() != T) st.threaded.p = std::make_shared<ThreadedStep>(T);
@@ -334,6 +399,11 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
     prepare_step(m, st, s);  // allocates only on the first fused step of this state
     par = st.threaded.p.get();
   }
+  // the opt-in tangent refresh (StepSettings::stable_step): a state not prepared for it is, once
+  if (!par && s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh &&
+      (m.volume.size() > 0 || m.compression.size() > 0) &&
+      (!st.threaded.p || st.threaded.p->tangent.scratch.q.size() == 0))
+    prepare_step(m, st, s);
   // the gather pass (spring_gather.hpp) for the serial symplectic step of a model that has one
   const bool gather = !par && s.integrator == Integrator::SymplecticEuler && detail::gather_ready(m, st);
   const double T = s.dt;
@@ -398,6 +468,7 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
         // the clock moves to the frame end so that time-driven loops and load schedules keep going.
         ++st.warnings.failed;
         status.code = StepCode::Failed;
+        if (st.threaded.p) st.threaded.p->tangent.valid = false;  // the tangent refresh starts again
         st.v.setZero();
         st.t = t0 + T;
         ++st.frames;
@@ -415,6 +486,9 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   }
   st.t = t0 + T;
   ++st.frames;
+  if (s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh && local_rule &&
+      !par && st.threaded.p && s.substep)
+    refine_stiffening(m, st, T, s.safety, rollbacks > 0);  // the stable step's tangent refresh (opt-in)
   if (m.volume.size() > 0)
     st.warnings.inverted_elements += count_inverted(m.volume, st.x);
   else if (m.compression.size() > 0)  // the same tetrahedra: counted once

@@ -16,6 +16,7 @@
 
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/parallel.hpp"
+#include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
 
 namespace medspring {
@@ -44,6 +45,17 @@ struct ThreadedStep {
   /// Per node: 0 free interior node, 1 fixed, 2 free boundary node.
   std::vector<std::uint8_t> kind;
   bool has_boundary = false;
+  /// Not the threaded step's: the stable step's tangent refresh of models with volume or compression terms
+  /// (integrators.cpp, docs/volumetric-stable-step.md), kept here because the State
+  /// holds this handle already (a copied State starts without a reference, as it starts without a partition).
+  struct TangentRefresh {
+    TangentScratch scratch;
+    double s_ref = 0.0;       // 1.05^2 x the Lanczos omega^2 at the reference state / omega_rest^2
+    double b_ref = 0.0;       // the frame's growth bound (State::stiffening) at the reference state
+    std::uint64_t frame = 0;  // State::frames when it was taken
+    std::uint64_t tried = 0;  // State::frames + 1 of the last refresh (0: never)
+    bool valid = false;
+  } tangent;
 
   bool matches(const Model& m) const {
     return model == &m && x0 == m.x0.data() && spring_i == m.springs.i.data() && nodes == m.num_nodes() &&

@@ -21,6 +21,19 @@ inline Integrator parse_enum(const std::string& text, Integrator*) {
   return parse_integrator(text);
 }
 
+/// The symplectic step's stable-step rule (docs/volumetric-stable-step.md).
+/// Bound: the growth bound of the last force pass (the default; cheap, a bound at every frame). Refresh: for
+/// models with volume or compression terms, the bound is replaced where smaller by a 15-product Lanczos
+/// estimate on the current tangent, retaken every 20-200 frames (fewer sub-steps under load, but one
+/// re-estimate stalls one frame for ~10-30 ms and its band and age limits are heuristic: for offline runs).
+enum class StableStep { Bound, Refresh };
+/// "bound" | "refresh"; InvalidInput naming stable_step otherwise.
+StableStep parse_stable_step(const std::string& text);
+std::string to_string(StableStep rule);
+inline StableStep parse_enum(const std::string& text, StableStep*) {
+  return parse_stable_step(text);
+}
+
 struct StepSettings {
   double dt = 0.5;  // frame duration (ms)
   Integrator integrator = Integrator::SymplecticEuler;
@@ -34,6 +47,7 @@ struct StepSettings {
   int cg_max_iterations = 200;  // implicit
   int newton_iterations = 1;    // implicit: 1 = linearly implicit; > 1 = full Newton with line search
   int threads = 1;  // symplectic: threads of the step, 1..256 (kMaxThreads); see effective_threads
+  StableStep stable_step = StableStep::Bound;  // symplectic, volume/compression terms: see StableStep
 };
 
 /// The declaration of StepSettings (core/params.hpp): the scene's "integrator" block, the Python
@@ -60,6 +74,10 @@ void for_each_field(S& s, V&& v) {
   v(ParamSpec{"threads", "", "symplectic: threads of the step (see effective_threads)"}.at_least(1).at_most(
         256),
     s.threads);
+  v(ParamSpec{"stable_step", "",
+              "symplectic, volumetric: bound (growth bound, default) or refresh (tangent estimate every "
+              "20-200 frames: fewer sub-steps, a ~10-30 ms frame at each; offline runs)"},
+    s.stable_step);
 }
 
 /// Validates settings (finite positive dt, safety in (0, 1], ...). Throws InvalidInput naming the field.

@@ -16,6 +16,19 @@ double gershgorin_omega(const Model& model, const MatX3& x);
 /// 1.05). Deterministic. (The name is historical: it was a power iteration of 30 steps.)
 double power_iteration_omega(const Model& model, const MatX3& x, int iterations = 15, double safety = 1.05);
 
+/// Scratch of tangent_omega2 (sized on first use; no allocation afterwards for the same model).
+struct TangentScratch {
+  VecX q, qprev, y, w, sc, ce, cb;
+};
+
+/// The same estimate as power_iteration_omega(model, x, iterations, 1.0), squared ((rad/ms)^2), from the
+/// same start vector, without allocating once `scratch` is sized: the largest eigenvalue of the Lanczos
+/// tridiagonal by bisection (Sturm counts) instead of Eigen's solver, so equal to rounding. iterations <=
+/// 64. The stable step's tangent refresh (integrators.cpp) calls it at the current state.
+/// Sizes `scratch` for tangent_omega2 on `model` (allocates unless already sized).
+void size_tangent_scratch(const Model& model, TangentScratch& scratch);
+double tangent_omega2(const Model& model, const MatX3& x, int iterations, TangentScratch& scratch);
+
 /// The run-time stable step: safety * 2 / (omega_rest * sqrt(stiffening)) (ms).
 inline double dt_safe(const Model& model, double stiffening, double safety = 0.8) {
   return safety * 2.0 / (model.omega_rest * std::sqrt(stiffening < 1.0 ? 1.0 : stiffening));
