@@ -1,0 +1,74 @@
+// A correction term for thin tetrahedra of the volumetric spring model (issue 23, docs/volumetric-mesh.md,
+// "A correction term for thin tetrahedra"). Six central springs per tetrahedron sense only n^T eps n, so a
+// flat tetrahedron loses its through-thickness shear as (h/L)^2. Per flagged tetrahedron this term adds
+//   E_c = 1/2 V0 e(U - I)^T C_c e(U - I),   U = sqrt(F^T F),  F = Ds Dm^-1,
+// where e(.) is the Mandel vector of a symmetric tensor and C_c = P+(C_P1 - C_rule) is the positive part of
+// the difference between the linear P1 element's and the rule's (springs + volume term) rest stiffness.
+// The forces are the exact gradient (rotation from the polar decomposition, no rotation estimate), so they
+// conserve linear and angular momentum and a rigid rotation gives none. Not wired into Model yet.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "medspring/core/types.hpp"
+
+namespace medspring {
+
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat12 = Eigen::Matrix<double, 12, 12>;
+
+/// Which tetrahedra get a term and with which rule they are compared.
+struct ThinTetSettings {
+  double E = 0.01;          // Young's modulus, N/mm^2
+  double nu = 0.45;         // Poisson ratio, [0, 0.5)
+  double q_max = 0.3;       // a term on the tetrahedra with q = h_min / L_max < q_max (q = 1 to take all)
+  double spring_scale = 1;  // the rule's springs: each edge k_e L_e^2 = spring_scale * (5/2) mu V
+  double volume_scale = 1;  // the rule's volume term: kv = volume_scale * max(lambda - mu, 0)
+};
+
+/// The terms as a struct of arrays; term t spans corners n[t] of the tetrahedron tet[t] of the input.
+struct ThinTetCorrections {
+  std::vector<std::array<Index, 4>> n;  // corners
+  std::vector<Index> tet;               // index of the tetrahedron in the input list
+  std::vector<Mat3> DmInv;              // inverse rest edge matrix [x1-x0, x2-x0, x3-x0]^-1
+  std::vector<double> V0;               // rest volume, mm^3
+  std::vector<Mat6> C;                  // C_c (Mandel, N/mm^2), symmetric positive semi-definite
+  std::vector<double> clipped;          // the largest clipped (negative) eigenvalue's magnitude / (2 mu)
+
+  Index size() const { return static_cast<Index>(n.size()); }
+};
+
+/// Mandel vector (e11, e22, e33, sqrt2 e23, sqrt2 e13, sqrt2 e12) of a symmetric tensor.
+Vec6 mandel(const Mat3& s);
+/// q = h_min / L_max of a tetrahedron: its smallest height (3 V / largest face area) over its longest edge.
+double tet_quality(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3);
+/// The rest stiffness (Mandel) of the linear P1 element, lambda dd^T + 2 mu I.
+Mat6 p1_mandel_stiffness(double E, double nu);
+/// The rest stiffness (Mandel) of the rule's springs and volume term on one tetrahedron.
+Mat6 rule_mandel_stiffness(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3,
+                           const ThinTetSettings& s);
+
+/// Builds the terms for the tetrahedra `tets` (#T x 4, positive orientation) of the rest positions x0 whose
+/// quality is below s.q_max. Throws InvalidInput naming `what` and the element when E <= 0, nu outside
+/// [0, 0.5), a corner is out of range or a rest tetrahedron is inverted or degenerate.
+ThinTetCorrections build_thin_tet_corrections(const MatX3& x0, const std::vector<std::array<Index, 4>>& tets,
+                                              const ThinTetSettings& s, const std::string& what);
+
+/// Sum of the terms' energies (mJ) at x.
+double thin_tet_energy(const ThinTetCorrections& C, const MatX3& x);
+/// Adds the forces -dE_c/dx to f (#nodes x 3).
+void add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f);
+/// The rest Hessian V0 B^T C_c B of term t (12 x 12, corner-major: rows 3k..3k+2 are corner k).
+Mat12 thin_tet_rest_stiffness(const ThinTetCorrections& C, Index t);
+/// Adds, per node, the Gershgorin row bound of the terms' rest Hessians in the form of add_volume_gershgorin:
+/// diag[a] += Frobenius norm of its own 3x3 block, off[a] += sum over the free other corners b of the
+/// Frobenius norms of the blocks (a, b) / sqrt(m_a m_b).
+void add_thin_tet_gershgorin(const ThinTetCorrections& C, const VecX& mass,
+                             const std::vector<std::uint8_t>& fixed, VecX& diag, VecX& off);
+
+}  // namespace medspring
