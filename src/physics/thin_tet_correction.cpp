@@ -1,6 +1,7 @@
 // The correction term for thin tetrahedra (thin_tet_correction.hpp; docs/volumetric-mesh.md).
 #include "medspring/physics/thin_tet_correction.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -87,14 +88,14 @@ Mat6 p1_mandel_stiffness(double E, double nu) {
 }
 
 Mat6 rule_mandel_stiffness(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3,
-                           const ThinTetSettings& s) {
+                           const ThinTetSettings& s, double spring_factor) {
   const Lame l = lame(s.E, s.nu);
   const Vec3 p[4] = {p0, p1, p2, p3};
   Mat6 C = Mat6::Zero();
   for (const auto& e : kEdges) {
     const Vec3 n = (p[e[1]] - p[e[0]]).normalized();
     const Vec6 m = mandel(n * n.transpose());
-    C += (s.spring_scale * 2.5 * l.mu) * m * m.transpose();  // (1/V) k_e L_e^2 m m^T
+    C += (spring_factor * s.spring_scale * 2.5 * l.mu) * m * m.transpose();  // (1/V) k_e L_e^2 m m^T
   }
   Vec6 d;
   d << 1, 1, 1, 0, 0, 0;
@@ -130,7 +131,22 @@ ThinTetCorrections build_thin_tet_corrections(const MatX3& x0, const std::vector
     require(std::isfinite(V) && V > 1e-12 * lmax * lmax * lmax, what, ": tetrahedron ", t,
             " is inverted or degenerate at rest (volume ", V, " mm^3)");
     if (tet_quality(p0, p1, p2, p3) >= s.q_max) continue;
-    const Mat6 Dc = Cp1 - rule_mandel_stiffness(p0, p1, p2, p3, s);
+    double factor = 1.0;
+    Mat6 Dc = Cp1 - rule_mandel_stiffness(p0, p1, p2, p3, s);
+    if (s.projection == ThinTetProjection::ScaleSprings) {
+      // the largest s <= 1 with A - s B PSD, A = C_P1 - C_vol, B = C_spr: s = 1 / lambda_max(L^-1 B L^-T)
+      const Mat6 Cvol = rule_mandel_stiffness(p0, p1, p2, p3, s, 0.0);
+      const Mat6 A = Cp1 - Cvol, Bs = rule_mandel_stiffness(p0, p1, p2, p3, s) - Cvol;
+      const Eigen::LLT<Mat6> llt(A);
+      if (llt.info() == Eigen::Success) {
+        const Mat6 Linv = llt.matrixL().solve(Mat6::Identity());
+        const Mat6 M = Linv * Bs * Linv.transpose();
+        const double emax =
+            Eigen::SelfAdjointEigenSolver<Mat6>(0.5 * (M + M.transpose())).eigenvalues().maxCoeff();
+        if (emax > 1.0) factor = 1.0 / emax;
+        Dc = A - factor * Bs;
+      }  // else (a volume term stiffer than P1 in some mode): the clip
+    }
     Eigen::SelfAdjointEigenSolver<Mat6> es(0.5 * (Dc + Dc.transpose()));
     const Vec6 ev = es.eigenvalues().cwiseMax(0.0);
     C.n.push_back(n);
@@ -139,6 +155,7 @@ ThinTetCorrections build_thin_tet_corrections(const MatX3& x0, const std::vector
     C.V0.push_back(V);
     C.C.push_back(es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose());
     C.clipped.push_back(std::max(-es.eigenvalues().minCoeff(), 0.0) / two_mu);
+    C.spring_factor.push_back(factor);
   }
   return C;
 }

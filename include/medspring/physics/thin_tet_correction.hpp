@@ -22,6 +22,14 @@ using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 
+/// How the difference C_P1 - C_rule is kept positive semi-definite.
+enum class ThinTetProjection {
+  Clip,  // C_c = P+(C_P1 - C_rule): negative eigenvalues set to 0; the springs keep their in-plane excess
+  ScaleSprings,  // the tetrahedron's springs are scaled by the largest s <= 1 with C_P1 - C_vol - s C_spr
+                 // PSD, and C_c = C_P1 - C_vol - s C_spr: rule + term = P1 exactly at rest (spring_factor =
+                 // s)
+};
+
 /// Which tetrahedra get a term and with which rule they are compared.
 struct ThinTetSettings {
   double E = 0.01;          // Young's modulus, N/mm^2
@@ -29,6 +37,7 @@ struct ThinTetSettings {
   double q_max = 0.3;       // a term on the tetrahedra with q = h_min / L_max < q_max (q = 1 to take all)
   double spring_scale = 1;  // the rule's springs: each edge k_e L_e^2 = spring_scale * (5/2) mu V
   double volume_scale = 1;  // the rule's volume term: kv = volume_scale * max(lambda - mu, 0)
+  ThinTetProjection projection = ThinTetProjection::Clip;
 };
 
 /// The terms as a struct of arrays; term t spans corners n[t] of the tetrahedron tet[t] of the input.
@@ -39,6 +48,7 @@ struct ThinTetCorrections {
   std::vector<double> V0;               // rest volume, mm^3
   std::vector<Mat6> C;                  // C_c (Mandel, N/mm^2), symmetric positive semi-definite
   std::vector<double> clipped;          // the largest clipped (negative) eigenvalue's magnitude / (2 mu)
+  std::vector<double> spring_factor;    // factor on this tetrahedron's share of its six springs (1 with Clip)
 
   Index size() const { return static_cast<Index>(n.size()); }
 };
@@ -49,9 +59,10 @@ Vec6 mandel(const Mat3& s);
 double tet_quality(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3);
 /// The rest stiffness (Mandel) of the linear P1 element, lambda dd^T + 2 mu I.
 Mat6 p1_mandel_stiffness(double E, double nu);
-/// The rest stiffness (Mandel) of the rule's springs and volume term on one tetrahedron.
+/// The rest stiffness (Mandel) of the rule's springs and volume term on one tetrahedron; the springs'
+/// share times spring_factor.
 Mat6 rule_mandel_stiffness(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3,
-                           const ThinTetSettings& s);
+                           const ThinTetSettings& s, double spring_factor = 1.0);
 
 /// Builds the terms for the tetrahedra `tets` (#T x 4, positive orientation) of the rest positions x0 whose
 /// quality is below s.q_max. Throws InvalidInput naming `what` and the element when E <= 0, nu outside
