@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -32,7 +34,9 @@
 #include "medspring/models/tissue.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/models/volumetric_moduli.hpp"
+#include "medspring/physics/forces.hpp"
 #include "medspring/physics/loads.hpp"
+#include "medspring/physics/thin_tet_correction.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/simulation.hpp"
@@ -343,6 +347,28 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       Index nf = 0;
       const std::vector<Index> map = fem::free_dof_map(m, nf);
       const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(fem::restrict_to_free(K, map, nf));
+      // The thin-tetrahedron term (physics/thin_tet_correction.hpp, docs/volumetric-mesh.md; not yet part of
+      // Model): the model's linear response at rest with the term's rest stiffness added, clipped and with
+      // scaled springs, under the same load as the P1 column. q_max from $MEDSPRING_THIN_TET_QMAX (0.3).
+      ThinTetSettings tts;
+      tts.nu = vb->stats().lambda / (2 * (vb->stats().lambda + vb->stats().mu));
+      tts.E = 2 * vb->stats().mu * (1 + tts.nu);
+      if (const char* q = std::getenv("MEDSPRING_THIN_TET_QMAX"); q && *q) tts.q_max = std::stod(q);
+      std::vector<std::array<Index, 4>> tets;
+      for (Index e = 0; e < vm.T.rows(); ++e)
+        tets.push_back({vm.T(e, 0), vm.T(e, 1), vm.T(e, 2), vm.T(e, 3)});
+      const Eigen::SparseMatrix<double> K0 = tangent_stiffness(m, m.x0, {false, true});
+      ThinTetSettings tts_scaled = tts;
+      tts_scaled.projection = ThinTetProjection::ScaleSprings;
+      const ThinTetCorrections tc = build_thin_tet_corrections(m.x0, tets, tts, o.name);
+      const ThinTetCorrections tcs = build_thin_tet_corrections(m.x0, tets, tts_scaled, o.name);
+      const Eigen::SparseMatrix<double> Kt[3] = {K0, K0 + thin_tet_rest_stiffness_change(tc, m.x0, tts),
+                                                 K0 + thin_tet_rest_stiffness_change(tcs, m.x0, tts_scaled)};
+      std::vector<std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>> tsolve;
+      for (const auto& Kk : Kt)
+        tsolve.push_back(std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(
+            fem::restrict_to_free(Kk, map, nf)));
+      double tsums[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // [springs, clip, scaled][contact, RMS, disk]
       json diag = json::array();
       double sums[6] = {0, 0, 0, 0, 0, 0}, nh = 0;
       for (std::size_t i = 0; i < cases.size(); ++i) {
@@ -382,6 +408,27 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                         {"fem_disk_mean_along_mm", c.fem_mean.dot(fd)},
                         {"springs_linear_disk_mean_along_mm", along(lin[i])},
                         {"p1_disk_mean_along_mm", along(up)}});
+        json thin = json::object();
+        for (int v = 0; v < 3; ++v) {
+          const VecX uv = tsolve[static_cast<std::size_t>(v)]->solve(r);
+          MatX3 us = MatX3::Zero(vm.surface_nodes, 3);
+          for (Index a = 0; a < vm.surface_nodes; ++a)
+            for (int d = 0; d < 3; ++d)
+              if (map[static_cast<std::size_t>(3 * a + d)] >= 0)
+                us(a, d) = uv[map[static_cast<std::size_t>(3 * a + d)]];
+          const fem::SurfaceError ev = fem::compare(on_organ_surface(o, us), c.u_fem, contact);
+          const double mv = mean_err(us, c.load, c.fem_mean);
+          static const char* const kName[3] = {"springs", "clip", "scaled"};
+          thin[kName[v]] = {{"contact_pct", 100 * ev.rel(ev.contact_error)},
+                            {"rms_pct", 100 * ev.rel(ev.rms)},
+                            {"disk_mean_pct", mv}};
+          if (!c.train) {
+            tsums[v][0] += 100 * ev.rel(ev.contact_error);
+            tsums[v][1] += 100 * ev.rel(ev.rms);
+            tsums[v][2] += mv;
+          }
+        }
+        diag.back()["thin_tet_term"] = thin;
         if (!c.train) {
           sums[0] += 100 * el.rel(el.contact_error), sums[1] += 100 * el.rel(el.rms);
           sums[2] += 100 * ep.rel(ep.contact_error), sums[3] += 100 * ep.rel(ep.rms);
@@ -402,6 +449,24 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                    " %; P1 FE on the same tetrahedra contact ", (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ",
                    (nh > 0 ? sums[3] / nh : 0.0), " %; disk-mean site error: springs ",
                    (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ", (nh > 0 ? sums[5] / nh : 0.0), " %"));
+      {
+        Index scaled_lt_half = 0;
+        for (double f : tcs.spring_factor) scaled_lt_half += f < 0.5 ? 1 : 0;
+        const double d = nh > 0 ? nh : 1.0;
+        out["volumetric"]["small_strain"]["thin_tet_term"] = {
+            {"q_max", tts.q_max},
+            {"flagged", tc.size()},
+            {"tetrahedra", static_cast<Index>(tets.size())},
+            {"held_out_mean_springs_same_load", {tsums[0][0] / d, tsums[0][1] / d, tsums[0][2] / d}},
+            {"held_out_mean_clip", {tsums[1][0] / d, tsums[1][1] / d, tsums[1][2] / d}},
+            {"held_out_mean_scaled", {tsums[2][0] / d, tsums[2][1] / d, tsums[2][2] / d}}};
+        note(st, cat(o.name, ": small strain, held out, P1's load: thin-tetrahedron term (q < ", tts.q_max,
+                     ": ", tc.size(), " of ", tets.size(), " tetrahedra, ", scaled_lt_half,
+                     " with spring factor < 0.5) contact / RMS / disk-mean %: springs ", tsums[0][0] / d,
+                     " / ", tsums[0][1] / d, " / ", tsums[0][2] / d, "; + clipped term ", tsums[1][0] / d,
+                     " / ", tsums[1][1] / d, " / ", tsums[1][2] / d, "; scaled springs + term ",
+                     tsums[2][0] / d, " / ", tsums[2][1] / d, " / ", tsums[2][2] / d));
+      }
     } catch (const Error& e) {  // a diagnosis, never the reason a run fails
       out["volumetric"]["small_strain"] = {{"error", e.what()}};
     }

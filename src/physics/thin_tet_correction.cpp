@@ -187,9 +187,8 @@ void add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f) 
   }
 }
 
-Mat12 thin_tet_rest_stiffness(const ThinTetCorrections& C, Index t) {
-  const auto u = static_cast<std::size_t>(t);
-  const Mat3& Di = C.DmInv[u];
+namespace {
+Mat12 rest_stiffness(const Mat3& Di, double V, const Mat6& C) {
   Eigen::Matrix<double, 6, 12> B;
   for (int k = 0; k < 4; ++k) {
     const Vec3 g =
@@ -199,7 +198,45 @@ Mat12 thin_tet_rest_stiffness(const ThinTetCorrections& C, Index t) {
       B.col(3 * k + a) = mandel(0.5 * (H + H.transpose()));
     }
   }
-  return C.V0[u] * B.transpose() * C.C[u] * B;
+  return V * B.transpose() * C * B;
+}
+}  // namespace
+
+Mat12 thin_tet_rest_stiffness(const ThinTetCorrections& C, Index t) {
+  const auto u = static_cast<std::size_t>(t);
+  return rest_stiffness(C.DmInv[u], C.V0[u], C.C[u]);
+}
+
+Mat12 tet_mandel_rest_stiffness(const MatX3& x0, const std::array<Index, 4>& tet, const Mat6& C) {
+  const Mat3 D = edge_matrix(x0.row(tet[0]).transpose(), x0.row(tet[1]).transpose(),
+                             x0.row(tet[2]).transpose(), x0.row(tet[3]).transpose());
+  return rest_stiffness(D.inverse(), D.determinant() / 6.0, C);
+}
+
+Eigen::SparseMatrix<double> thin_tet_rest_stiffness_change(const ThinTetCorrections& C, const MatX3& x0,
+                                                           const ThinTetSettings& s) {
+  std::vector<Eigen::Triplet<double>> trip;
+  for (Index t = 0; t < C.size(); ++t) {
+    const auto u = static_cast<std::size_t>(t);
+    const auto& n = C.n[u];
+    Mat12 K = thin_tet_rest_stiffness(C, t);
+    if (C.spring_factor[u] != 1.0) {
+      const Vec3 p0 = x0.row(n[0]), p1 = x0.row(n[1]), p2 = x0.row(n[2]), p3 = x0.row(n[3]);
+      const Mat6 Cspr =
+          rule_mandel_stiffness(p0, p1, p2, p3, s) - rule_mandel_stiffness(p0, p1, p2, p3, s, 0.0);
+      K += (C.spring_factor[u] - 1.0) * rest_stiffness(C.DmInv[u], C.V0[u], Cspr);
+    }
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            trip.emplace_back(3 * n[static_cast<std::size_t>(a)] + i, 3 * n[static_cast<std::size_t>(b)] + j,
+                              K(3 * a + i, 3 * b + j));
+  }
+  const Index N = static_cast<Index>(x0.rows());
+  Eigen::SparseMatrix<double> out(3 * N, 3 * N);
+  out.setFromTriplets(trip.begin(), trip.end());
+  return out;
 }
 
 void add_thin_tet_gershgorin(const ThinTetCorrections& C, const VecX& mass,

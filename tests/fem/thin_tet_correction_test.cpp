@@ -34,13 +34,8 @@ std::vector<std::array<Index, 4>> one() {
   return {{0, 1, 2, 3}};
 }
 
-// The 12 x 12 rest stiffness V B^T C B of tetrahedron `tet` of x0 for a Mandel stiffness C.
 Mat12 element_stiffness(const MatX3& x0, const std::array<Index, 4>& tet, const Mat6& C) {
-  ThinTetSettings s;
-  s.q_max = 10;  // every tetrahedron
-  ThinTetCorrections c = build_thin_tet_corrections(x0, {tet}, s, "element");
-  c.C[0] = C;
-  return thin_tet_rest_stiffness(c, 0);
+  return tet_mandel_rest_stiffness(x0, tet, C);
 }
 
 Mat3 unit_mode(int k) {  // the symmetric tensor of the k-th Mandel unit vector
@@ -130,6 +125,26 @@ TEST(ThinTetCorrection, ScaledSpringsMakeTheFlatTetrahedronP1AtRest) {
     EXPECT_LT((Ct - Cp1).norm(), 1e-9 * Cp1.norm()) << "t " << t;
     EXPECT_LT(c.clipped[0], 1e-9);
   }
+}
+
+// The model's own rest stiffness plus the terms' change (thin_tet_rest_stiffness_change) is the P1 element's
+// for ScaleSprings, and above it for the clip.
+TEST(ThinTetCorrection, ModelPlusTheRestStiffnessChangeIsP1) {
+  const MatX3 X = flat_tet(0.1);
+  VolumetricSettings st;
+  st.nu = 0.45;
+  st.compression = 0;
+  st.fixed = {0, 1, 2};
+  const VolumetricBody body(testing::one_tet(X), st, "tet");
+  const Eigen::MatrixXd Km = Eigen::MatrixXd(tangent_stiffness(body.model(), X, {false, false}));
+  ThinTetSettings s;
+  s.E = st.E_kPa * 1e-3;
+  s.nu = st.nu;
+  s.projection = ThinTetProjection::ScaleSprings;
+  const ThinTetCorrections c = build_thin_tet_corrections(X, one(), s, "flat");
+  const Eigen::MatrixXd K = Km + Eigen::MatrixXd(thin_tet_rest_stiffness_change(c, X, s));
+  const Mat12 Kp1 = element_stiffness(X, {0, 1, 2, 3}, p1_mandel_stiffness(s.E, s.nu));
+  EXPECT_LT((K - Kp1).norm(), 1e-9 * Kp1.norm());
 }
 
 // Deformed state: a general stretch and shear of ~20 % on a flat tetrahedron.

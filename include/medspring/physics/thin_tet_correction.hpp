@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -76,6 +77,16 @@ double thin_tet_energy(const ThinTetCorrections& C, const MatX3& x);
 void add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f);
 /// The rest Hessian V0 B^T C_c B of term t (12 x 12, corner-major: rows 3k..3k+2 are corner k).
 Mat12 thin_tet_rest_stiffness(const ThinTetCorrections& C, Index t);
+/// The rest stiffness V B^T C B (12 x 12, corner-major) of the tetrahedron `tet` of x0 for a Mandel stiffness
+/// C (positive orientation).
+Mat12 tet_mandel_rest_stiffness(const MatX3& x0, const std::array<Index, 4>& tet, const Mat6& C);
+/// What the terms change in the rest stiffness of a model of the rule on x0 (3N x 3N): their rest Hessians
+/// and, with ScaleSprings, (spring_factor - 1) times each flagged tetrahedron's share of its springs. Added
+/// to the model's tangent stiffness at rest it gives the corrected model's linear response (a diagnostic
+/// until the term is part of Model). `s` must be the settings the terms were built with.
+Eigen::SparseMatrix<double> thin_tet_rest_stiffness_change(const ThinTetCorrections& C, const MatX3& x0,
+                                                           const ThinTetSettings& s);
+
 /// Adds, per node, the Gershgorin row bound of the terms' rest Hessians in the form of add_volume_gershgorin:
 /// diag[a] += Frobenius norm of its own 3x3 block, off[a] += sum over the free other corners b of the
 /// Frobenius norms of the blocks (a, b) / sqrt(m_a m_b).
