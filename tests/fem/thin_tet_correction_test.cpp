@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
 #include <vector>
 
@@ -228,6 +229,37 @@ TEST(ThinTetCorrection, ForcesAreMinusTheEnergyGradientAndTheRestHessianMatches)
         for (int e = 0; e < 3; ++e)
           EXPECT_NEAR(-(fp(b, e) - fm(b, e)) / (2 * h), K(3 * b + e, 3 * a + d), 1e-6 * K.norm());
     }
+}
+
+// The stable step's rows (add_thin_tet_gershgorin, diag / m + off as the springs' bound) bound the largest
+// eigenvalue of M^-1/2 K M^-1/2 of the rest Hessian, unequal masses, one corner pinned.
+TEST(ThinTetCorrection, GershgorinRowsBoundTheRestSpectrum) {
+  ThinTetSettings s;
+  const MatX3 X = flat_tet(0.05);
+  const ThinTetCorrections c = build_thin_tet_corrections(X, one(), s, "flat");
+  VecX mass(4);
+  mass << 0.1, 0.3, 0.2, 0.05;
+  const std::vector<std::uint8_t> fixed = {0, 0, 1, 0};
+  VecX diag = VecX::Zero(4), off = VecX::Zero(4);
+  add_thin_tet_gershgorin(c, mass, fixed, diag, off);
+  double bound = 0;
+  for (Index a = 0; a < 4; ++a)
+    if (!fixed[static_cast<std::size_t>(a)]) bound = std::max(bound, diag[a] / mass[a] + off[a]);
+  const Mat12 K = thin_tet_rest_stiffness(c, 0);
+  std::vector<int> free;
+  for (int a = 0; a < 4; ++a)
+    if (!fixed[static_cast<std::size_t>(a)])
+      for (int d = 0; d < 3; ++d) free.push_back(3 * a + d);
+  Eigen::MatrixXd A(free.size(), free.size());
+  for (std::size_t i = 0; i < free.size(); ++i)
+    for (std::size_t j = 0; j < free.size(); ++j)
+      A(static_cast<Index>(i), static_cast<Index>(j)) =
+          K(free[i], free[j]) / std::sqrt(mass[free[i] / 3] * mass[free[j] / 3]);
+  const double lmax = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues().maxCoeff();
+  EXPECT_GT(lmax, 0);
+  EXPECT_GE(bound, lmax * (1 - 1e-12));
+  EXPECT_LT(bound, 6 * lmax);  // not vacuous
+  std::cout << "flat tetrahedron t/a = 0.05: Gershgorin bound " << bound << ", lambda_max " << lmax << "\n";
 }
 
 TEST(ThinTetCorrection, BadInputIsRefusedWithTheDefectNamed) {
