@@ -262,6 +262,25 @@ TEST(ThinTetCorrection, GershgorinRowsBoundTheRestSpectrum) {
   std::cout << "flat tetrahedron t/a = 0.05: Gershgorin bound " << bound << ", lambda_max " << lmax << "\n";
 }
 
+// Never a NaN: an inverted tetrahedron (apex pushed through the base), one flattened to a plane and one
+// collapsed to a point give finite energies and forces.
+TEST(ThinTetCorrection, InvertedFlatOrCollapsedTetrahedronGivesFiniteForces) {
+  ThinTetSettings s;
+  const MatX3 X = flat_tet(0.1);
+  const ThinTetCorrections c = build_thin_tet_corrections(X, one(), s, "flat");
+  MatX3 inverted = X, plane = X, point = MatX3::Zero(4, 3);
+  inverted(3, 2) = -0.1;
+  plane(3, 2) = 0;
+  for (const MatX3* x : {&inverted, &plane, &point}) {
+    MatX3 f = MatX3::Zero(4, 3);
+    add_thin_tet_forces(c, *x, f);
+    EXPECT_TRUE(f.allFinite());
+    EXPECT_TRUE(std::isfinite(thin_tet_energy(c, *x)));
+  }
+  // the mirror image has the rest stretch: no energy (the volume term, not this one, restores it)
+  EXPECT_LT(thin_tet_energy(c, inverted), 1e-20);
+}
+
 TEST(ThinTetCorrection, BadInputIsRefusedWithTheDefectNamed) {
   ThinTetSettings s;
   const MatX3 X = flat_tet(0.1);
