@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -348,26 +349,37 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       const std::vector<Index> map = fem::free_dof_map(m, nf);
       const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(fem::restrict_to_free(K, map, nf));
       // The thin-tetrahedron term (physics/thin_tet_correction.hpp, docs/volumetric-mesh.md; not yet part of
-      // Model): the model's linear response at rest with the term's rest stiffness added, clipped and with
-      // scaled springs, under the same load as the P1 column. q_max from $MEDSPRING_THIN_TET_QMAX (0.3).
+      // Model), only when $MEDSPRING_THIN_TET_QMAX is set (its q_max): the model's linear response at rest
+      // with the term's rest stiffness added, clipped and with scaled springs, under the P1 column's load.
+      const char* const qenv = std::getenv("MEDSPRING_THIN_TET_QMAX");
+      const bool thin_on = qenv && *qenv;
       ThinTetSettings tts;
-      tts.nu = vb->stats().lambda / (2 * (vb->stats().lambda + vb->stats().mu));
-      tts.E = 2 * vb->stats().mu * (1 + tts.nu);
-      if (const char* q = std::getenv("MEDSPRING_THIN_TET_QMAX"); q && *q) tts.q_max = std::stod(q);
-      std::vector<std::array<Index, 4>> tets;
-      for (Index e = 0; e < vm.T.rows(); ++e)
-        tets.push_back({vm.T(e, 0), vm.T(e, 1), vm.T(e, 2), vm.T(e, 3)});
-      const Eigen::SparseMatrix<double> K0 = tangent_stiffness(m, m.x0, {false, true});
-      ThinTetSettings tts_scaled = tts;
-      tts_scaled.projection = ThinTetProjection::ScaleSprings;
-      const ThinTetCorrections tc = build_thin_tet_corrections(m.x0, tets, tts, o.name);
-      const ThinTetCorrections tcs = build_thin_tet_corrections(m.x0, tets, tts_scaled, o.name);
-      const Eigen::SparseMatrix<double> Kt[3] = {K0, K0 + thin_tet_rest_stiffness_change(tc, m.x0, tts),
-                                                 K0 + thin_tet_rest_stiffness_change(tcs, m.x0, tts_scaled)};
+      ThinTetCorrections tc, tcs;
       std::vector<std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>> tsolve;
-      for (const auto& Kk : Kt)
-        tsolve.push_back(std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(
-            fem::restrict_to_free(Kk, map, nf)));
+      std::size_t ntets = 0;
+      if (thin_on) {
+        char* end = nullptr;
+        tts.q_max = std::strtod(qenv, &end);
+        require(end && *end == '\0' && std::isfinite(tts.q_max) && tts.q_max > 0,
+                "MEDSPRING_THIN_TET_QMAX: must be a number > 0 (got '", qenv, "')");
+        tts.nu = vb->stats().lambda / (2 * (vb->stats().lambda + vb->stats().mu));
+        tts.E = 2 * vb->stats().mu * (1 + tts.nu);
+        std::vector<std::array<Index, 4>> tets;
+        for (Index e = 0; e < vm.T.rows(); ++e)
+          tets.push_back({vm.T(e, 0), vm.T(e, 1), vm.T(e, 2), vm.T(e, 3)});
+        ntets = tets.size();
+        const Eigen::SparseMatrix<double> K0 = tangent_stiffness(m, m.x0, {false, true});
+        ThinTetSettings tts_scaled = tts;
+        tts_scaled.projection = ThinTetProjection::ScaleSprings;
+        tc = build_thin_tet_corrections(m.x0, tets, tts, o.name);
+        tcs = build_thin_tet_corrections(m.x0, tets, tts_scaled, o.name);
+        const Eigen::SparseMatrix<double> Kt[3] = {
+            K0, K0 + thin_tet_rest_stiffness_change(tc, m.x0, tts),
+            K0 + thin_tet_rest_stiffness_change(tcs, m.x0, tts_scaled)};
+        for (const auto& Kk : Kt)
+          tsolve.push_back(std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(
+              fem::restrict_to_free(Kk, map, nf)));
+      }
       double tsums[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // [springs, clip, scaled][contact, RMS, disk]
       json diag = json::array();
       double sums[6] = {0, 0, 0, 0, 0, 0}, nh = 0;
@@ -409,7 +421,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                         {"springs_linear_disk_mean_along_mm", along(lin[i])},
                         {"p1_disk_mean_along_mm", along(up)}});
         json thin = json::object();
-        for (int v = 0; v < 3; ++v) {
+        for (int v = 0; v < (thin_on ? 3 : 0); ++v) {
           const VecX uv = tsolve[static_cast<std::size_t>(v)]->solve(r);
           MatX3 us = MatX3::Zero(vm.surface_nodes, 3);
           for (Index a = 0; a < vm.surface_nodes; ++a)
@@ -428,7 +440,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
             tsums[v][2] += mv;
           }
         }
-        diag.back()["thin_tet_term"] = thin;
+        if (thin_on) diag.back()["thin_tet_term"] = thin;
         if (!c.train) {
           sums[0] += 100 * el.rel(el.contact_error), sums[1] += 100 * el.rel(el.rms);
           sums[2] += 100 * ep.rel(ep.contact_error), sums[3] += 100 * ep.rel(ep.rms);
@@ -449,19 +461,19 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                    " %; P1 FE on the same tetrahedra contact ", (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ",
                    (nh > 0 ? sums[3] / nh : 0.0), " %; disk-mean site error: springs ",
                    (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ", (nh > 0 ? sums[5] / nh : 0.0), " %"));
-      {
+      if (thin_on) {
         Index scaled_lt_half = 0;
-        for (double f : tcs.spring_factor) scaled_lt_half += f < 0.5 ? 1 : 0;
+        for (double sf : tcs.spring_factor) scaled_lt_half += sf < 0.5 ? 1 : 0;
         const double d = nh > 0 ? nh : 1.0;
         out["volumetric"]["small_strain"]["thin_tet_term"] = {
             {"q_max", tts.q_max},
             {"flagged", tc.size()},
-            {"tetrahedra", static_cast<Index>(tets.size())},
+            {"tetrahedra", ntets},
             {"held_out_mean_springs_same_load", {tsums[0][0] / d, tsums[0][1] / d, tsums[0][2] / d}},
             {"held_out_mean_clip", {tsums[1][0] / d, tsums[1][1] / d, tsums[1][2] / d}},
             {"held_out_mean_scaled", {tsums[2][0] / d, tsums[2][1] / d, tsums[2][2] / d}}};
         note(st, cat(o.name, ": small strain, held out, P1's load: thin-tetrahedron term (q < ", tts.q_max,
-                     ": ", tc.size(), " of ", tets.size(), " tetrahedra, ", scaled_lt_half,
+                     ": ", tc.size(), " of ", ntets, " tetrahedra, ", scaled_lt_half,
                      " with spring factor < 0.5) contact / RMS / disk-mean %: springs ", tsums[0][0] / d,
                      " / ", tsums[0][1] / d, " / ", tsums[0][2] / d, "; + clipped term ", tsums[1][0] / d,
                      " / ", tsums[1][1] / d, " / ", tsums[1][2] / d, "; scaled springs + term ",
