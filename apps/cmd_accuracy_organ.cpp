@@ -353,7 +353,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       // with the term's rest stiffness added, clipped and with scaled springs, under the P1 column's load.
       const char* const qenv = std::getenv("MEDSPRING_THIN_TET_QMAX");
       const bool thin_on = qenv && *qenv;
-      ThinTetSettings tts;
+      ThinTetSettings tts, tcs_settings;
       ThinTetCorrections tc, tcs;
       std::vector<std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>> tsolve;
       std::size_t ntets = 0;
@@ -373,6 +373,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
         tts_scaled.projection = ThinTetProjection::ScaleSprings;
         tc = build_thin_tet_corrections(m.x0, tets, tts, o.name);
         tcs = build_thin_tet_corrections(m.x0, tets, tts_scaled, o.name);
+        tcs_settings = tts_scaled;
         const Eigen::SparseMatrix<double> Kt[3] = {
             K0, K0 + thin_tet_rest_stiffness_change(tc, m.x0, tts),
             K0 + thin_tet_rest_stiffness_change(tcs, m.x0, tts_scaled)};
@@ -462,6 +463,30 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                    (nh > 0 ? sums[3] / nh : 0.0), " %; disk-mean site error: springs ",
                    (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ", (nh > 0 ? sums[5] / nh : 0.0), " %"));
       if (thin_on) {
+        // the largest rest eigenvalue of M^-1/2 K M^-1/2 over the free DOFs (power iteration, 400 steps):
+        // omega_max at rest, for the stable step's price of the term
+        auto omega = [&](const Eigen::SparseMatrix<double>& Kk) {
+          const Eigen::SparseMatrix<double> Kf = fem::restrict_to_free(Kk, map, nf);
+          VecX minv(nf);
+          for (Index i = 0; i < 3 * m.num_nodes(); ++i)
+            if (map[static_cast<std::size_t>(i)] >= 0)
+              minv[map[static_cast<std::size_t>(i)]] = 1 / std::sqrt(m.mass[i / 3]);
+          VecX v = VecX::Ones(nf) + 0.1 * VecX::LinSpaced(nf, 0, 1);
+          double lam = 0;
+          for (int it = 0; it < 400; ++it) {
+            v.normalize();
+            const VecX w = minv.cwiseProduct(Kf * minv.cwiseProduct(v));
+            lam = v.dot(w);
+            v = w;
+          }
+          return std::sqrt(std::max(lam, 0.0));
+        };
+        const Eigen::SparseMatrix<double> K0 = tangent_stiffness(m, m.x0, {false, true});
+        const double om[3] = {omega(K0), omega(K0 + thin_tet_rest_stiffness_change(tc, m.x0, tts)),
+                              omega(K0 + thin_tet_rest_stiffness_change(tcs, m.x0, tcs_settings))};
+        note(st, cat(o.name, ": thin-tetrahedron term: omega_max at rest (power iteration) springs ", om[0],
+                     ", + clipped term ", om[1], ", scaled springs + term ", om[2], " rad/ms"));
+        out["volumetric"]["small_strain"]["thin_tet_omega_rest"] = {om[0], om[1], om[2]};
         Index scaled_lt_half = 0;
         for (double sf : tcs.spring_factor) scaled_lt_half += sf < 0.5 ? 1 : 0;
         const double d = nh > 0 ? nh : 1.0;
