@@ -3,16 +3,13 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
-#include <array>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
-#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -35,9 +32,7 @@
 #include "medspring/models/tissue.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/models/volumetric_moduli.hpp"
-#include "medspring/physics/forces.hpp"
 #include "medspring/physics/loads.hpp"
-#include "medspring/physics/thin_tet_correction.hpp"
 #include "medspring/scene/build.hpp"
 #include "medspring/scene/scene.hpp"
 #include "medspring/sim/simulation.hpp"
@@ -78,7 +73,9 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.volume_scale = m(1);
     s.moduli_correction = k.corrected;
     s.compression = o.compression * (m.size() > 2 ? m(2) : 1.0);  // m(2): the nonlinear fit's c multiplier
-    if (k.nonlinear) s.duffing = DuffingSettings{};               // Strain, eta = 1 (D-3)
+    s.thin_tet = o.thin_tet;  // opt-in thin-tetrahedron terms (docs/volumetric-mesh.md)
+    s.thin_tet_q_max = o.thin_tet_q_max;
+    if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
     s.fixed = o.surface_subdivisions > 0 ? o.vsupport : support;
     return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
   }
@@ -292,6 +289,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   o.nu = st.material.nu;
   o.target_nodes = st.volumetric_nodes;
   o.compression = st.compression;
+  o.thin_tet = st.thin_tet;
+  o.thin_tet_q_max = st.thin_tet_q_max;
   o.surface_subdivisions = st.surface_subdivisions;
   o.interior_sizing = st.interior_sizing;
   if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
@@ -304,7 +303,9 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                          {"interior_sizing", to_string(o.interior_sizing)},
                          {"tetrahedra", vm.T.rows()},
                          {"target_nodes", st.volumetric_nodes},
-                         {"compression", st.compression}};
+                         {"compression", st.compression},
+                         {"thin_tet", to_string(st.thin_tet)},
+                         {"thin_tet_q_max", st.thin_tet_q_max}};
     // the mesh's effective moduli from E and nu (docs/volumetric.md, "Effective moduli of the mesh")
     for (const auto& [label, sv] : std::vector<std::pair<std::string, std::pair<double, double>>>{
              {"springs+volume", {1.0, 1.0}}, {"springs", {1.0, 0.0}}}) {
@@ -348,40 +349,6 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       Index nf = 0;
       const std::vector<Index> map = fem::free_dof_map(m, nf);
       const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(fem::restrict_to_free(K, map, nf));
-      // The thin-tetrahedron term (physics/thin_tet_correction.hpp, docs/volumetric-mesh.md; not yet part of
-      // Model), only when $MEDSPRING_THIN_TET_QMAX is set (its q_max): the model's linear response at rest
-      // with the term's rest stiffness added, clipped and with scaled springs, under the P1 column's load.
-      const char* const qenv = std::getenv("MEDSPRING_THIN_TET_QMAX");
-      const bool thin_on = qenv && *qenv;
-      ThinTetSettings tts, tcs_settings;
-      ThinTetCorrections tc, tcs;
-      std::vector<std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>> tsolve;
-      std::size_t ntets = 0;
-      if (thin_on) {
-        char* end = nullptr;
-        tts.q_max = std::strtod(qenv, &end);
-        require(end && *end == '\0' && std::isfinite(tts.q_max) && tts.q_max > 0,
-                "MEDSPRING_THIN_TET_QMAX: must be a number > 0 (got '", qenv, "')");
-        tts.nu = vb->stats().lambda / (2 * (vb->stats().lambda + vb->stats().mu));
-        tts.E = 2 * vb->stats().mu * (1 + tts.nu);
-        std::vector<std::array<Index, 4>> tets;
-        for (Index e = 0; e < vm.T.rows(); ++e)
-          tets.push_back({vm.T(e, 0), vm.T(e, 1), vm.T(e, 2), vm.T(e, 3)});
-        ntets = tets.size();
-        const Eigen::SparseMatrix<double> K0 = tangent_stiffness(m, m.x0, {false, true});
-        ThinTetSettings tts_scaled = tts;
-        tts_scaled.projection = ThinTetProjection::ScaleSprings;
-        tc = build_thin_tet_corrections(m.x0, tets, tts, o.name);
-        tcs = build_thin_tet_corrections(m.x0, tets, tts_scaled, o.name);
-        tcs_settings = tts_scaled;
-        const Eigen::SparseMatrix<double> Kt[3] = {
-            K0, K0 + thin_tet_rest_stiffness_change(tc, m.x0, tts),
-            K0 + thin_tet_rest_stiffness_change(tcs, m.x0, tts_scaled)};
-        for (const auto& Kk : Kt)
-          tsolve.push_back(std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(
-              fem::restrict_to_free(Kk, map, nf)));
-      }
-      double tsums[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // [springs, clip, scaled][contact, RMS, disk]
       json diag = json::array();
       double sums[6] = {0, 0, 0, 0, 0, 0}, nh = 0;
       for (std::size_t i = 0; i < cases.size(); ++i) {
@@ -421,27 +388,6 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                         {"fem_disk_mean_along_mm", c.fem_mean.dot(fd)},
                         {"springs_linear_disk_mean_along_mm", along(lin[i])},
                         {"p1_disk_mean_along_mm", along(up)}});
-        json thin = json::object();
-        for (int v = 0; v < (thin_on ? 3 : 0); ++v) {
-          const VecX uv = tsolve[static_cast<std::size_t>(v)]->solve(r);
-          MatX3 us = MatX3::Zero(vm.surface_nodes, 3);
-          for (Index a = 0; a < vm.surface_nodes; ++a)
-            for (int d = 0; d < 3; ++d)
-              if (map[static_cast<std::size_t>(3 * a + d)] >= 0)
-                us(a, d) = uv[map[static_cast<std::size_t>(3 * a + d)]];
-          const fem::SurfaceError ev = fem::compare(on_organ_surface(o, us), c.u_fem, contact);
-          const double mv = mean_err(us, c.load, c.fem_mean);
-          static const char* const kName[3] = {"springs", "clip", "scaled"};
-          thin[kName[v]] = {{"contact_pct", 100 * ev.rel(ev.contact_error)},
-                            {"rms_pct", 100 * ev.rel(ev.rms)},
-                            {"disk_mean_pct", mv}};
-          if (!c.train) {
-            tsums[v][0] += 100 * ev.rel(ev.contact_error);
-            tsums[v][1] += 100 * ev.rel(ev.rms);
-            tsums[v][2] += mv;
-          }
-        }
-        if (thin_on) diag.back()["thin_tet_term"] = thin;
         if (!c.train) {
           sums[0] += 100 * el.rel(el.contact_error), sums[1] += 100 * el.rel(el.rms);
           sums[2] += 100 * ep.rel(ep.contact_error), sums[3] += 100 * ep.rel(ep.rms);
@@ -462,48 +408,6 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                    " %; P1 FE on the same tetrahedra contact ", (nh > 0 ? sums[2] / nh : 0.0), " %, RMS ",
                    (nh > 0 ? sums[3] / nh : 0.0), " %; disk-mean site error: springs ",
                    (nh > 0 ? sums[4] / nh : 0.0), " %, P1 ", (nh > 0 ? sums[5] / nh : 0.0), " %"));
-      if (thin_on) {
-        // the largest rest eigenvalue of M^-1/2 K M^-1/2 over the free DOFs (power iteration, 400 steps):
-        // omega_max at rest, for the stable step's price of the term
-        auto omega = [&](const Eigen::SparseMatrix<double>& Kk) {
-          const Eigen::SparseMatrix<double> Kf = fem::restrict_to_free(Kk, map, nf);
-          VecX minv(nf);
-          for (Index i = 0; i < 3 * m.num_nodes(); ++i)
-            if (map[static_cast<std::size_t>(i)] >= 0)
-              minv[map[static_cast<std::size_t>(i)]] = 1 / std::sqrt(m.mass[i / 3]);
-          VecX v = VecX::Ones(nf) + 0.1 * VecX::LinSpaced(nf, 0, 1);
-          double lam = 0;
-          for (int it = 0; it < 400; ++it) {
-            v.normalize();
-            const VecX w = minv.cwiseProduct(Kf * minv.cwiseProduct(v));
-            lam = v.dot(w);
-            v = w;
-          }
-          return std::sqrt(std::max(lam, 0.0));
-        };
-        const Eigen::SparseMatrix<double> K0 = tangent_stiffness(m, m.x0, {false, true});
-        const double om[3] = {omega(K0), omega(K0 + thin_tet_rest_stiffness_change(tc, m.x0, tts)),
-                              omega(K0 + thin_tet_rest_stiffness_change(tcs, m.x0, tcs_settings))};
-        note(st, cat(o.name, ": thin-tetrahedron term: omega_max at rest (power iteration) springs ", om[0],
-                     ", + clipped term ", om[1], ", scaled springs + term ", om[2], " rad/ms"));
-        out["volumetric"]["small_strain"]["thin_tet_omega_rest"] = {om[0], om[1], om[2]};
-        Index scaled_lt_half = 0;
-        for (double sf : tcs.spring_factor) scaled_lt_half += sf < 0.5 ? 1 : 0;
-        const double d = nh > 0 ? nh : 1.0;
-        out["volumetric"]["small_strain"]["thin_tet_term"] = {
-            {"q_max", tts.q_max},
-            {"flagged", tc.size()},
-            {"tetrahedra", ntets},
-            {"held_out_mean_springs_same_load", {tsums[0][0] / d, tsums[0][1] / d, tsums[0][2] / d}},
-            {"held_out_mean_clip", {tsums[1][0] / d, tsums[1][1] / d, tsums[1][2] / d}},
-            {"held_out_mean_scaled", {tsums[2][0] / d, tsums[2][1] / d, tsums[2][2] / d}}};
-        note(st, cat(o.name, ": small strain, held out, P1's load: thin-tetrahedron term (q < ", tts.q_max,
-                     ": ", tc.size(), " of ", ntets, " tetrahedra, ", scaled_lt_half,
-                     " with spring factor < 0.5) contact / RMS / disk-mean %: springs ", tsums[0][0] / d,
-                     " / ", tsums[0][1] / d, " / ", tsums[0][2] / d, "; + clipped term ", tsums[1][0] / d,
-                     " / ", tsums[1][1] / d, " / ", tsums[1][2] / d, "; scaled springs + term ",
-                     tsums[2][0] / d, " / ", tsums[2][1] / d, " / ", tsums[2][2] / d));
-      }
     } catch (const Error& e) {  // a diagnosis, never the reason a run fails
       out["volumetric"]["small_strain"] = {{"error", e.what()}};
     }

@@ -3,6 +3,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 
@@ -54,6 +55,23 @@ double biot_energy(const Mat6& Cc, const Mat3& F, Mat3* P) {
     *P = 2.0 * F * (Q * Tq * Q.transpose());
   }
   return psi;
+}
+
+// The stable step's growth factor of one term at F (header, add_thin_tet_forces).
+double growth(const Mat6& Cc, double c_max, const Mat3& F) {
+  const Eigen::JacobiSVD<Mat3> svd(F, Eigen::ComputeFullV);
+  const Vec3 sg = svd.singularValues();
+  double rho = 0.5;
+  for (int i = 0; i < 3; ++i)
+    for (int j = i + 1; j < 3; ++j) {
+      const double d = sg[i] + sg[j];
+      rho = std::max(rho, d > 0 ? (sg[i] * sg[i] + sg[j] * sg[j]) / (d * d) : 1.0);
+    }
+  const Mat3& V = svd.matrixV();
+  const Mat3 U = V * sg.asDiagonal() * V.transpose();
+  const double T = (Cc * mandel(U - Mat3::Identity())).norm();  // |T|_F (Mandel keeps the norm)
+  const double smin = std::max(sg.minCoeff(), 1e-12);
+  return 2.0 * rho + 3.0 * T / (smin * c_max);
 }
 
 }  // namespace
@@ -156,6 +174,7 @@ ThinTetCorrections build_thin_tet_corrections(const MatX3& x0, const std::vector
     C.C.push_back(es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose());
     C.clipped.push_back(std::max(-es.eigenvalues().minCoeff(), 0.0) / two_mu);
     C.spring_factor.push_back(factor);
+    C.c_max.push_back(ev.maxCoeff());
   }
   return C;
 }
@@ -173,6 +192,11 @@ double thin_tet_energy(const ThinTetCorrections& C, const MatX3& x) {
 }
 
 void add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f) {
+  add_thin_tet_forces(C, x, f, false);
+}
+
+double add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f, bool stiffening) {
+  double grow = 1.0;
   for (Index t = 0; t < C.size(); ++t) {
     const auto u = static_cast<std::size_t>(t);
     const auto& n = C.n[u];
@@ -184,6 +208,77 @@ void add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f) 
     const Mat3 H = -C.V0[u] * P * C.DmInv[u].transpose();  // columns: forces on corners 1..3
     for (int k = 0; k < 3; ++k) f.row(n[static_cast<std::size_t>(k + 1)]) += H.col(k).transpose();
     f.row(n[0]) -= (H.col(0) + H.col(1) + H.col(2)).transpose();
+    if (stiffening && C.c_max[u] > 0) grow = std::max(grow, growth(C.C[u], C.c_max[u], F));
+  }
+  return grow;
+}
+
+namespace {
+
+// The polar rotation of F (U V^T of its SVD; a reflection where F is inverted: still orthogonal, so the
+// co-rotated stiffness stays positive semi-definite).
+Mat3 polar_rotation(const Mat3& F) {
+  const Eigen::JacobiSVD<Mat3> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return svd.matrixU() * svd.matrixV().transpose();
+}
+
+}  // namespace
+
+void add_thin_tet_stiffness_product(const ThinTetCorrections& C, const MatX3& x, const VecX& p, VecX& y) {
+  for (Index t = 0; t < C.size(); ++t) {
+    const auto u = static_cast<std::size_t>(t);
+    const auto& n = C.n[u];
+    const Mat3 F = edge_matrix(x.row(n[0]).transpose(), x.row(n[1]).transpose(), x.row(n[2]).transpose(),
+                               x.row(n[3]).transpose()) *
+                   C.DmInv[u];
+    const Mat3 R = polar_rotation(F);
+    Vec3 q[4];
+    for (int k = 0; k < 4; ++k) q[k] = R.transpose() * p.segment<3>(3 * n[static_cast<std::size_t>(k)]);
+    Mat3 Dq;
+    for (int k = 0; k < 3; ++k) Dq.col(k) = q[k + 1] - q[0];
+    const Mat3 G = Dq * C.DmInv[u];
+    const Mat3 S = unmandel(C.C[u] * mandel(0.5 * (G + G.transpose())));
+    const Mat3 H = R * (C.V0[u] * S * C.DmInv[u].transpose());  // columns: K p on corners 1..3
+    for (int k = 0; k < 3; ++k) y.segment<3>(3 * n[static_cast<std::size_t>(k + 1)]) += H.col(k);
+    y.segment<3>(3 * n[0]) -= H.col(0) + H.col(1) + H.col(2);
+  }
+}
+
+void add_thin_tet_stiffness_triplets(const ThinTetCorrections& C, const MatX3& x,
+                                     std::vector<Eigen::Triplet<double>>& T) {
+  for (Index t = 0; t < C.size(); ++t) {
+    const auto u = static_cast<std::size_t>(t);
+    const auto& n = C.n[u];
+    const Mat3 F = edge_matrix(x.row(n[0]).transpose(), x.row(n[1]).transpose(), x.row(n[2]).transpose(),
+                               x.row(n[3]).transpose()) *
+                   C.DmInv[u];
+    const Mat3 R = polar_rotation(F);
+    const Mat12 K = thin_tet_rest_stiffness(C, t);
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const Mat3 B = R * K.block<3, 3>(3 * a, 3 * b) * R.transpose();
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            T.emplace_back(3 * n[static_cast<std::size_t>(a)] + i, 3 * n[static_cast<std::size_t>(b)] + j,
+                           B(i, j));
+      }
+  }
+}
+
+void validate_thin_tet_corrections(const ThinTetCorrections& C, Index nodes, const std::string& what) {
+  const auto nt = static_cast<std::size_t>(C.size());
+  require(C.tet.size() == nt && C.DmInv.size() == nt && C.V0.size() == nt && C.C.size() == nt &&
+              C.clipped.size() == nt && C.spring_factor.size() == nt && C.c_max.size() == nt,
+          what, ": thin-tetrahedron terms: arrays have inconsistent sizes");
+  for (std::size_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 4; ++k)
+      require(C.n[t][static_cast<std::size_t>(k)] >= 0 && C.n[t][static_cast<std::size_t>(k)] < nodes, what,
+              ": thin-tetrahedron term ", t, ": corner ", k, " = ", C.n[t][static_cast<std::size_t>(k)],
+              " out of range [0, ", nodes, ")");
+    require(std::isfinite(C.V0[t]) && C.V0[t] > 0, what, ": thin-tetrahedron term ", t,
+            ": rest volume must be > 0 (got ", C.V0[t], ")");
+    require(C.DmInv[t].allFinite() && C.C[t].allFinite() && std::isfinite(C.c_max[t]) && C.c_max[t] >= 0,
+            what, ": thin-tetrahedron term ", t, ": non-finite rest data");
   }
 }
 

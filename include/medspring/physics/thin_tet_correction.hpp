@@ -5,7 +5,8 @@
 // where e(.) is the Mandel vector of a symmetric tensor and C_c = P+(C_P1 - C_rule) is the positive part of
 // the difference between the linear P1 element's and the rule's (springs + volume term) rest stiffness.
 // The forces are the exact gradient (rotation from the polar decomposition, no rotation estimate), so they
-// conserve linear and angular momentum and a rigid rotation gives none. Not wired into Model yet.
+// conserve linear and angular momentum and a rigid rotation gives none. Part of Model (Model::thin), built
+// by VolumetricBody when VolumetricSettings::thin_tet is on (off by default).
 #pragma once
 
 #include <Eigen/Core>
@@ -50,6 +51,7 @@ struct ThinTetCorrections {
   std::vector<Mat6> C;                  // C_c (Mandel, N/mm^2), symmetric positive semi-definite
   std::vector<double> clipped;          // the largest clipped (negative) eigenvalue's magnitude / (2 mu)
   std::vector<double> spring_factor;    // factor on this tetrahedron's share of its six springs (1 with Clip)
+  std::vector<double> c_max;            // largest eigenvalue of C_c (N/mm^2), for the stable step's bound
 
   Index size() const { return static_cast<Index>(n.size()); }
 };
@@ -86,6 +88,23 @@ Mat12 tet_mandel_rest_stiffness(const MatX3& x0, const std::array<Index, 4>& tet
 /// until the term is part of Model). `s` must be the settings the terms were built with.
 Eigen::SparseMatrix<double> thin_tet_rest_stiffness_change(const ThinTetCorrections& C, const MatX3& x0,
                                                            const ThinTetSettings& s);
+
+/// Adds the forces and, with `stiffening`, returns the largest growth factor over the terms of the term's
+/// stiffness off rest (1 at rest; docs/volumetric-mesh.md, "Stable step"):
+///   s_t = 2 rho + 3 |T|_F / (sigma_min c_max),  rho = max_{i<j} (s_i^2 + s_j^2) / (s_i + s_j)^2,
+/// sigma the singular values of F, T the Biot stress C_c e(U - I): d^2 Psi/dF^2 <= s_t c_max |dF|^2, where
+/// the rest stiffness is c_max |sym dF|^2 at most. Without `stiffening` returns 1.
+double add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f, bool stiffening);
+/// y += K_c p, K_c = sum_t R_t K_t(x0) R_t^T (the terms' rest stiffness co-rotated by the polar rotation of
+/// each F: symmetric positive semi-definite, exact at rest; the Gauss-Newton part of the implicit step's
+/// and the stable-step estimate's product). p, y: 3 #N (node-major).
+void add_thin_tet_stiffness_product(const ThinTetCorrections& C, const MatX3& x, const VecX& p, VecX& y);
+/// The same co-rotated stiffness as triplets (rows 3 a + i) for tangent_stiffness.
+void add_thin_tet_stiffness_triplets(const ThinTetCorrections& C, const MatX3& x,
+                                     std::vector<Eigen::Triplet<double>>& T);
+/// Checks sizes, corner ranges, finite positive V0 and finite C of terms set by hand (finalize); throws
+/// InvalidInput naming `what` and the term.
+void validate_thin_tet_corrections(const ThinTetCorrections& C, Index nodes, const std::string& what);
 
 /// Adds, per node, the Gershgorin row bound of the terms' rest Hessians in the form of add_volume_gershgorin:
 /// diag[a] += Frobenius norm of its own 3x3 block, off[a] += sum over the free other corners b of the
