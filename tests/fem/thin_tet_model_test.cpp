@@ -166,7 +166,7 @@ TEST(ThinTetModel, ModelForcesAreTheEnergyGradientAndConserveMomentum) {
     for (Index i = 0; i < x.rows(); ++i) f.row(i) += m.kr[i] * (x.row(i) - m.x0.row(i));
   };
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> U(-0.08, 0.08);
+  std::uniform_real_distribution<double> U(-0.02, 0.02);  // 20 % of a cell's thickness
   MatX3 x = m.x0;
   for (Index i = 0; i < x.rows(); ++i)
     for (int k = 0; k < 3; ++k) x(i, k) += U(rng);
@@ -178,8 +178,8 @@ TEST(ThinTetModel, ModelForcesAreTheEnergyGradientAndConserveMomentum) {
     torque += Vec3(x.row(i)).cross(Vec3(f.row(i)));
   }
   const double scale = f.cwiseAbs().maxCoeff();
-  EXPECT_LT(sum.norm(), 1e-12 * scale * x.rows());
-  EXPECT_LT(torque.norm(), 1e-11 * scale * x.rows());
+  EXPECT_LT(sum.norm(), 1e-12 * scale * static_cast<double>(x.rows()));
+  EXPECT_LT(torque.norm(), 1e-11 * scale * static_cast<double>(x.rows()));
   double worst = 0;
   for (Index i = 0; i < x.rows(); i += 3)
     for (int k = 0; k < 3; ++k) {
@@ -200,7 +200,7 @@ TEST(ThinTetModel, ModelForcesAreTheEnergyGradientAndConserveMomentum) {
 }
 
 // An undamped model released from a deformed state keeps its total energy (symplectic Euler: a bounded
-// oscillation of O(h), under 1 % here), the term's energy included.
+// oscillation of O(h omega), under 1 % at a tenth of the stable step), the term's energy included.
 TEST(ThinTetModel, UndampedStepKeepsTheTotalEnergy) {
   const VolumetricMesh vm = box(fem::graded(0, 1, 2), fem::graded(0, 1, 2), fem::graded(0, 0.4, 4));
   VolumetricSettings s = settings(ThinTetMode::ScaleSprings, 1.0);
@@ -212,6 +212,7 @@ TEST(ThinTetModel, UndampedStepKeepsTheTotalEnergy) {
   const Model& m = body.model();
   StepSettings ss;
   ss.dt = 0.5;
+  ss.safety = 0.1;  // symplectic Euler's energy error is O(h omega): 4 % at the default 0.8
   State st = make_state(m, ss);
   for (Index i = 0; i < m.num_nodes(); ++i)
     if (!m.fixed[static_cast<std::size_t>(i)]) st.x(i, 0) += 0.05 * m.x0(i, 2);  // a through-thickness shear
