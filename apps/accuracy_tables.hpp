@@ -44,6 +44,9 @@ struct Organ {
   mutable std::vector<Index> vsupport;
   // VolumetricSettings::compression
   mutable double compression = kDefaultVolumetricCompression;
+  // VolumetricSettings::thin_tet, thin_tet_q_max (--thin-tet, --thin-tet-q-max)
+  mutable ThinTetMode thin_tet = ThinTetMode::Off;
+  mutable double thin_tet_q_max = kDefaultThinTetQMax;
 };
 
 // A model kind of the tables: "surface", "hybrid" or "volumetric", linear or Duffing, with or without the
@@ -81,6 +84,9 @@ struct Settings {
   fem::MeshSizing interior_sizing = fem::MeshSizing::Volume;  // --interior-sizing (volumetric kinds)
   // --compression (volumetric kinds)
   double compression = kDefaultVolumetricCompression;
+  // --thin-tet, --thin-tet-q-max (volumetric kinds; declared in VolumetricSettings)
+  ThinTetMode thin_tet = ThinTetMode::Off;
+  double thin_tet_q_max = kDefaultThinTetQMax;
   // --fit nonlinear (default) | small-strain: the volumetric calibration refined on the full response
   bool fit_nonlinear = true;
   // --train-force F[,F...] (N): the training sites' loads (empty: 0.5 N or the smallest force)

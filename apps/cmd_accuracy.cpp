@@ -35,6 +35,7 @@
 #include "medspring/scene/study_settings.hpp"
 #include "medspring/sim/simulation.hpp"
 #include "scene_support.hpp"
+#include "thin_tet_options.hpp"
 
 namespace medspring::cli::accuracy {
 
@@ -90,6 +91,10 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   } catch (const InvalidInput& e) {
     throw InvalidInput(cat(cmd, ": --site-readout ", e.what()));
   }
+  VolumetricSettings thin;  // --thin-tet, --thin-tet-q-max through the declaration (thin_tet_options.hpp)
+  read_thin_tet_options(args, thin, cmd);
+  st.thin_tet = thin.thin_tet;
+  st.thin_tet_q_max = thin.thin_tet_q_max;
   st.compression = args.number("compression", st.compression);
   require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
           st.compression, ")");
@@ -135,7 +140,9 @@ int cmd_accuracy(const Args& args) {
                       "fit",
                       "train-force",
                       "site-readout",
-                      "volume-term-variants"});
+                      "volume-term-variants",
+                      "thin-tet",
+                      "thin-tet-q-max"});
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -297,7 +304,7 @@ int cmd_accuracy(const Args& args) {
 int cmd_calibrate(const Args& args) {
   args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
                       "compression", "surface-subdivisions", "interior-sizing", "fit", "train-force",
-                      "site-readout"});
+                      "site-readout", "thin-tet", "thin-tet-q-max"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));

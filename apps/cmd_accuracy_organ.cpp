@@ -74,7 +74,9 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.volume_scale = m(1);
     s.moduli_correction = k.corrected;
     s.compression = o.compression * (m.size() > 2 ? m(2) : 1.0);  // m(2): the nonlinear fit's c multiplier
-    if (k.nonlinear) s.duffing = DuffingSettings{};               // Strain, eta = 1 (D-3)
+    s.thin_tet = o.thin_tet;  // opt-in thin-tetrahedron terms (docs/volumetric-mesh.md)
+    s.thin_tet_q_max = o.thin_tet_q_max;
+    if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
     s.fixed = o.surface_subdivisions > 0 ? o.vsupport : support;
     return std::make_shared<VolumetricBody>(volumetric_mesh_of(o), s, o.name);
   }
@@ -288,6 +290,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   o.nu = st.material.nu;
   o.target_nodes = st.volumetric_nodes;
   o.compression = st.compression;
+  o.thin_tet = st.thin_tet;
+  o.thin_tet_q_max = st.thin_tet_q_max;
   o.surface_subdivisions = st.surface_subdivisions;
   o.interior_sizing = st.interior_sizing;
   if (std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric"; })) {
@@ -300,7 +304,9 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                          {"interior_sizing", to_string(o.interior_sizing)},
                          {"tetrahedra", vm.T.rows()},
                          {"target_nodes", st.volumetric_nodes},
-                         {"compression", st.compression}};
+                         {"compression", st.compression},
+                         {"thin_tet", to_string(st.thin_tet)},
+                         {"thin_tet_q_max", st.thin_tet_q_max}};
     // the mesh's effective moduli from E and nu (docs/volumetric.md, "Effective moduli of the mesh")
     for (const auto& [label, sv] : std::vector<std::pair<std::string, std::pair<double, double>>>{
              {"springs+volume", {1.0, 1.0}}, {"springs", {1.0, 0.0}}}) {

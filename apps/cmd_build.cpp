@@ -19,6 +19,7 @@
 #include "cases.hpp"
 #include "commands.hpp"
 #include "medspring/core/check.hpp"
+#include "thin_tet_options.hpp"
 
 #ifdef MEDSPRING_HAVE_BUILDERS
 #include "medspring/builders/centerline_build.hpp"
@@ -358,7 +359,8 @@ int build_vessel_cmd(const Args& args) {
 // springs are on), surface.vtp and summary.json.
 int build_volumetric_cmd(const Args& args) {
   args.require_known({"json", "force", "mesh", "mask", "label", "unit", "close-holes", "nodes",
-                      "surface-nodes", "interior-sizing", "E-kPa", "nu", "out"});
+                      "surface-nodes", "interior-sizing", "E-kPa", "nu", "out", "thin-tet",
+                      "thin-tet-q-max"});
   KidneyBuildSettings st;
   st.source = organ_source(args);
   st.nodes = count_option(args, "surface-nodes", 458, 4);
@@ -371,6 +373,7 @@ int build_volumetric_cmd(const Args& args) {
   require(std::isfinite(vs.nu) && vs.nu > -1 && vs.nu < 0.5, "option --nu: must be in (-1, 0.5) (got ", vs.nu,
           ")");
   const fem::MeshSizing sizing = fem::parse_mesh_sizing(args.get_or("interior-sizing", "volume"));
+  read_thin_tet_options(args, vs, "build volumetric");  // opt-in thin-tetrahedron terms
   const fs::path out = out_option(args);
   check_output_folder(out, args.flag("force"));
   const auto t0 = std::chrono::steady_clock::now();
@@ -393,6 +396,10 @@ int build_volumetric_cmd(const Args& args) {
                             {"min_tet_volume_mm3", vst.min_tet_volume},
                             {"E_kPa", vs.E_kPa},
                             {"nu", vs.nu},
+                            {"thin_tet", to_string(vs.thin_tet)},
+                            {"thin_tet_q_max", vs.thin_tet_q_max},
+                            {"thin_tets", vst.thin_tets},
+                            {"thin_spring_factor", vst.thin_spring_factor},
                             {"build_seconds", seconds}};
   const std::string text = cat("volumetric organ from ", k.summary.input, ": ", vst.nodes, " nodes (",
                                vst.surface_nodes, " on the surface, target ", nodes, "), ", vst.tetrahedra,

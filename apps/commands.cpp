@@ -11,6 +11,7 @@
 
 #include "command_options.hpp"
 #include "medspring/scene/study_settings.hpp"
+#include "thin_tet_options.hpp"
 
 namespace medspring::cli {
 
@@ -332,6 +333,8 @@ const std::vector<CommandSpec>& commands() {
             fit_option("nonlinear; --quick: small-strain"),
             kTrainForce,
             kSiteReadout,
+            thin_tet_option(),
+            thin_tet_q_max_option(),
             {.name = "no-validation", .help = "skip the closed-form validation of the FEM pipeline"},
             {.name = "forces",
              .value = "LIST",
@@ -390,6 +393,8 @@ const std::vector<CommandSpec>& commands() {
             fit_option("nonlinear"),
             kTrainForce,
             kSiteReadout,
+            thin_tet_option(),
+            thin_tet_q_max_option(),
             kScenes,
             kJson,
             kQuiet},

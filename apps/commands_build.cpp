@@ -1,6 +1,7 @@
 // `medspring build KIND` and its options, declared once (split from commands.cpp; see its header comment).
 #include "command_options.hpp"
 #include "commands.hpp"
+#include "thin_tet_options.hpp"
 
 namespace medspring::cli {
 
@@ -126,6 +127,8 @@ CommandSpec build_command() {
                      "                              [--nodes 2000] [--surface-nodes 458] [--E-kPa 10] "
                      "[--nu 0.45]\n"
                      "                              [--interior-sizing volume|surface]\n"
+                     "                              [--thin-tet off|scale_springs|clip] "
+                     "[--thin-tet-q-max 0.3]\n"
                      "                              --out DIR [--json] [--force]",
             .about =
                 "The volumetric spring organ: the balloon surface of `build kidney` with --surface-nodes\n"
@@ -142,6 +145,8 @@ CommandSpec build_command() {
                  {.name = "nodes", .value = "N", .def = "2000", .help = "nodes in all (surface + interior)"},
                  {.name = "surface-nodes", .value = "N", .def = "458", .help = "surface nodes"},
                  kInteriorSizing,
+                 thin_tet_option(),
+                 thin_tet_q_max_option(),
                  {.name = "E-kPa",
                   .value = "E",
                   .unit = "kPa",

@@ -73,3 +73,30 @@ def test_volumetric_scene_mesh_sizing_surface_is_no_finer_than_the_surface():
     bad["model"]["parameters"]["mesh_sizing"] = "fine"
     with pytest.raises(ms.InvalidInput, match=r"mesh_sizing"):
         ms.run_scene(bad)
+
+
+def test_volumetric_scene_thin_tet_term_is_opt_in_and_checked():
+    """"thin_tet": "scale_springs" (docs/volumetric-mesh.md, "A correction term for thin tetrahedra"): the
+    build notes the terms and the run moves the load node; off (the default) notes nothing; a bad mode or
+    q_max is refused naming the parameter."""
+    import json
+
+    from medspring.scenes import scene_runner
+
+    def notes(params):
+        doc = scene({"E_kPa": 10.0, "nu": 0.45})
+        doc["model"]["parameters"].update(params)
+        return scene_runner().model(json.dumps(doc))["notes"]
+
+    assert not any("thin-tetrahedron terms" in n for n in notes({}))
+    on = notes({"thin_tet": "scale_springs", "thin_tet_q_max": 0.5})
+    assert any(n.startswith("volumetric: thin-tetrahedron terms (scale_springs) on ") for n in on)
+    doc = scene({"E_kPa": 10.0, "nu": 0.45})
+    doc["model"]["parameters"].update({"thin_tet": "scale_springs", "thin_tet_q_max": 0.5})
+    r = ms.run_scene(doc, field_times=[400.0])
+    assert np.linalg.norm(r["fields"][0][r["load_node"]]) > 0.05
+    for key, value in (("thin_tet", "on"), ("thin_tet_q_max", 0.0), ("thin_tet_q_max", 2.0)):
+        bad = scene({"E_kPa": 10.0, "nu": 0.45})
+        bad["model"]["parameters"][key] = value
+        with pytest.raises(ms.InvalidInput, match=key):
+            ms.run_scene(bad)

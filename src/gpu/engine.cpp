@@ -32,6 +32,10 @@ Engine::Engine(const std::vector<const Model*>& models, const StepSettings& sett
       throw GpuError(cat("GPU: model '", models[b]->name, "' has compression-stiffening terms (",
                          models[b]->compression.size(), "), which the GPU path does not have; use ",
                          kCpuAlternative));
+    if (models[b]->thin.size() > 0)
+      throw GpuError(cat("GPU: model '", models[b]->name, "' has thin-tetrahedron terms (",
+                         models[b]->thin.size(), "), which the GPU path does not have; use ",
+                         kCpuAlternative));
     validate_step_settings(*models[b], settings);
   }
   if (settings.integrator != Integrator::SymplecticEuler)

@@ -261,8 +261,10 @@ std::string encode_model_package(const ModelPackage& p) {
     w.f64(s.return_k.value_or(0.0));
     put_duffing(w, s.duffing);
     put_indices(w, s.fixed);
-    w.f64(s.mass_scaling_dt);  // version 4
-    w.f64(s.compression);      // version 6
+    w.f64(s.mass_scaling_dt);                      // version 4
+    w.f64(s.compression);                          // version 6
+    w.i64(static_cast<std::int64_t>(s.thin_tet));  // version 7
+    w.f64(s.thin_tet_q_max);
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -376,7 +378,13 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     s.fixed = get_indices(r, "fixed", nv);
     s.mass_scaling_dt = version >= 4 ? r.f64() : 0.0;  // earlier packages were built without it
     s.compression = version >= 6 ? r.f64() : 0.0;      // nor without compression stiffening
-  } else {                                             // smrm_tree
+    if (version >= 7) {                                // thin-tetrahedron terms (off before)
+      const std::int64_t mode = r.i64();
+      if (mode < 0 || mode > 2) r.fail(cat("volumetric thin_tet: mode ", mode, " (expected 0, 1 or 2)"));
+      s.thin_tet = static_cast<ThinTetMode>(mode);
+      s.thin_tet_q_max = r.f64();
+    }
+  } else {  // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));
     for (Index b = 0; b < nb; ++b) {

@@ -22,6 +22,17 @@ MeshSizing parse_mesh_sizing(const std::string& text) {
   throw InvalidInput(cat("unknown interior sizing '", text, "' (expected volume or surface)"));
 }
 
+const char* to_string(ThinTetMode m) {
+  return m == ThinTetMode::ScaleSprings ? "scale_springs" : m == ThinTetMode::Clip ? "clip" : "off";
+}
+
+ThinTetMode parse_thin_tet_mode(const std::string& text) {
+  if (text == "off") return ThinTetMode::Off;
+  if (text == "scale_springs") return ThinTetMode::ScaleSprings;
+  if (text == "clip") return ThinTetMode::Clip;
+  throw InvalidInput(cat("unknown thin-tetrahedron term '", text, "' (expected off, scale_springs or clip)"));
+}
+
 void lame_parameters(double E_kPa, double nu, double& mu, double& lambda, const std::string& where) {
   require(std::isfinite(E_kPa) && E_kPa > 0, where, ".E_kPa: must be > 0 (got ", E_kPa, ")");
   require(std::isfinite(nu) && nu > -1.0 && nu < 0.5, where, ".nu: must be in (-1, 0.5) (got ", nu, ")");
@@ -180,6 +191,32 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
   stats_.mu = mu;
   stats_.lambda = lambda;
   stats_.kv = kv * volume_scale;
+  // opt-in thin-tetrahedron terms (thin_tet_correction.hpp): built before the springs, whose share of each
+  // flagged tetrahedron scale_springs scales by the term's spring_factor
+  ThinTetCorrections thin;
+  std::vector<double> share(static_cast<std::size_t>(nt), 1.0);
+  if (s.thin_tet != ThinTetMode::Off) {
+    require(std::isfinite(s.thin_tet_q_max) && s.thin_tet_q_max > 0 && s.thin_tet_q_max <= 1, w,
+            ": thin_tet_q_max must be in (0, 1] (got ", s.thin_tet_q_max, ")");
+    std::vector<std::array<Index, 4>> tets(static_cast<std::size_t>(nt));
+    for (Index t = 0; t < nt; ++t) tets[static_cast<std::size_t>(t)] = {T(t, 0), T(t, 1), T(t, 2), T(t, 3)};
+    const ThinTetSettings ts{.E = s.E_kPa * 1e-3,
+                             .nu = s.nu,
+                             .q_max = s.thin_tet_q_max,
+                             .spring_scale = spring_scale,
+                             .volume_scale = volume_scale,
+                             .projection = s.thin_tet == ThinTetMode::Clip ? ThinTetProjection::Clip
+                                                                           : ThinTetProjection::ScaleSprings};
+    thin = build_thin_tet_corrections(mesh.X, tets, ts, w + ": thin_tet");
+    double sum = 0;
+    for (Index k = 0; k < thin.size(); ++k) {
+      share[static_cast<std::size_t>(thin.tet[static_cast<std::size_t>(k)])] =
+          thin.spring_factor[static_cast<std::size_t>(k)];
+      sum += thin.spring_factor[static_cast<std::size_t>(k)];
+    }
+    stats_.thin_tets = thin.size();
+    stats_.thin_spring_factor = thin.size() > 0 ? sum / static_cast<double>(thin.size()) : 1.0;
+  }
   std::map<std::pair<Index, Index>, double> edge_k;
   std::vector<double> mass(static_cast<std::size_t>(n), 0.0);
   for (Index t = 0; t < nt; ++t) {
@@ -187,7 +224,7 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
     for (const auto& e : kEdges) {
       const Index a = T(t, e[0]), b = T(t, e[1]);
       const double L2 = (mesh.X.row(a) - mesh.X.row(b)).squaredNorm();
-      edge_k[std::minmax(a, b)] += 2.5 * mu * V / L2 * spring_scale;
+      edge_k[std::minmax(a, b)] += 2.5 * mu * V / L2 * spring_scale * share[static_cast<std::size_t>(t)];
     }
     for (int k = 0; k < 4; ++k) mass[static_cast<std::size_t>(T(t, k))] += 0.25 * s.density * V;
   }
@@ -262,6 +299,7 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
     stats_.kc = s.compression * mu * spring_scale;
     for (Index t = 0; t < nt; ++t) b.add_compression(T(t, 0), T(t, 1), T(t, 2), T(t, 3), stats_.kc);
   }
+  if (thin.size() > 0) b.set_thin_tet(std::move(thin));
   model_ = b.build();
   if (!surf_k.empty()) {
     std::nth_element(surf_k.begin(), surf_k.begin() + static_cast<long>(surf_k.size() / 2), surf_k.end());

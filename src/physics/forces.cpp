@@ -167,8 +167,21 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
   return internal_forces(m, x, f_ext, f, stiffening, nullptr);
 }
 
+namespace {
+double internal_forces_terms(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
+                             const LocalStiffening* local);
+}  // namespace
+
 double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
                        const LocalStiffening* local) {
+  const double stiff = internal_forces_terms(m, x, f_ext, f, stiffening, local);
+  if (m.thin.size() == 0) return stiff;  // issue 23: thin-tetrahedron terms (their growth bound: max)
+  return std::max(stiff, add_thin_tet_forces(m.thin, x, f, stiffening));
+}
+
+namespace {
+double internal_forces_terms(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
+                             const LocalStiffening* local) {
   const double* X = x.data();
   double* Fo = f.data();
   return_forces(m, X, f_ext.data(), Fo, 0, m.num_nodes());  // external force and return springs (§1.4)
@@ -190,6 +203,7 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
     stiff = volume_forces(m, X, Fo, stiffening, stiff, local);
   return stiff;
 }
+}  // namespace
 
 }  // namespace detail
 
@@ -213,6 +227,7 @@ double potential_energy(const Model& m, const MatX3& x) {
   }
   if (m.volume.size() > 0) e += volume_energy(m.volume, x);
   if (m.compression.size() > 0) e += compression_energy(m.compression, x);
+  if (m.thin.size() > 0) e += thin_tet_energy(m.thin, x);
   return e;
 }
 
@@ -261,6 +276,7 @@ Eigen::SparseMatrix<double> tangent_stiffness(const Model& m, const MatX3& x, co
   }
   if (m.volume.size() > 0) add_volume_stiffness_triplets(m.volume, x, T);
   if (m.compression.size() > 0) add_compression_stiffness_triplets(m.compression, x, T);
+  if (m.thin.size() > 0) add_thin_tet_stiffness_triplets(m.thin, x, T);  // co-rotated (Gauss-Newton)
   Eigen::SparseMatrix<double> K(3 * n, 3 * n);
   K.setFromTriplets(T.begin(), T.end());
   return K;

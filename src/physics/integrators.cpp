@@ -277,7 +277,7 @@ Substep implicit_substep(const Model& m, State& st, const StepSettings& s, doubl
 
 int effective_threads(const Model& m, const StepSettings& s) {
   if (!threads_supported() || s.threads <= 1 || s.integrator != Integrator::SymplecticEuler ||
-      m.bending.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0)
+      m.bending.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0 || m.thin.size() > 0)
     return 1;
   const Index by_size = m.num_springs() / kMinSpringsPerThread;
   return static_cast<int>(std::max<Index>(1, std::min<Index>(std::min(s.threads, kMaxThreads), by_size)));

@@ -128,6 +128,7 @@ void finalize(Model& m) {
     finalize_compression_terms(m.compression, m.x0, w);
     fuse_compression_terms(m.volume, m.compression);  // on the volume terms' tetrahedra: one pass (issue 23)
   }
+  if (m.thin.size() > 0) validate_thin_tet_corrections(m.thin, n, w);  // issue 23, thin tetrahedra
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) m.free_nodes.push_back(a);
@@ -206,11 +207,13 @@ Model ModelBuilder::build() {
   m.bending = std::move(bending_);
   m.volume = std::move(volume_);
   m.compression = std::move(compression_);
+  m.thin = std::move(thin_);
   fixed_.clear();
   springs_ = Springs{};
   bending_ = BendingTerms{};
   volume_ = VolumeTerms{};
   compression_ = CompressionTerms{};
+  thin_ = ThinTetCorrections{};
   finalize(m);
   return m;
 }
@@ -314,6 +317,13 @@ std::uint64_t model_fingerprint(const Model& m) {
     const CompressionTerms& C = m.compression;
     for (const auto* v : {&C.a, &C.b, &C.c, &C.d}) h = hash_vector(*v, h);
     h = hash_vector(C.kc, h);
+  }
+  if (m.thin.size() > 0) {  // appended only when present (issue 23, thin-tetrahedron terms)
+    const ThinTetCorrections& C = m.thin;
+    h = hash_vector(C.n, h);
+    h = hash_vector(C.V0, h);
+    for (const Mat3& D : C.DmInv) h = hash_dense(D, h);
+    for (const Mat6& c : C.C) h = hash_dense(c, h);
   }
   return h;
 }

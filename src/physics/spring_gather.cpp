@@ -30,7 +30,7 @@ void build_spring_gather(Model& m) {
   // volume terms: their pass adds into st.f, which the node pass reads (issue 23); not with the fused pass
   // of terms that own springs (plan_owned_springs)
   if (ns == 0 || ns > kSpringGatherMaxSprings || m.has_soft_springs || m.bending.size() > 0 ||
-      (m.volume.size() > 0 && m.volume.planned_springs >= 0))
+      (m.volume.size() > 0 && m.volume.planned_springs >= 0) || m.thin.size() > 0)  // thin: internal_forces
     return;
   const auto un = static_cast<std::size_t>(n);
   std::vector<Index> degree(un + 1, 0);

@@ -43,6 +43,8 @@ double gershgorin_omega(const Model& m, const MatX3& x) {
   }
   if (m.volume.size() > 0) add_volume_gershgorin(m.volume, x, m.mass, m.fixed, diag, off);
   if (m.compression.size() > 0) add_compression_gershgorin(m.compression, x, m.mass, m.fixed, diag, off);
+  if (m.thin.size() > 0)
+    add_thin_tet_gershgorin(m.thin, m.mass, m.fixed, diag, off);  // rest = co-rotated rows
   double w2 = 0;
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) w2 = std::max(w2, diag[a] / m.mass[a] + off[a]);

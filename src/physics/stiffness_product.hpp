@@ -48,7 +48,7 @@ void stiffness_product(const Model& m, const MatX3& x, const double* scale, cons
     Y[j + 2] -= k.z();
   }
   const BendingTerms& B = m.bending;
-  if (B.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0) {
+  if (B.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0 || m.thin.size() > 0) {
     const VecX* sp = &p;  // S p
     if constexpr (Scaled) {
       w->resize(3 * n);
@@ -64,6 +64,7 @@ void stiffness_product(const Model& m, const MatX3& x, const double* scale, cons
     }
     if (m.volume.size() > 0) add_volume_stiffness_product(m.volume, x, *sp, y, gauss_newton);
     if (m.compression.size() > 0) add_compression_stiffness_product(m.compression, x, *sp, y, gauss_newton);
+    if (m.thin.size() > 0) add_thin_tet_stiffness_product(m.thin, x, *sp, y);  // co-rotated, PSD
   }
   if constexpr (Scaled)
     for (Index a = 0; a < n; ++a)

@@ -71,7 +71,7 @@ inline constexpr Index kChunk = 256;
 
 /// The fused step applies to m: no bending, volume or compression terms.
 inline bool fused_step_applies(const Model& m) {
-  return m.bending.size() == 0 && m.volume.size() == 0 && m.compression.size() == 0;
+  return m.bending.size() == 0 && m.volume.size() == 0 && m.compression.size() == 0 && m.thin.size() == 0;
 }
 
 /// One guarded symplectic substep (§2.1, §2.5) through the partition P, coefficients st.step_coef

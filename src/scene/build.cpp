@@ -213,6 +213,9 @@ struct Builder {
                             to_string(m.volumetric.mesh_sizing), "), ", st.springs,
                             " springs; E = ", m.volumetric.E_kPa, " kPa, nu = ", m.volumetric.nu,
                             ", return springs ", b->model().kr.maxCoeff() > 0 ? "on" : "off (supports)"));
+    if (st.thin_tets > 0)  // opt-in thin-tetrahedron terms (docs/volumetric-mesh.md)
+      out.notes.push_back(cat("volumetric: thin-tetrahedron terms (", to_string(m.volumetric.thin_tet),
+                              ") on ", st.thin_tets, " tetrahedra, their springs x ", st.thin_spring_factor));
     for (const std::string& w : b->warnings()) out.notes.push_back(w);
     return b;
   }

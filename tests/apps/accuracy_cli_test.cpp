@@ -116,6 +116,15 @@ TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
   EXPECT_FALSE(fs::exists(out));
   EXPECT_NE(run("calibrate --organ phantom --kind volumetric --train-force 0.5,x", &err), 0);
   EXPECT_NE(err.find("--train-force must be > 0 N or a list of such (got 'x')"), std::string::npos) << err;
+  // the thin-tetrahedron term's options, read through VolumetricSettings' declaration
+  // (docs/volumetric-mesh.md)
+  EXPECT_NE(run("calibrate --organ phantom --kind volumetric --thin-tet on", &err), 0);
+  EXPECT_NE(err.find("calibrate: --thin-tet: thin_tet: "), std::string::npos) << err;
+  EXPECT_NE(run("accuracy --quick --thin-tet-q-max 2 --out '" + out.string() + "'", &err), 0);
+  EXPECT_NE(err.find("accuracy: --thin-tet-q-max: thin_tet_q_max: must be in (0, 1] (got 2)"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 // The aorta as a solid organ (issue 23, docs/accuracy-volumetric.md "The aorta as a solid organ"): surface

@@ -196,5 +196,29 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
 #endif
 }
 
+// issue 23: the same kidney with the opt-in thin-tetrahedron terms (thin_tet_correction.hpp: fixed-size Eigen
+// only; the model steps through internal_forces, no gather pass)
+TEST(UpdateNoAllocation, VolumetricKidneyWithThinTetTerms) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+#ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
+  const SurfaceMesh s = kidney_phantom();
+  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+  VolumetricSettings st;
+  st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  st.thin_tet = ThinTetMode::ScaleSprings;
+  st.thin_tet_q_max = 0.5;
+  auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
+  ASSERT_GT(body->model().thin.size(), 0);
+  std::vector<Index> sites;
+  const Index ns = body->num_surface_nodes();
+  for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
+    if (body->rest_surface()(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
+  ASSERT_EQ(sites.size(), 4u);
+  expect_no_allocation("volumetric_thin_tet", body, sites);
+#else
+  GTEST_SKIP() << "built without the fem layer (TetGen)";
+#endif
+}
+
 }  // namespace
 }  // namespace medspring

@@ -52,6 +52,20 @@ inline MeshSizing parse_enum(const std::string& text, MeshSizing*) {
   return parse_mesh_sizing(text);
 }
 
+/// The opt-in correction term on thin tetrahedra (physics/thin_tet_correction.hpp, docs/volumetric-mesh.md,
+/// "A correction term for thin tetrahedra"). off (default); scale_springs: each flagged tetrahedron's share
+/// of its six springs is scaled down and the term supplies the rest of P1's stiffness (rule + term = P1 at
+/// rest); clip: the positive part of P1 minus the rule, springs unchanged.
+enum class ThinTetMode { Off, ScaleSprings, Clip };
+const char* to_string(ThinTetMode m);
+/// "off" | "scale_springs" | "clip"; InvalidInput naming the text otherwise.
+ThinTetMode parse_thin_tet_mode(const std::string& text);
+inline ThinTetMode parse_enum(const std::string& text, ThinTetMode*) {
+  return parse_thin_tet_mode(text);
+}
+/// VolumetricSettings::thin_tet_q_max by default: tetrahedra with h_min / L_max below it get the term.
+inline constexpr double kDefaultThinTetQMax = 0.3;
+
 struct VolumetricSettings {
   double E_kPa = 10.0;             // Young's modulus, kPa (> 0)
   double nu = 0.45;                // Poisson ratio, (-1, 0.5)
@@ -79,6 +93,8 @@ struct VolumetricSettings {
   std::vector<Index> fixed;                      // pinned surface nodes
   Index mesh_nodes = 2000;  // node count aimed at when a scene build tetrahedralises the surface (TetGen)
   MeshSizing mesh_sizing = MeshSizing::Volume;  // how that build sizes the interior
+  ThinTetMode thin_tet = ThinTetMode::Off;      // correction term on thin tetrahedra (opt-in)
+  double thin_tet_q_max = kDefaultThinTetQMax;  // ... on those with h_min / L_max below this, (0, 1]
 };
 
 /// The declaration of VolumetricSettings (core/params.hpp): the "parameters" of a volumetric model in a
@@ -118,6 +134,14 @@ void for_each_field(S& s, V&& v) {
       s.moduli_correction);
   v(ParamSpec{"duffing", "", "Duffing law of the edge springs (linear unless the model is nonlinear)"},
     s.duffing);
+  v(ParamSpec{"thin_tet", "",
+              "correction term on thin tetrahedra: off, scale_springs (rule + term = P1 at rest) or clip "
+              "(docs/volumetric-mesh.md)"},
+    s.thin_tet);
+  v(ParamSpec{"thin_tet_q_max", "", "the term on tetrahedra with h_min / L_max below this"}
+        .positive()
+        .at_most(1),
+    s.thin_tet_q_max);
   v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
   v(ParamSpec{"E_kPa", "kPa", "Young's modulus, from model.material"}.positive().set_by_program(), s.E_kPa);
   v(ParamSpec{"nu", "", "Poisson ratio, from model.material"}
@@ -138,6 +162,9 @@ struct VolumetricStats {
   Index scaled_nodes = 0;          // nodes whose mass mass_scaling_dt raised
   // moduli_correction: the multipliers applied and the effective mu, K of the mesh / target before them
   double spring_correction = 1, volume_correction = 1, mu_ratio_before = 0, K_ratio_before = 0;
+  // thin_tet: tetrahedra with a term, and the mean factor on their spring share (1 with clip)
+  Index thin_tets = 0;
+  double thin_spring_factor = 1;
 };
 
 class VolumetricBody final : public Body {

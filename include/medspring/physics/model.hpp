@@ -9,6 +9,7 @@
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/spring_law.hpp"
+#include "medspring/physics/thin_tet_correction.hpp"
 #include "medspring/physics/volume_terms.hpp"
 
 namespace medspring {
@@ -69,6 +70,8 @@ struct Model {
   VolumeTerms volume;  // volumetric spring models (issue 23): one term per tetrahedron
   // their optional compression stiffening (issue 23, compression_terms.hpp), one term per tetrahedron
   CompressionTerms compression;
+  // opt-in correction terms on thin tetrahedra (issue 23, thin_tet_correction.hpp; empty by default)
+  ThinTetCorrections thin;
 
   // Derived by finalize():
   VecX inv_k;  // (#S) 1/k (0 when k = 0), for the run-time stability estimate
@@ -115,6 +118,8 @@ class ModelBuilder {
   void add_volume(Index a, Index b, Index c, Index d, double kv) { volume_.add(a, b, c, d, kv); }
   /// Adds a compression-stiffening term (compression_terms.hpp) of modulus kc (N/mm^2) on the tetrahedron.
   void add_compression(Index a, Index b, Index c, Index d, double kc) { compression_.add(a, b, c, d, kc); }
+  /// Sets the thin-tetrahedron correction terms (thin_tet_correction.hpp; checked by build()).
+  void set_thin_tet(ThinTetCorrections terms) { thin_ = std::move(terms); }
   Index num_nodes() const { return static_cast<Index>(nodes_.size()); }
   const Vec3& position(Index i) const { return nodes_[i]; }
   /// Validates and returns the finished model.
@@ -129,6 +134,7 @@ class ModelBuilder {
   BendingTerms bending_;
   VolumeTerms volume_;
   CompressionTerms compression_;
+  ThinTetCorrections thin_;
 };
 
 /// A surface mass-spring body from a triangle mesh: one spring per unique edge (D-1), uniform nodes.
