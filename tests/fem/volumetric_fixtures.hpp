@@ -11,6 +11,13 @@
 
 namespace medspring::testing {
 
+// An irregular, positively oriented tetrahedron (mm).
+inline MatX3 irregular_tet() {
+  MatX3 X(4, 3);
+  X << 0, 0, 0, 4.2, 0.3, -0.2, 0.7, 3.6, 0.4, 1.1, 0.9, 3.3;
+  return X;
+}
+
 // A single tetrahedron as a closed surface + mesh (all four nodes on the surface).
 inline VolumetricMesh one_tet(const MatX3& X) {
   VolumetricMesh m;
