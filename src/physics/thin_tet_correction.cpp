@@ -74,6 +74,14 @@ double growth(const Mat6& Cc, double c_max, const Mat3& F) {
   return 2.0 * rho + 3.0 * T / (smin * c_max);
 }
 
+// The deformation gradient of term u at positions x (its rest edge matrix inverted in C.DmInv).
+Mat3 deformation_gradient(const ThinTetCorrections& C, const MatX3& x, std::size_t u) {
+  const auto& n = C.n[u];
+  return edge_matrix(x.row(n[0]).transpose(), x.row(n[1]).transpose(), x.row(n[2]).transpose(),
+                     x.row(n[3]).transpose()) *
+         C.DmInv[u];
+}
+
 }  // namespace
 
 Vec6 mandel(const Mat3& s) {
@@ -182,11 +190,8 @@ ThinTetCorrections build_thin_tet_corrections(const MatX3& x0, const std::vector
 double thin_tet_energy(const ThinTetCorrections& C, const MatX3& x) {
   double E = 0;
   for (Index t = 0; t < C.size(); ++t) {
-    const auto& n = C.n[static_cast<std::size_t>(t)];
-    const Mat3 F = edge_matrix(x.row(n[0]).transpose(), x.row(n[1]).transpose(), x.row(n[2]).transpose(),
-                               x.row(n[3]).transpose()) *
-                   C.DmInv[static_cast<std::size_t>(t)];
-    E += C.V0[static_cast<std::size_t>(t)] * biot_energy(C.C[static_cast<std::size_t>(t)], F, nullptr);
+    const auto u = static_cast<std::size_t>(t);
+    E += C.V0[u] * biot_energy(C.C[u], deformation_gradient(C, x, u), nullptr);
   }
   return E;
 }
@@ -200,9 +205,7 @@ double add_thin_tet_forces(const ThinTetCorrections& C, const MatX3& x, MatX3& f
   for (Index t = 0; t < C.size(); ++t) {
     const auto u = static_cast<std::size_t>(t);
     const auto& n = C.n[u];
-    const Mat3 F = edge_matrix(x.row(n[0]).transpose(), x.row(n[1]).transpose(), x.row(n[2]).transpose(),
-                               x.row(n[3]).transpose()) *
-                   C.DmInv[u];
+    const Mat3 F = deformation_gradient(C, x, u);
     Mat3 P;
     biot_energy(C.C[u], F, &P);
     const Mat3 H = -C.V0[u] * P * C.DmInv[u].transpose();  // columns: forces on corners 1..3
@@ -228,9 +231,7 @@ void add_thin_tet_stiffness_product(const ThinTetCorrections& C, const MatX3& x,
   for (Index t = 0; t < C.size(); ++t) {
     const auto u = static_cast<std::size_t>(t);
     const auto& n = C.n[u];
-    const Mat3 F = edge_matrix(x.row(n[0]).transpose(), x.row(n[1]).transpose(), x.row(n[2]).transpose(),
-                               x.row(n[3]).transpose()) *
-                   C.DmInv[u];
+    const Mat3 F = deformation_gradient(C, x, u);
     const Mat3 R = polar_rotation(F);
     Vec3 q[4];
     for (int k = 0; k < 4; ++k) q[k] = R.transpose() * p.segment<3>(3 * n[static_cast<std::size_t>(k)]);
@@ -249,9 +250,7 @@ void add_thin_tet_stiffness_triplets(const ThinTetCorrections& C, const MatX3& x
   for (Index t = 0; t < C.size(); ++t) {
     const auto u = static_cast<std::size_t>(t);
     const auto& n = C.n[u];
-    const Mat3 F = edge_matrix(x.row(n[0]).transpose(), x.row(n[1]).transpose(), x.row(n[2]).transpose(),
-                               x.row(n[3]).transpose()) *
-                   C.DmInv[u];
+    const Mat3 F = deformation_gradient(C, x, u);
     const Mat3 R = polar_rotation(F);
     const Mat12 K = thin_tet_rest_stiffness(C, t);
     for (int a = 0; a < 4; ++a)

@@ -22,6 +22,7 @@
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/static_solve.hpp"
+#include "volumetric_box.hpp"
 #include "volumetric_fixtures.hpp"
 
 using namespace medspring;
@@ -52,35 +53,7 @@ Model volume_only(double kv) {
 VolumetricMesh cube_mesh(int cells, double L) {
   std::vector<double> xs;
   for (int i = 0; i <= cells; ++i) xs.push_back(L * i / cells);
-  const fem::TetMesh q = fem::box_mesh(xs, xs, xs);
-  const Index nn = q.T.leftCols(4).maxCoeff() + 1;
-  // renumber: surface nodes first
-  std::vector<Index> order, newid(static_cast<std::size_t>(nn), -1);
-  auto on_surface = [&](Index i) {
-    for (int k = 0; k < 3; ++k)
-      if (std::abs(q.X(i, k)) < 1e-9 || std::abs(q.X(i, k) - L) < 1e-9) return true;
-    return false;
-  };
-  for (Index i = 0; i < nn; ++i)
-    if (on_surface(i)) order.push_back(i);
-  const Index ns = static_cast<Index>(order.size());
-  for (Index i = 0; i < nn; ++i)
-    if (!on_surface(i)) order.push_back(i);
-  VolumetricMesh m;
-  m.X.resize(nn, 3);
-  for (Index k = 0; k < nn; ++k) {
-    newid[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
-    m.X.row(k) = q.X.row(order[static_cast<std::size_t>(k)]);
-  }
-  m.T.resize(q.num_elements(), 4);
-  for (Index e = 0; e < q.num_elements(); ++e)
-    for (int k = 0; k < 4; ++k) m.T(e, k) = newid[static_cast<std::size_t>(q.T(e, k))];
-  const fem::MatX6i B = fem::boundary_faces(q);
-  m.F.resize(B.rows(), 3);
-  for (Index f = 0; f < B.rows(); ++f)
-    for (int k = 0; k < 3; ++k) m.F(f, k) = newid[static_cast<std::size_t>(B(f, k))];
-  m.surface_nodes = ns;
-  return m;
+  return medspring::testing::box(xs, xs, xs);
 }
 
 // Effective Young's modulus (kPa) and Poisson ratio of a box [0, L]^3 mesh under opposite uniform tractions

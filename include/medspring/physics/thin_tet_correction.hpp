@@ -84,8 +84,8 @@ Mat12 thin_tet_rest_stiffness(const ThinTetCorrections& C, Index t);
 Mat12 tet_mandel_rest_stiffness(const MatX3& x0, const std::array<Index, 4>& tet, const Mat6& C);
 /// What the terms change in the rest stiffness of a model of the rule on x0 (3N x 3N): their rest Hessians
 /// and, with ScaleSprings, (spring_factor - 1) times each flagged tetrahedron's share of its springs. Added
-/// to the plain rule's tangent stiffness at rest it gives the corrected model's (the one VolumetricBody builds
-/// with thin_tet on) linear response. `s` must be the settings the terms were built with.
+/// to the plain rule's tangent stiffness at rest it gives the corrected model's (the one VolumetricBody
+/// builds with thin_tet on) linear response. `s` must be the settings the terms were built with.
 Eigen::SparseMatrix<double> thin_tet_rest_stiffness_change(const ThinTetCorrections& C, const MatX3& x0,
                                                            const ThinTetSettings& s);
 
