@@ -9,9 +9,12 @@
 
 #include "medspring/core/error.hpp"
 #include "medspring/physics/volume_terms.hpp"
+#include "test_support.hpp"
 
 namespace medspring {
 namespace {
+
+using testing::jitter;
 
 // An n x n x n grid of unit cubes (edge h), each split into six tetrahedra around its main diagonal.
 void grid(int n, double h, MatX3& X, MatX4i& T) {
@@ -36,14 +39,6 @@ void grid(int n, double h, MatX3& X, MatX4i& T) {
           }
           ++t;
         }
-}
-
-MatX3 jitter(const MatX3& x, double amp, unsigned seed) {
-  std::mt19937 g(seed);
-  std::uniform_real_distribution<double> u(-amp, amp);
-  MatX3 y = x;
-  for (Index i = 0; i < y.size(); ++i) y.data()[i] += u(g);
-  return y;
 }
 
 struct Fixture {

@@ -6,23 +6,18 @@
 
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/physics/forces.hpp"
+#include "test_support.hpp"
 
 namespace medspring {
 namespace {
+
+using testing::jitter;
 
 Model perturbed_kidney_model(DuffingSettings d, double kr) {
   SurfaceBodyParams p;
   p.duffing = d;
   p.node.return_k = kr;
   return make_surface_model(kidney_phantom(), p);
-}
-
-MatX3 jitter(const MatX3& x, double amp, unsigned seed) {
-  std::mt19937 g(seed);
-  std::uniform_real_distribution<double> u(-amp, amp);
-  MatX3 y = x;
-  for (Index i = 0; i < y.size(); ++i) y.data()[i] += u(g);
-  return y;
 }
 
 TEST(Forces, ZeroAtRestAndUnderRigidMotion) {

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <string>
 
+#include "medspring/core/types.hpp"
+
 namespace medspring::testing {
 
 /// The real-anatomy data folder: $MEDSPRING_DATA if set, else the configured default
@@ -20,5 +22,8 @@ std::filesystem::path require_data_file(const std::string& name);
 /// A fresh, empty temporary folder for one test, removed at exit of the process when every test passed
 /// (kept after a failure, or always with MEDSPRING_KEEP_TEST_FILES=1).
 std::filesystem::path temp_dir(const std::string& tag);
+
+/// x with every coordinate moved by a uniform random amount in [-amp, amp] (std::mt19937 seeded with seed).
+MatX3 jitter(const MatX3& x, double amp, unsigned seed);
 
 }  // namespace medspring::testing
