@@ -42,6 +42,9 @@ Engine::Engine(const std::vector<const Model*>& models, const StepSettings& sett
     throw GpuError(cat("GPU: the ", to_string(settings.integrator),
                        " integrator is not ported to the GPU path (symplectic_euler is); use ",
                        kCpuAlternative));
+  if (settings.stable_step != StableStep::Bound)
+    throw GpuError(cat("GPU: the stable_step rule '", to_string(settings.stable_step),
+                       "' is not ported to the GPU path ('bound' is); use ", kCpuAlternative));
   require(options.block >= 32 && options.block <= 1024 && options.block % 32 == 0,
           "gpu::Options::block: must be a multiple of 32 in 32..1024 (got ", options.block, ")");
   require(options.gather_batch == 0 || options.gather_batch == 1 || options.gather_batch == 2 ||

@@ -87,7 +87,7 @@ TEST(GpuErrors, FeaturesTheGpuPathLacksNameTheCpuAlternative) {
   EXPECT_THROW(gpu::require_supported("surface", false, true), gpu::GpuError);  // tools
 }
 
-TEST(GpuErrors, BendingTermsAndTheImplicitIntegratorAreRefusedBeforeAnyDeviceWork) {
+TEST(GpuErrors, BendingTermsTheImplicitIntegratorAndTheRefreshAreRefusedBeforeAnyDeviceWork) {
   ModelBuilder b("bent");
   for (int i = 0; i < 3; ++i) b.add_node(Vec3(2.5 * i, 0, 0), 0.3, 0.15, 0.02, i == 0);
   b.add_spring(0, 1, 0.05, 0.0, 2.5);
@@ -114,6 +114,14 @@ TEST(GpuErrors, BendingTermsAndTheImplicitIntegratorAreRefusedBeforeAnyDeviceWor
   StepSettings implicit;
   implicit.integrator = Integrator::ImplicitEuler;
   EXPECT_THROW(gpu::Engine({&m}, implicit), gpu::GpuError);
+  StepSettings refresh;  // the opt-in tangent refresh of the CPU engine: refused, never silently dropped
+  refresh.stable_step = StableStep::Refresh;
+  try {
+    gpu::Engine e({&m}, refresh);
+    ADD_FAILURE() << "stable_step refresh was accepted";
+  } catch (const gpu::GpuError& e) {
+    EXPECT_NE(std::string(e.what()).find("stable_step rule 'refresh'"), std::string::npos) << e.what();
+  }
   EXPECT_EQ(gpu::parse_precision("fp32"), gpu::Precision::Float);
   EXPECT_THROW(gpu::parse_precision("fp16"), InvalidInput);
 }

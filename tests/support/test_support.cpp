@@ -50,12 +50,4 @@ std::filesystem::path temp_dir(const std::string& tag) {
   return p;
 }
 
-MatX3 jitter(const MatX3& x, double amp, unsigned seed) {
-  std::mt19937 g(seed);
-  std::uniform_real_distribution<double> u(-amp, amp);
-  MatX3 y = x;
-  for (Index i = 0; i < y.size(); ++i) y.data()[i] += u(g);
-  return y;
-}
-
 }  // namespace medspring::testing

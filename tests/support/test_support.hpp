@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <random>
 #include <string>
 
 #include "medspring/core/types.hpp"
@@ -24,6 +25,12 @@ std::filesystem::path require_data_file(const std::string& name);
 std::filesystem::path temp_dir(const std::string& tag);
 
 /// x with every coordinate moved by a uniform random amount in [-amp, amp] (std::mt19937 seeded with seed).
-MatX3 jitter(const MatX3& x, double amp, unsigned seed);
+inline MatX3 jitter(const MatX3& x, double amp, unsigned seed) {
+  std::mt19937 g(seed);
+  std::uniform_real_distribution<double> u(-amp, amp);
+  MatX3 y = x;
+  for (Index i = 0; i < y.size(); ++i) y.data()[i] += u(g);
+  return y;
+}
 
 }  // namespace medspring::testing
