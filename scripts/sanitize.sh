@@ -46,7 +46,11 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/scripts/lsan.supp:print_s
 # ForceThenReleaseReturnsToRest build and run it here, the other sweep, the press and the grasper stay),
 # the packed spring table on the 1M tube and on the real kidney (the small tables' decode and gather tests
 # stay), the compression block bound against dense eigenvalues (the fused-pass and finite-difference tests
-# of the same code stay) and the real aorta's 40x30 vessel (the phantom vessels' spoke marching stays).
+# of the same code stay), the real aorta's 40x30 vessel (the phantom vessels' spoke marching stays), and three
+# tests added in the session of 2026-11-26 evening (5 s each unsanitized): the tangent refresh up to large
+# strain (its estimate and default-rule tests stay), the thin-tetrahedron cube at large strain (the term's
+# model, energy, implicit and package tests stay) and the SIMD volume pass on the real kidney (its cube and
+# tail tests stay).
 heavy='VesselTreeSkeleton\.RealAorta|CliBuildVessel\..*AortaSegmentation|SpokeVisibility\.NoSpokeOfTheRealKidney'
 heavy+='|RealKidneyTool\.CalibratedKidneySettles|ThousandfoldForce\..*/TubeImplicit'
 heavy+='|Compression\.CubeStiffensUnderLargeCompressionOnly|Calibration\.NonlinearFitRecovers'
@@ -55,6 +59,7 @@ heavy+='|RealKidney\.(ModelSurfaceIsWithin|GatherFusedAndTwoPass|AtLeast85Percen
 heavy+='|RealKidneyTool\.SweepEpisode2021'
 heavy+='|PackedTable\.MillionNodeTube|RealKidneyTable\.PackedTable|Compression\.BlockBoundIsAbove'
 heavy+='|SmrmRealData\.AortaSpokesMarched'
+heavy+='|StableStepRefresh\.RefreshedStepStaysBelow|ThinTetModel\.LargeStrainCompression|VolumeSimd\.RealKidney'
 ctest --test-dir "$build" -LE '^(long|web)$' -E "$heavy" --output-on-failure --parallel "$jobs" --timeout 1500
 t2=$(date +%s)
 
