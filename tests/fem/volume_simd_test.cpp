@@ -92,7 +92,9 @@ bool simd_compiled() {
 }  // namespace
 
 TEST(VolumeSimd, CubeFromTensionToPushedThroughEqualsTheScalarPass) {
-  if (!simd_compiled()) GTEST_SKIP() << "no AVX2 target: the scalar pass is the only one";
+  if (!simd_compiled())
+    GTEST_SKIP()
+        << "no vector pass in this build (no AVX2 target, or not GCC): the scalar pass is the only one";
   const VolumetricMesh vm =
       fem::volumetric_mesh(medspring::testing::box_surface(4, 20), {.target_nodes = 300});
   VolumetricSettings st;
@@ -121,7 +123,9 @@ TEST(VolumeSimd, CubeFromTensionToPushedThroughEqualsTheScalarPass) {
 
 // Fewer records than a lane group, and a count that leaves a tail: the scalar kernel's share.
 TEST(VolumeSimd, TailRecordsEqualTheScalarPass) {
-  if (!simd_compiled()) GTEST_SKIP() << "no AVX2 target: the scalar pass is the only one";
+  if (!simd_compiled())
+    GTEST_SKIP()
+        << "no vector pass in this build (no AVX2 target, or not GCC): the scalar pass is the only one";
   int tails = 0;
   MatX3 X(4, 3);
   X << 0, 0, 0, 4.2, 0.3, -0.2, 0.7, 3.6, 0.4, 1.1, 0.9, 3.3;
@@ -150,7 +154,9 @@ TEST(VolumeSimd, TailRecordsEqualTheScalarPass) {
 // the speed benchmark meshes the 458-node phantom at 2,000): at rest, squeezed 2 % (the benchmark's state)
 // and 30 % with noise.
 TEST(VolumeSimd, RealKidneyEqualsTheScalarPass) {
-  if (!simd_compiled()) GTEST_SKIP() << "no AVX2 target: the scalar pass is the only one";
+  if (!simd_compiled())
+    GTEST_SKIP()
+        << "no vector pass in this build (no AVX2 target, or not GCC): the scalar pass is the only one";
   const SurfaceMesh s = read_mesh(medspring::testing::require_data_file("kidney_left_hubmap_vhm.obj"),
                                   {.unit = LengthUnit::Metre});
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = 7000});
