@@ -346,6 +346,12 @@ void refine_stiffening(const Model& m, State& st, double T, double safety, bool 
   if (s < B) st.stiffening = s;
 }
 
+// The opt-in tangent refresh applies to a symplectic step of a model with volume or compression terms.
+bool tangent_refresh_on(const Model& m, const StepSettings& s) {
+  return s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh &&
+         (m.volume.size() > 0 || m.compression.size() > 0);
+}
+
 }  // namespace
 
 void prepare_step(const Model& m, State& st, const StepSettings& s) {
@@ -364,8 +370,7 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
       st.stiff_rows.size() != stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()))
     st.stiff_rows.setZero(stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()));
   const int T = effective_threads(m, s);
-  if (s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh &&
-      (m.volume.size() > 0 || m.compression.size() > 0) &&
+  if (tangent_refresh_on(m, s) &&
       T <= 1) {  // the stable step's tangent refresh (refine_stiffening): its scratch, sized now
     if (!st.threaded.p) st.threaded.p = std::make_shared<ThreadedStep>(1);
     size_tangent_scratch(m, st.threaded.p->tangent.scratch);
@@ -400,9 +405,7 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
     par = st.threaded.p.get();
   }
   // the opt-in tangent refresh (StepSettings::stable_step): a state not prepared for it is, once
-  if (!par && s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh &&
-      (m.volume.size() > 0 || m.compression.size() > 0) &&
-      (!st.threaded.p || st.threaded.p->tangent.scratch.q.size() == 0))
+  if (!par && tangent_refresh_on(m, s) && (!st.threaded.p || st.threaded.p->tangent.scratch.q.size() == 0))
     prepare_step(m, st, s);
   // the gather pass (spring_gather.hpp) for the serial symplectic step of a model that has one
   const bool gather = !par && s.integrator == Integrator::SymplecticEuler && detail::gather_ready(m, st);
