@@ -64,7 +64,11 @@ struct Kind {
   // + eta of the Duffing springs (D-3: k' = eta k / L0^2; the volumetric kind keeps eta = 1: its
   // calibration fits springs and volume terms only) + k_loc
   bool fits_eta() const { return nonlinear && base != "volumetric"; }
-  Index families() const { return stiffness_families() + (fits_eta() ? 1 : 0) + (local ? 1 : 0); }
+  // volumetric + local: (springs, volume terms, c, overlay compliance a): c keeps its slot, a sits last
+  // (docs/accuracy-calibration.md, "The local overlay as a site family")
+  Index families() const {
+    return stiffness_families() + (fits_eta() ? 1 : 0) + (local ? (base == "volumetric" ? 2 : 1) : 0);
+  }
   Index eta_index() const { return fits_eta() ? stiffness_families() : -1; }
   Index local_index() const { return local ? families() - 1 : -1; }
 };

@@ -46,9 +46,10 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
     std::string item;
     while (std::getline(ss, item, ',')) {
       require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing" ||
-                  item == "volumetric-corrected",
+                  item == "volumetric-corrected" || item == "volumetric-local",
               cmd, ": --kinds: unknown kind '", item,
-              "' (expected surface, hybrid, volumetric, volumetric-duffing, volumetric-corrected)");
+              "' (expected surface, hybrid, volumetric, volumetric-duffing, volumetric-corrected, "
+              "volumetric-local)");
       st.kinds.push_back(item);
     }
     require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");
@@ -304,7 +305,7 @@ int cmd_accuracy(const Args& args) {
 int cmd_calibrate(const Args& args) {
   args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
                       "compression", "surface-subdivisions", "interior-sizing", "fit", "train-force",
-                      "site-readout", "thin-tet", "thin-tet-q-max"});
+                      "site-readout", "thin-tet", "thin-tet-q-max", "local"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));
@@ -319,6 +320,10 @@ int cmd_calibrate(const Args& args) {
           "calibrate: --kind must be hybrid, surface or volumetric");
   require(!(organ == "aorta" && kind == "hybrid"),
           "calibrate: --organ aorta has no medial skeleton for the hybrid kind (use surface or volumetric)");
+  const bool local = args.flag("local");  // the disk overlay as a site family, beside the kind without it
+  require(!local || (kind == "volumetric" && args.flag("linear")),
+          "calibrate: --local needs --kind volumetric --linear (got --kind ", kind,
+          args.flag("linear") ? "" : " without --linear", ")");
   read_kind_options(args, st, "calibrate");
   Organ o;
   FileLoader loader;
@@ -338,10 +343,21 @@ int cmd_calibrate(const Args& args) {
     o = std::move(*k);
   }
   json maps;
-  const json r = run_organ(o, st, maps, {{kind, !args.flag("linear"), false}}, false);
+  std::vector<Kind> kinds{{kind, !args.flag("linear"), false}};
+  if (local) kinds.push_back({kind, false, true});
+  const json r = run_organ(o, st, maps, kinds, false);
   json out = {{"organ", r["organ"]}, {"material", {{"E_kPa", st.material.E * 1e3}, {"nu", st.material.nu}}}};
   if (r.contains("volumetric")) out["volumetric"] = r["volumetric"];  // mesh, effective moduli
   for (const auto& m : r["models"]) {
+    if (local && !m["local"].get<bool>()) {  // the same run without the overlay, for comparison
+      const char* pre = m["calibrated"].get<bool>() ? "calibrated" : "default";
+      for (const char* key : {"multipliers", "held_out_mean_rms_pct", "held_out_max_rms_pct",
+                              "held_out_mean_contact_pct", "held_out_max_contact_pct",
+                              "held_out_mean_disk_mean_pct", "held_out_max_disk_mean_pct", "update_us"})
+        out["without_overlay"][pre][key] = m[key];
+      if (m.contains("fit")) out["without_overlay"][pre]["fit"] = m["fit"];
+      continue;
+    }
     if (!m["calibrated"].get<bool>()) {
       out["default_held_out_mean_rms_pct"] = m["held_out_mean_rms_pct"];
       out["default_held_out_mean_disk_mean_pct"] = m["held_out_mean_disk_mean_pct"];
@@ -357,6 +373,10 @@ int cmd_calibrate(const Args& args) {
       if (m.contains("fit")) {  // c and what the nonlinear fit moved (docs/accuracy.md)
         out["parameters"]["compression"] = m["fit"]["compression"];
         out["fit"] = m["fit"];
+      }
+      if (local) {  // the overlay compliance a and k_loc = k_ref / a (null: off)
+        out["parameters"]["overlay_compliance"] = mult[3];
+        out["parameters"]["k_loc_N_per_mm"] = m["fit"]["k_loc_N_per_mm"];
       }
     } else
       out["parameters"] = {{"k_surf_N_per_mm", 0.05 * mult[0]},
@@ -381,7 +401,7 @@ int cmd_calibrate(const Args& args) {
   std::cout << "calibrate: " << o.name << ", " << kind << (args.flag("linear") ? " (linear)" : " (Duffing)")
             << ", E = " << st.material.E * 1e3 << " kPa, nu = " << st.material.nu << "\n";
   for (const auto& [key, v] : out["parameters"].items())
-    std::cout << "  " << key << " = " << v.get<double>() << "\n";
+    std::cout << "  " << key << " = " << (v.is_null() ? std::string("off") : cat(v.get<double>())) << "\n";
   if (out.contains("fit")) {
     const auto& f = out["fit"];
     std::cout << "  small-strain fit: spring_scale = " << f["small_strain_multipliers"][0].get<double>()
@@ -399,6 +419,14 @@ int cmd_calibrate(const Args& args) {
             << out["held_out_max_contact_pct"].get<double>() << " %, disk mean "
             << out["held_out_mean_disk_mean_pct"].get<double>() << " / "
             << out["held_out_max_disk_mean_pct"].get<double>() << " %\n";
+  if (local) {
+    const auto& w = out["without_overlay"]["calibrated"];
+    std::cout << "  without the overlay (same run): held-out RMS " << w["held_out_mean_rms_pct"].get<double>()
+              << " / " << w["held_out_max_rms_pct"].get<double>() << " %, contact node "
+              << w["held_out_mean_contact_pct"].get<double>() << " %, disk mean "
+              << w["held_out_mean_disk_mean_pct"].get<double>() << " / "
+              << w["held_out_max_disk_mean_pct"].get<double>() << " %\n";
+  }
   for (const auto& c : out["cases"])
     if (c.contains("train") && !c["train"].get<bool>())
       std::cout << "  held out: site " << c["site"] << ", " << c["force_N"].get<double>() << " N: contact "

@@ -14,12 +14,14 @@
 #include <sstream>
 
 #include "accuracy_indentation.hpp"
+#include "accuracy_overlay.hpp"
 #include "accuracy_summary.hpp"
 #include "accuracy_tables.hpp"
 #include "accuracy_volume_terms.hpp"
 #include "commands.hpp"
 #include "medspring/builders/output_folder.hpp"
 #include "medspring/core/check.hpp"
+#include "medspring/fem/local_site.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/validation.hpp"
 #include "medspring/fem/vessel.hpp"
@@ -274,6 +276,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   }
   if (std::find(st.kinds.begin(), st.kinds.end(), "volumetric-corrected") != st.kinds.end())
     kinds.push_back({"volumetric", false, false, true});  // opt-in, linear: the moduli correction
+  if (std::find(st.kinds.begin(), st.kinds.end(), "volumetric-local") != st.kinds.end())
+    kinds.push_back({"volumetric", false, true});  // opt-in, linear: the disk overlay as a site family
   if (o.atoms.rows() == 0 &&
       std::erase_if(kinds, [](const Kind& k) { return k.base == "hybrid"; }) > 0)  // no medial skeleton
     out["notes"].push_back(
@@ -283,6 +287,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                   [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
                     const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing"
                                                         : k.corrected                         ? "-corrected"
+                                                        : k.base == "volumetric" && k.local   ? "-local"
                                                                                               : "");
                     return std::find(st.kinds.begin(), st.kinds.end(), token) == st.kinds.end();
                   });
@@ -426,8 +431,16 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     }
   }
   // The displacement of kind k with its families scaled by m (+ local: the last multiplier scales k_loc).
+  // volumetric + local: the disk overlay at k_ref, the E, nu body's local_stiffness(), times m(3) = a
+  const double k_ref =
+      std::any_of(kinds.begin(), kinds.end(), [](const Kind& k) { return k.base == "volumetric" && k.local; })
+          ? make_body(o, {"volumetric", false, false}, support, VecX::Ones(2))->local_stiffness()
+          : 0.0;
   auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {
     const BodyPtr body = make_body(o, k, support, m);
+    if (k.base == "volumetric" && k.local)
+      return MatX3(fem::spring_displacement(*body, load) +
+                   m(k.local_index()) * fem::disk_local_overlay(*body, load, k_ref));
     if (k.base == "volumetric") return fem::spring_displacement(*body, load);  // its own (refined) surface
     return k.local ? fem::spring_displacement_local(*body, load, body->local_stiffness() * m(k.local_index()))
                    : fem::spring_displacement(*body, load);
@@ -441,7 +454,11 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
       if (calibrated) {
         note(st, cat(o.name, ": calibrating ", k.label(),
                      " (site read-out: ", st.site_disk_mean ? "disk mean" : "contact node", ")"));
-        if (k.base == "volumetric") {  // on the small-strain response: one factorisation per ratio
+        if (k.base == "volumetric" && k.local)
+          fit = fit_volumetric_overlay(
+              o.name, st, o.compression, k_ref, [&](const VecX& mm) { return make_body(o, k, support, mm); },
+              [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, training, m);
+        else if (k.base == "volumetric") {  // on the small-strain response: one factorisation per ratio
           const auto t0 = std::chrono::steady_clock::now();
           m = fem::calibrate_scale_and_ratio(
               [&](const VecX& mm, const std::vector<fem::ContactLoad>& ls) {

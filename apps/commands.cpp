@@ -325,7 +325,9 @@ const std::vector<CommandSpec>& commands() {
             {.name = "kinds",
              .value = "LIST",
              .def = "all",
-             .help = "model kinds to run: surface,hybrid,volumetric (docs/volumetric.md)"},
+             .help = "model kinds to run: surface,hybrid,volumetric (docs/volumetric.md); opt-in: "
+                     "volumetric-duffing, volumetric-corrected, volumetric-local (the disk overlay as a site "
+                     "family, docs/accuracy-calibration.md)"},
             kVolumetricNodes,
             kCompression,
             kSurfaceSubdivisions,
@@ -383,6 +385,11 @@ const std::vector<CommandSpec>& commands() {
            {{.name = "organ", .value = "phantom|kidney|aorta", .def = "phantom", .help = "the organ"},
             {.name = "kind", .value = "hybrid|surface|volumetric", .def = "hybrid", .help = "the model kind"},
             {.name = "linear", .help = "linear springs (default Duffing)"},
+            {.name = "local",
+             .help =
+                 "--kind volumetric: also the kind with the local overlay of the disk load fitted as a site "
+                 "family (overlay compliance a; docs/accuracy-calibration.md); reported beside the kind "
+                 "without it, same run"},
             declared_option<FemCaseSettings>("E-kPa", "E_kPa", "E"),
             declared_option<FemCaseSettings>("nu", "nu", "NU"),
             declared_option<FemCaseSettings>("radius", "radius", "A"),

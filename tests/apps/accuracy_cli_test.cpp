@@ -116,6 +116,16 @@ TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
   EXPECT_FALSE(fs::exists(out));
   EXPECT_NE(run("calibrate --organ phantom --kind volumetric --train-force 0.5,x", &err), 0);
   EXPECT_NE(err.find("--train-force must be > 0 N or a list of such (got 'x')"), std::string::npos) << err;
+  // the local overlay as a site family (docs/accuracy-calibration.md): the volumetric linear kind only
+  EXPECT_NE(run("calibrate --organ phantom --kind surface --linear --local", &err), 0);
+  EXPECT_NE(err.find("calibrate: --local needs --kind volumetric --linear (got --kind surface)"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(run("calibrate --organ phantom --kind volumetric --local", &err), 0);
+  EXPECT_NE(err.find("(got --kind volumetric without --linear)"), std::string::npos) << err;
+  EXPECT_NE(run("accuracy --quick --kinds volumetric-locale --out '" + out.string() + "'", &err), 0);
+  EXPECT_NE(err.find("unknown kind 'volumetric-locale'"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
   // the thin-tetrahedron term's options, read through VolumetricSettings' declaration
   // (docs/volumetric-mesh.md)
   EXPECT_NE(run("calibrate --organ phantom --kind volumetric --thin-tet on", &err), 0);
