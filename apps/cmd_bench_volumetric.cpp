@@ -3,7 +3,7 @@
 // the bottom 20 %, 0.5 N on the top node; one update = Simulation::update (a 0.5 ms frame with the sub-steps
 // its stable step needs). The same set-up as bench/volumetric_bench.cpp. Needs the fem layer (TetGen).
 // kidney_volumetric_2000_explicit_linear_refresh: the same with the opt-in tangent refresh
-// (StepSettings::stable_step = refresh; its median hides the one slow frame per re-estimate).
+// (StepSettings::stable_step = refresh; its re-estimate is spread over 15 frames, one product each).
 #include <memory>
 #include <string>
 #include <vector>

@@ -302,46 +302,62 @@ bool implicit_scratch_ready(const Model& m, const State& st) {
 namespace {
 
 // Lanczos products of the tangent refresh (those of omega_rest), its safety on omega (as omega_rest's), the
-// band of the growth bound within which a reference stays in use, and its age limits in frames.
+// band of the growth bound within which a reference stays in use, and its age limits in frames; the products
+// taken per frame (the estimate is spread over kRefreshProducts frames), and how many frames before the age
+// limit the next estimate starts (so that under a steady load a new reference is ready before the old one
+// ages out: the products take kRefreshProducts frames).
 constexpr int kRefreshProducts = 15;
 constexpr double kRefreshSafety = 1.05;
 constexpr double kRefreshBand = 0.02;
 constexpr std::uint64_t kRefreshMaxAge = 200, kRefreshMinGap = 20;
+constexpr int kRefreshProductsPerFrame = 1;
+constexpr std::uint64_t kRefreshLead = 20;
+static_assert(kRefreshLead * kRefreshProductsPerFrame > kRefreshProducts && kRefreshLead < kRefreshMaxAge);
 
 // The stable step's tangent refresh (docs/volumetric-stable-step.md). B =
 // st.stiffening is the growth bound of the frame's last force pass (omega^2 <= B omega_rest^2: springs' kappa
 // / k, the volume terms' rows, the compression blocks, added by Weyl to the rest value). Where B asks for
 // more sub-steps than the rest value does, it is replaced by the same estimate as omega_rest (15 Lanczos
 // products of the exact tangent x 1.05) taken at a recent state x_r of this run, grown by B / B_r: s = s_r
-// max(1, B / B_r), when smaller. The reference is retaken when B leaves [B_r (1 - band), B_r (1 + band)] or
-// after kRefreshMaxAge frames, at most every kRefreshMinGap frames (else B is used as it is); a frame with a
-// rollback drops it. So a loaded organ at rest under a constant load (the benchmark) takes one estimate and
-// the sub-steps of its true omega; a moving load takes B, or the estimate where B stays within its band.
+// max(1, B / B_r), when smaller. The reference holds while B stays in [B_r (1 - band), B_r (1 + band)] and
+// for kRefreshMaxAge frames; a frame with a rollback drops it. The estimate is amortised: it is started on a
+// snapshot of the frame's end state x_r (and its B_r), one product is taken per later frame, and when its
+// last product is in, it replaces the reference at once if B is still within the band of B_r (else it is
+// discarded). Meanwhile the step keeps its valid rule: the old reference while it holds, else B. An estimate
+// starts when the reference does not hold, or kRefreshLead frames before it ages out, at most every
+// kRefreshMinGap frames. So a loaded organ under a constant load (the benchmark) keeps the sub-steps of its
+// true omega without a frame that takes all the products; a moving load mostly takes B.
 void refine_stiffening(const Model& m, State& st, double T, double safety, bool rolled_back) {
   ThreadedStep::TangentRefresh& r = st.threaded.p->tangent;
   if (rolled_back) {
-    r.valid = false;
+    r.drop();
     return;
   }
   const double B = st.stiffening;
   // nothing to gain where B asks for no more sub-steps than the rest value (omega_max hardly falls below
   // its rest value under load: docs/volumetric-speed.md)
   if (stable_substeps(m, B, T, safety) <= stable_substeps(m, 1.0, T, safety) || !(m.omega_rest > 0)) return;
-  const bool fresh = r.valid && st.frames - r.frame < kRefreshMaxAge && B <= r.b_ref * (1 + kRefreshBand) &&
-                     B >= r.b_ref * (1 - kRefreshBand);
-  if (!fresh) {
-    if (r.tried > 0 && st.frames + 1 - r.tried < kRefreshMinGap) return;
-    const double w2 = tangent_omega2(m, st.x, kRefreshProducts, r.scratch);
-    r.tried = st.frames + 1;
-    if (!(w2 > 0) || !std::isfinite(w2)) {
-      r.valid = false;
-      return;
+  const auto within = [B](double b) { return B <= b * (1 + kRefreshBand) && B >= b * (1 - kRefreshBand); };
+  if (r.pending && tangent_lanczos_advance(m, kRefreshProductsPerFrame, r.scratch)) {
+    r.pending = false;  // complete: the new reference, if the state is still near its snapshot
+    const double w2 = tangent_lanczos_omega2(r.scratch);
+    if (w2 > 0 && std::isfinite(w2) && within(r.b_snap) && st.frames - r.frame_snap < kRefreshMaxAge) {
+      r.s_ref = kRefreshSafety * kRefreshSafety * w2 / (m.omega_rest * m.omega_rest);
+      r.b_ref = r.b_snap;
+      r.frame = r.frame_snap;
+      r.valid = true;
     }
-    r.s_ref = kRefreshSafety * kRefreshSafety * w2 / (m.omega_rest * m.omega_rest);
-    r.b_ref = B;
-    r.frame = st.frames;
-    r.valid = true;
   }
+  const bool fresh = r.valid && st.frames - r.frame < kRefreshMaxAge && within(r.b_ref);
+  if (!r.pending && (!fresh || st.frames - r.frame + kRefreshLead >= kRefreshMaxAge) &&
+      !(r.tried > 0 && st.frames + 1 - r.tried < kRefreshMinGap)) {
+    tangent_lanczos_start(m, st.x, kRefreshProducts, r.scratch);  // its products: the next frames
+    r.pending = true;
+    r.b_snap = B;
+    r.frame_snap = st.frames;
+    r.tried = st.frames + 1;
+  }
+  if (!fresh) return;  // B as it is
   const double s = r.s_ref * std::max(1.0, B / r.b_ref);
   if (s < B) st.stiffening = s;
 }
@@ -471,7 +487,7 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
         // the clock moves to the frame end so that time-driven loops and load schedules keep going.
         ++st.warnings.failed;
         status.code = StepCode::Failed;
-        if (st.threaded.p) st.threaded.p->tangent.valid = false;  // the tangent refresh starts again
+        if (st.threaded.p) st.threaded.p->tangent.drop();  // the tangent refresh starts again
         st.v.setZero();
         st.t = t0 + T;
         ++st.frames;

@@ -253,21 +253,29 @@ void tangent_product(const Model& m, const MatX3& x, TangentScratch& z, const Ve
 
 void size_tangent_scratch(const Model& m, TangentScratch& z) {
   const Index n = m.num_nodes(), ns = m.springs.size();
-  if (z.q.size() == 3 * n && z.ce.size() == ns) return;
+  if (z.q.size() == 3 * n && z.ce.size() == ns && z.x.rows() == n) return;
   for (VecX* v : {&z.q, &z.qprev, &z.y, &z.w}) v->setZero(3 * n);
   z.sc.setZero(n);
   z.ce.setZero(ns);
   z.cb.setZero(ns);
+  z.x.setZero(n, 3);
+  z.k = 0;
+  z.done = true;
 }
 
-double tangent_omega2(const Model& m, const MatX3& x, int iterations, TangentScratch& z) {
+void tangent_lanczos_start(const Model& m, const MatX3& x, int iterations, TangentScratch& z) {
   const Index n = m.num_nodes();
-  if (m.free_nodes.empty()) return 0.0;
+  size_tangent_scratch(m, z);
+  z.k = 0;
+  z.beta_prev = 0;
+  z.iterations = std::clamp(iterations, 1, TangentScratch::kMaxProducts);
+  z.done = true;  // until the start vector is in place
+  if (m.free_nodes.empty()) return;
+  z.x = x;  // the snapshot: the estimate's products read it, whatever the state does meanwhile
   const Springs& S = m.springs;
   const Index ns = S.size();
-  size_tangent_scratch(m, z);
   for (Index q = 0; q < ns; ++q) {  // as power_iteration_omega
-    const Vec3 e = (x.row(S.j[q]) - x.row(S.i[q])).transpose();
+    const Vec3 e = (z.x.row(S.j[q]) - z.x.row(S.i[q])).transpose();
     const double L2 = e.squaredNorm();
     const double L = std::sqrt(L2);
     if (L < 1e-9) {
@@ -279,35 +287,48 @@ double tangent_omega2(const Model& m, const MatX3& x, int iterations, TangentScr
     z.ce[q] = (spring_tension_derivative(S.k[q], S.kp[q], d) - z.cb[q]) / L2;
   }
   for (Index a = 0; a < n; ++a) z.sc[a] = m.fixed[a] ? 0.0 : 1.0 / std::sqrt(m.mass[a]);
-  auto apply_A = [&](const VecX& qv, VecX& y) { tangent_product(m, x, z, qv, y); };
-  VecX &qv = z.q, &qprev = z.qprev, &y = z.y;
-  qprev.setZero();
+  VecX& qv = z.q;
+  z.qprev.setZero();
   std::uint64_t seed = 0x9E3779B97F4A7C15ull;  // power_iteration_omega's start
   for (Index q = 0; q < 3 * n; ++q) {
     seed = seed * 6364136223846793005ull + 1442695040888963407ull;
     qv[q] = (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * z.sc[q / 3];
   }
   const double n0 = qv.norm();
-  if (n0 == 0) return 0.0;
+  if (n0 == 0) return;
   qv /= n0;
-  constexpr int kMax = 64;
-  double alpha[kMax], beta[kMax];
-  int k = 0;
-  double beta_prev = 0;
-  iterations = std::clamp(iterations, 1, kMax);
-  for (int it = 0; it < iterations; ++it) {
-    apply_A(qv, y);
+  z.done = false;
+}
+
+bool tangent_lanczos_advance(const Model& m, int products, TangentScratch& z) {
+  VecX &qv = z.q, &qprev = z.qprev, &y = z.y;
+  for (int p = 0; p < products && !z.done; ++p) {
+    tangent_product(m, z.x, z, qv, y);
+    ++z.products;
     const double al = qv.dot(y);
-    y -= al * qv + beta_prev * qprev;
-    alpha[k++] = al;
+    y -= al * qv + z.beta_prev * qprev;
+    z.alpha[z.k++] = al;
     const double be = y.norm();
-    if (!(be > 1e-12 * std::max(std::abs(al), 1e-300)) || it + 1 == iterations) break;
-    beta[k - 1] = be;
+    if (!(be > 1e-12 * std::max(std::abs(al), 1e-300)) || z.k == z.iterations) {
+      z.done = true;  // the iterations asked for, or an invariant space
+      break;
+    }
+    z.beta[z.k - 1] = be;
     qprev.swap(qv);
     qv = y / be;
-    beta_prev = be;
+    z.beta_prev = be;
   }
-  return std::max(tridiagonal_max(alpha, beta, k), 0.0);
+  return z.done;
+}
+
+double tangent_lanczos_omega2(const TangentScratch& z) {
+  return z.k > 0 ? std::max(tridiagonal_max(z.alpha, z.beta, z.k), 0.0) : 0.0;
+}
+
+double tangent_omega2(const Model& m, const MatX3& x, int iterations, TangentScratch& z) {
+  tangent_lanczos_start(m, x, iterations, z);
+  tangent_lanczos_advance(m, TangentScratch::kMaxProducts, z);
+  return tangent_lanczos_omega2(z);
 }
 
 }  // namespace medspring

@@ -49,12 +49,16 @@ struct ThreadedStep {
   /// (integrators.cpp, docs/volumetric-stable-step.md), kept here because the State
   /// holds this handle already (a copied State starts without a reference, as it starts without a partition).
   struct TangentRefresh {
-    TangentScratch scratch;
+    TangentScratch scratch;   // the estimate under way: its snapshot of x, Lanczos vectors, tridiagonal
     double s_ref = 0.0;       // 1.05^2 x the Lanczos omega^2 at the reference state / omega_rest^2
     double b_ref = 0.0;       // the frame's growth bound (State::stiffening) at the reference state
-    std::uint64_t frame = 0;  // State::frames when it was taken
-    std::uint64_t tried = 0;  // State::frames + 1 of the last refresh (0: never)
-    bool valid = false;
+    std::uint64_t frame = 0;  // State::frames when its state was taken
+    std::uint64_t tried = 0;  // State::frames + 1 when the last estimate was started (0: never)
+    bool valid = false;       // the reference (s_ref, b_ref, frame) is in use
+    bool pending = false;     // an estimate is under way on scratch.x, taken at frame_snap with bound b_snap
+    double b_snap = 0.0;
+    std::uint64_t frame_snap = 0;
+    void drop() { valid = pending = false; }  // a rollback or a failed frame: start again
   } tangent;
 
   bool matches(const Model& m) const {
