@@ -24,8 +24,9 @@ inline Integrator parse_enum(const std::string& text, Integrator*) {
 /// The symplectic step's stable-step rule (docs/volumetric-stable-step.md).
 /// Bound: the growth bound of the last force pass (the default; cheap, a bound at every frame). Refresh: for
 /// models with volume or compression terms, the bound is replaced where smaller by a 15-product Lanczos
-/// estimate on the current tangent, retaken every 20-200 frames (fewer sub-steps under load, but one
-/// re-estimate stalls one frame for ~10-30 ms and its band and age limits are heuristic: for offline runs).
+/// estimate on the current tangent, retaken every 20-200 frames one product per frame on a snapshot (fewer
+/// sub-steps under load; ~0.8 ms more CPU on the frames that take a product, and its band and age limits are
+/// heuristic: for offline runs).
 enum class StableStep { Bound, Refresh };
 /// "bound" | "refresh"; InvalidInput naming stable_step otherwise.
 StableStep parse_stable_step(const std::string& text);
@@ -76,7 +77,7 @@ void for_each_field(S& s, V&& v) {
     s.threads);
   v(ParamSpec{"stable_step", "",
               "symplectic, volumetric: bound (growth bound, default) or refresh (tangent estimate every "
-              "20-200 frames: fewer sub-steps, a ~10-30 ms frame at each; offline runs)"},
+              "20-200 frames, one product per frame: fewer sub-steps; heuristic, offline runs)"},
     s.stable_step);
 }
 
