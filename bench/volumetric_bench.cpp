@@ -36,12 +36,14 @@ namespace {
 
 using namespace medspring;
 
-std::shared_ptr<const VolumetricBody> kidney(Index nodes, double mass_scaling_dt = 0.25) {
+std::shared_ptr<const VolumetricBody> kidney(Index nodes, double mass_scaling_dt = 0.25,
+                                             VolumePrecision precision = VolumePrecision::Double) {
   const SurfaceMesh s = kidney_phantom();
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = nodes});
   const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
   VolumetricSettings st;  // 10 kPa, nu = 0.45
   st.mass_scaling_dt = mass_scaling_dt;
+  st.volume_precision = precision;
   st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
   return std::make_shared<VolumetricBody>(vm, st, "volumetric kidney");
 }
@@ -82,8 +84,9 @@ double former_compression_bound(const CompressionTerms& T, const MatX3& x, const
 
 // One update of the kidney of `nodes` nodes with mass scaling for `mass_scaling_dt` (ms, 0: off) under a
 // point load of `load` N on its top node, with the counters of its stable step.
-void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, double load) {
-  const auto body = kidney(nodes, mass_scaling_dt);
+void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, double load,
+                   VolumePrecision precision = VolumePrecision::Double) {
+  const auto body = kidney(nodes, mass_scaling_dt, precision);
   SimulationSettings ss;
   ss.normals = false;
   ss.local.enabled = false;
@@ -176,6 +179,18 @@ BENCHMARK(BM_VolumetricKidneyUpdateScalar)
     ->Args({500, 0})
     ->Args({1000, 0})
     ->Args({2000, 0})
+    ->Unit(benchmark::kMicrosecond);
+// BM_VolumetricKidneyUpdate with the opt-in single-precision volume pass (volume_precision float) on the
+// sub-steps without the stable step's bound.
+void BM_VolumetricKidneyUpdateF32(benchmark::State& st) {
+  kidney_update(st, static_cast<Index>(st.range(0)), 1e-3 * static_cast<double>(st.range(1)), 0.5,
+                VolumePrecision::Float);
+}
+BENCHMARK(BM_VolumetricKidneyUpdateF32)
+    ->Args({500, 0})
+    ->Args({1000, 0})
+    ->Args({2000, 0})
+    ->Args({2000, 250})
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_VolumetricKidneyUpdate)
     ->Args({500, 0})

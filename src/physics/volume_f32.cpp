@@ -7,12 +7,14 @@
 #include <atomic>
 #include <cstddef>
 #include <cstring>
+#include <memory>
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
 
 #include "medspring/core/check.hpp"
 #include "medspring/physics/compression_terms.hpp"
+#include "medspring/physics/model.hpp"
 
 namespace medspring {
 
@@ -308,6 +310,19 @@ void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double
     diff ? records_f32<false, true>(F, u, g) : records_f32<false, false>(F, u, g);
   for (Index i = 0; i < n; ++i)
     for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
+}
+
+void set_volume_single_precision(Model& m, bool on) {
+  if (!on) {
+    m.volume_f32.reset();
+    return;
+  }
+  require(m.volume.size() > 0 && static_cast<Index>(m.volume.packed.size()) == m.volume.size(), m.name,
+          ": the single-precision volume pass needs finalized volume terms (the model has ", m.volume.size(),
+          ")");
+  auto F = std::make_shared<VolumeTermsF32>();
+  build_volume_f32(m.volume, m.x0, *F);
+  m.volume_f32 = std::move(F);
 }
 
 namespace detail {
