@@ -3,7 +3,9 @@
 // the bottom 20 %, 0.5 N on the top node; one update = Simulation::update (a 0.5 ms frame with the sub-steps
 // its stable step needs). The same set-up as bench/volumetric_bench.cpp. Needs the fem layer (TetGen).
 // kidney_volumetric_2000_explicit_linear_refresh: the same with the opt-in tangent refresh
-// (StepSettings::stable_step = refresh; its re-estimate is spread over 15 frames, one product each).
+// (StepSettings::stable_step = refresh; its re-estimate is spread over 15 frames, one product each). The _f32
+// cases: the default and the mass-scaled case with the opt-in single-precision volume pass
+// (VolumetricSettings::volume_precision = float).
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,17 +27,20 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
   std::vector<bench::BenchCase> cases;
 #ifdef MEDSPRING_HAVE_FEM
   for (const Index target : {500, 1000, 2000})
-    for (const int variant : {0, 1, 2}) {  // the default; opt-in selective mass scaling; the tangent refresh
+    for (const int variant : {0, 1, 2, 3, 4}) {  // the default; opt-in selective mass scaling; the tangent
+                                                 // refresh; 3, 4: 0, 1 with the single-precision volume pass
       if (variant == 2 && target != 2000) continue;  // StepSettings::stable_step = refresh: 2,000 nodes only
-      const double mass_scaling_dt = variant == 1 ? 0.25 : 0.0;
-      const bool refresh = variant == 2;
-      const std::string name = cat("kidney_volumetric_", target, "_explicit_linear",
-                                   variant == 1 ? "_mass_scaled" : (refresh ? "_refresh" : ""));
+      const double mass_scaling_dt = variant == 1 || variant == 4 ? 0.25 : 0.0;
+      const bool refresh = variant == 2, f32 = variant >= 3;
+      const std::string name =
+          cat("kidney_volumetric_", target, "_explicit_linear",
+              mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""), f32 ? "_f32" : "");
       if (!filter.empty() && name.find(filter) == std::string::npos) continue;
       const SurfaceMesh s = kidney_phantom();
       const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
       VolumetricSettings st;  // 10 kPa, nu = 0.45
       st.mass_scaling_dt = mass_scaling_dt;
+      if (f32) st.volume_precision = VolumePrecision::Float;
       st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
       auto body = std::make_shared<const VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = target}),
                                                          st, "volumetric kidney");

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <vector>
 
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/volumetric.hpp"
@@ -29,17 +30,20 @@ namespace detail {  // the volume passes' vector path on or off (src/physics/com
 bool set_volume_simd(bool on);
 }  // namespace detail
 }  // namespace medspring
+#include "../src/physics/volume_f32.hpp"  // the single-precision volume pass (internal to the physics layer)
 
 namespace {
 
 using namespace medspring;
 
-std::shared_ptr<const VolumetricBody> kidney(Index nodes, double mass_scaling_dt = 0.25) {
+std::shared_ptr<const VolumetricBody> kidney(Index nodes, double mass_scaling_dt = 0.25,
+                                             VolumePrecision precision = VolumePrecision::Double) {
   const SurfaceMesh s = kidney_phantom();
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = nodes});
   const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
   VolumetricSettings st;  // 10 kPa, nu = 0.45
   st.mass_scaling_dt = mass_scaling_dt;
+  st.volume_precision = precision;
   st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
   return std::make_shared<VolumetricBody>(vm, st, "volumetric kidney");
 }
@@ -80,8 +84,9 @@ double former_compression_bound(const CompressionTerms& T, const MatX3& x, const
 
 // One update of the kidney of `nodes` nodes with mass scaling for `mass_scaling_dt` (ms, 0: off) under a
 // point load of `load` N on its top node, with the counters of its stable step.
-void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, double load) {
-  const auto body = kidney(nodes, mass_scaling_dt);
+void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, double load,
+                   VolumePrecision precision = VolumePrecision::Double) {
+  const auto body = kidney(nodes, mass_scaling_dt, precision);
   SimulationSettings ss;
   ss.normals = false;
   ss.local.enabled = false;
@@ -174,6 +179,18 @@ BENCHMARK(BM_VolumetricKidneyUpdateScalar)
     ->Args({500, 0})
     ->Args({1000, 0})
     ->Args({2000, 0})
+    ->Unit(benchmark::kMicrosecond);
+// BM_VolumetricKidneyUpdate with the opt-in single-precision volume pass (volume_precision float) on the
+// sub-steps without the stable step's bound.
+void BM_VolumetricKidneyUpdateF32(benchmark::State& st) {
+  kidney_update(st, static_cast<Index>(st.range(0)), 1e-3 * static_cast<double>(st.range(1)), 0.5,
+                VolumePrecision::Float);
+}
+BENCHMARK(BM_VolumetricKidneyUpdateF32)
+    ->Args({500, 0})
+    ->Args({1000, 0})
+    ->Args({2000, 0})
+    ->Args({2000, 250})
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_VolumetricKidneyUpdate)
     ->Args({500, 0})
@@ -299,8 +316,18 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   VecX msq(m.num_nodes());        // m_i^-1/2, 0 on a fixed node (phase 9)
   for (Index i = 0; i < m.num_nodes(); ++i) msq[i] = m.fixed[i] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
   // phases 10 + p: phase p with the volume passes one tetrahedron at a time (their vector path off)
-  const int phase = static_cast<int>(st.range(0)) % 10;
-  const bool simd_was = detail::set_volume_simd(st.range(0) < 10);
+  // phases 20 / 21: phase 6 in single precision (volume_f32.hpp), 6V - 6V0 from the displacement differences
+  // (the default) / as a difference of the two volumes; 22: phase 20 one record at a time (4-float vectors,
+  // not eight records per 256-bit vector)
+  const int phase = st.range(0) >= 20 ? static_cast<int>(st.range(0)) : static_cast<int>(st.range(0)) % 10;
+  const bool simd_was = detail::set_volume_simd(st.range(0) < 10 || st.range(0) >= 20);
+  VolumeTermsF32 vf;
+  std::vector<float> fscratch;
+  const bool x8_was = detail::set_volume_f32_x8(phase != 22);
+  if (phase >= 20) {
+    build_volume_f32(m.volume, m.x0, vf);
+    fscratch.resize(static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()));
+  }
   double row_max = 0;
   for (auto _ : st) {
     if (phase == 0) detail::internal_forces(springs_only, x, fe, f, false);
@@ -322,9 +349,12 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
       benchmark::DoNotOptimize(add_volume_and_compression_forces_inc(m.volume, x.data(), f.data(),
                                                                      rows.data() + m.num_nodes(), msq.data(),
                                                                      crows.data(), m.num_nodes()));
+    if (phase >= 20)
+      add_volume_and_compression_forces_f32(vf, x.data(), f.data(), fscratch.data(), phase != 21);
     benchmark::DoNotOptimize(f.data());
   }
   detail::set_volume_simd(simd_was);
+  detail::set_volume_f32_x8(x8_was);
   st.counters["tets"] = static_cast<double>(m.volume.size());
   st.counters["springs"] = static_cast<double>(m.num_springs());
 }
@@ -333,6 +363,9 @@ BENCHMARK(BM_VolumetricKidneyPhases)
     ->Arg(15)
     ->Arg(16)
     ->Arg(19)
+    ->Arg(20)
+    ->Arg(21)
+    ->Arg(22)
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

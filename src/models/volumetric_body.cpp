@@ -33,6 +33,16 @@ ThinTetMode parse_thin_tet_mode(const std::string& text) {
   throw InvalidInput(cat("unknown thin-tetrahedron term '", text, "' (expected off, scale_springs or clip)"));
 }
 
+const char* to_string(VolumePrecision p) {
+  return p == VolumePrecision::Float ? "float" : "double";
+}
+
+VolumePrecision parse_volume_precision(const std::string& text) {
+  if (text == "double") return VolumePrecision::Double;
+  if (text == "float") return VolumePrecision::Float;
+  throw InvalidInput(cat("unknown volume pass precision '", text, "' (expected double or float)"));
+}
+
 void lame_parameters(double E_kPa, double nu, double& mu, double& lambda, const std::string& where) {
   require(std::isfinite(E_kPa) && E_kPa > 0, where, ".E_kPa: must be > 0 (got ", E_kPa, ")");
   require(std::isfinite(nu) && nu > -1.0 && nu < 0.5, where, ".nu: must be in (-1, 0.5) (got ", nu, ")");
@@ -301,6 +311,9 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
   }
   if (thin.size() > 0) b.set_thin_tet(std::move(thin));
   model_ = b.build();
+  if (s.volume_precision == VolumePrecision::Float &&
+      model_.volume.size() > 0)  // opt-in (docs/volumetric-speed.md)
+    set_volume_single_precision(model_, true);
   if (!surf_k.empty()) {
     std::nth_element(surf_k.begin(), surf_k.begin() + static_cast<long>(surf_k.size() / 2), surf_k.end());
     k_local_ = surf_k[surf_k.size() / 2];

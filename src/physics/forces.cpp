@@ -8,6 +8,7 @@
 #include "medspring/physics/stability.hpp"
 #include "spring_kernel.hpp"
 #include "tet_kernel.hpp"
+#include "volume_f32.hpp"
 
 namespace medspring {
 
@@ -147,6 +148,12 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
     if (!comp || count(R + ct) <= count(R + ct / 3)) return R + ct;
     if (fused) return R + fused_compression_blocks(m.volume, X, trows + n, crows, n) / w2;
     return R + compression_block_bound(m.compression, X, m.mass.data(), m.fixed.data(), crows, n) / w2;
+  }
+  if (!stiffening && m.volume_f32 && local && local->f32 &&
+      (compression_fused(m) || m.compression.size() == 0)) {
+    // opt-in single precision (set_volume_single_precision; volume_f32.hpp): the sub-steps without the bound
+    add_volume_and_compression_forces_f32(*m.volume_f32, X, Fo, local->f32);
+    return stiff;
   }
   if (!stiffening && compression_fused(m)) {
     add_volume_and_compression_forces(m.volume, X, Fo);

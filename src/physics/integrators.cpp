@@ -13,6 +13,7 @@
 #include "spring_kernel.hpp"
 #include "stiffness_product.hpp"
 #include "threaded_step.hpp"
+#include "volume_f32.hpp"
 
 namespace medspring {
 
@@ -385,6 +386,9 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
   if ((m.volume.size() > 0 || m.compression.size() > 0) &&
       st.stiff_rows.size() != stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()))
     st.stiff_rows.setZero(stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size()));
+  if (m.volume_f32 &&
+      st.volume_f32.size() != static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()))
+    st.volume_f32.assign(static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()), 0.0f);
   const int T = effective_threads(m, s);
   if (tangent_refresh_on(m, s) &&
       T <= 1) {  // the stable step's tangent refresh (refine_stiffening): its scratch, sized now
@@ -443,7 +447,12 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   }
   // volume terms: the local stiffening (scratch sized by prepare_step; a state without it gets the global
   // rule)
-  const detail::LocalStiffening local{st.stiff_rows.data(), T, s.safety};
+  const detail::LocalStiffening local{
+      st.stiff_rows.data(), T, s.safety,
+      m.volume_f32 &&
+              st.volume_f32.size() == static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes())
+          ? st.volume_f32.data()
+          : nullptr};
   const detail::LocalStiffening* local_rule =
       (m.volume.size() > 0 || m.compression.size() > 0) &&
               st.stiff_rows.size() == stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size())

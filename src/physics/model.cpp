@@ -10,6 +10,7 @@
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
 #include "spring_gather.hpp"
+#include "volume_f32.hpp"
 
 namespace medspring {
 
@@ -129,6 +130,7 @@ void finalize(Model& m) {
     fuse_compression_terms(m.volume, m.compression);  // on the volume terms' tetrahedra: one pass (issue 23)
   }
   if (m.thin.size() > 0) validate_thin_tet_corrections(m.thin, n, w);  // issue 23, thin tetrahedra
+  if (m.volume_f32) set_volume_single_precision(m, true);  // its float rest data from the records just built
   m.free_nodes.clear();
   for (Index a = 0; a < n; ++a)
     if (!m.fixed[a]) m.free_nodes.push_back(a);
@@ -255,6 +257,7 @@ State make_state(const Model& m) {
   s.step_coef.setZero(n);
   if (m.volume.size() > 0 || m.compression.size() > 0)
     s.stiff_rows.setZero(stiff_rows_size(n, m.volume.size(), m.compression.size()));  // issue 23
+  if (m.volume_f32) s.volume_f32.assign(static_cast<std::size_t>(kVolumeF32ScratchPerNode * n), 0.0f);
   for (VecX* b : {&s.cg_r, &s.cg_z, &s.cg_p, &s.cg_q, &s.dv, &s.rhs, &s.jacobi}) b->setZero(3 * n);
   s.spring_a.setZero(ns);
   s.spring_b.setZero(ns);

@@ -122,6 +122,7 @@ struct LocalStiffening {
   double* scratch;
   double frame_dt;
   double safety;
+  float* f32 = nullptr;  // State::volume_f32 (the single-precision volume pass, Model::volume_f32), or null
 };
 /// The same, and with `local` (and stiffening) the local stiffening of the volume terms: the returned
 /// stiffening is min(max(s_springs, s_terms), s_springs + row_max / omega_rest^2) (add_volume_forces_local)

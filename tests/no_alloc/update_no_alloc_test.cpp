@@ -191,6 +191,12 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
   expect_no_allocation("volumetric", body, sites);
   // the opt-in tangent refresh (StepSettings::stable_step): its scratch is sized before the counted updates
   expect_no_allocation("volumetric, stable_step refresh", body, sites, 0, StableStep::Refresh);
+  // the opt-in single-precision volume pass (volume_precision float): its float scratch sized with the state
+  st.volume_precision = VolumePrecision::Float;
+  auto body32 =
+      std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney (float)");
+  ASSERT_TRUE(body32->model().volume_f32 != nullptr);
+  expect_no_allocation("volumetric, volume_precision float", body32, sites);
 #else
   GTEST_SKIP() << "built without the fem layer (TetGen)";
 #endif

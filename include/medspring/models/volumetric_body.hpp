@@ -63,6 +63,17 @@ ThinTetMode parse_thin_tet_mode(const std::string& text);
 inline ThinTetMode parse_enum(const std::string& text, ThinTetMode*) {
   return parse_thin_tet_mode(text);
 }
+/// Precision of the volume pass of the sub-steps without the stable step's bound (issue 23,
+/// docs/volumetric-speed.md "A single-precision volume pass"; physics/model.hpp set_volume_single_precision):
+/// double (default) or float (opt-in: the volume and compression terms' forces of those sub-steps in single
+/// precision; the frame's last sub-step, energies, Hessians and static solves stay double).
+enum class VolumePrecision { Double, Float };
+const char* to_string(VolumePrecision p);
+/// "double" | "float"; InvalidInput naming the text otherwise.
+VolumePrecision parse_volume_precision(const std::string& text);
+inline VolumePrecision parse_enum(const std::string& text, VolumePrecision*) {
+  return parse_volume_precision(text);
+}
 /// VolumetricSettings::thin_tet_q_max by default: tetrahedra with h_min / L_max below it get the term.
 inline constexpr double kDefaultThinTetQMax = 0.3;
 
@@ -95,6 +106,7 @@ struct VolumetricSettings {
   MeshSizing mesh_sizing = MeshSizing::Volume;  // how that build sizes the interior
   ThinTetMode thin_tet = ThinTetMode::Off;      // correction term on thin tetrahedra (opt-in)
   double thin_tet_q_max = kDefaultThinTetQMax;  // ... on those with h_min / L_max below this, (0, 1]
+  VolumePrecision volume_precision = VolumePrecision::Double;  // the sub-steps' volume pass (float: opt-in)
 };
 
 /// The declaration of VolumetricSettings (core/params.hpp): the "parameters" of a volumetric model in a
@@ -142,6 +154,10 @@ void for_each_field(S& s, V&& v) {
         .positive()
         .at_most(1),
     s.thin_tet_q_max);
+  v(ParamSpec{"volume_precision", "",
+              "volume pass of the sub-steps without the stable step's bound: double, or float (opt-in, "
+              "docs/volumetric-speed.md)"},
+    s.volume_precision);
   v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
   v(ParamSpec{"E_kPa", "kPa", "Young's modulus, from model.material"}.positive().set_by_program(), s.E_kPa);
   v(ParamSpec{"nu", "", "Poisson ratio, from model.material"}

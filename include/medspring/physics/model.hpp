@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,10 @@ struct Model {
   CompressionTerms compression;
   // opt-in correction terms on thin tetrahedra (issue 23, thin_tet_correction.hpp; empty by default)
   ThinTetCorrections thin;
+  // opt-in single-precision volume pass for the sub-steps without the stable step's bound (issue 23,
+  // docs/volumetric-speed.md; set_volume_single_precision): its float rest data, rebuilt by finalize();
+  // null (the default): every volume pass in double
+  std::shared_ptr<const VolumeTermsF32> volume_f32;
 
   // Derived by finalize():
   VecX inv_k;  // (#S) 1/k (0 when k = 0), for the run-time stability estimate
@@ -92,6 +97,13 @@ struct Model {
 /// and computes the derived quantities. Throws InvalidInput naming the model and the element,
 /// e.g. "kidney: springs[12].k: must be >= 0 (got -1)".
 void finalize(Model& model);
+
+/// The opt-in single-precision volume pass (issue 23, docs/volumetric-speed.md "A single-precision volume
+/// pass"): with `on`, builds model.volume_f32 from the finalized volume terms (and their fused compression
+/// terms), so that the symplectic step's sub-steps without the stable step's bound evaluate them in float
+/// (the frame's last sub-step, the energies, Hessians and static solves stay double); off clears it.
+/// Throws InvalidInput naming the model when `on` and it has no finalized volume terms.
+void set_volume_single_precision(Model& model, bool on);
 
 /// Per-node parameters used by builders.
 struct NodeParams {

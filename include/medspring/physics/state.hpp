@@ -58,6 +58,7 @@ struct State {
   VecX step_coef;                                // symplectic: 1 / (m + h d) per node for the cached h
   VecX spring_force;                             // gather pass: force of every spring slot, x | y | z blocks
   VecX stiff_rows;                               // volume terms: local stiffening rows (#N), increments (#T)
+  std::vector<float> volume_f32;                 // single-precision volume pass (Model::volume_f32): 8 #N
   double step_coef_h = -1.0;                     // the h step_coef was computed for
   VecX cg_r, cg_z, cg_p, cg_q, dv, rhs, jacobi;  // implicit Euler (3N)
   VecX spring_a, spring_b;                       // implicit: per-spring stiffness coefficients (#S)

@@ -16,6 +16,7 @@
 namespace medspring {
 
 struct CompressionTerms;  // compression_terms.hpp
+struct VolumeTermsF32;    // the single-precision pass's rest data (src/physics/volume_f32.hpp, internal)
 
 /// Volume terms as a struct of arrays; term t spans the tetrahedron (a[t], b[t], c[t], d[t]) with a
 /// positive rest volume.

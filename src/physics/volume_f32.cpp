@@ -1,0 +1,344 @@
+// The single-precision volume pass (volume_f32.hpp; issue 23, docs/volumetric-speed.md "A single-precision
+// volume pass"). GCC on x86 (SSE2): 4-float GCC vector extensions, the corners loaded and the forces added 16
+// bytes at a time. Elsewhere (Clang: the sanitizer and fuzz builds) the same arithmetic on a plain 4-float
+// struct.
+#include "volume_f32.hpp"
+
+#include <atomic>
+#include <cstddef>
+#include <cstring>
+#include <memory>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
+#include "medspring/core/check.hpp"
+#include "medspring/physics/compression_terms.hpp"
+#include "medspring/physics/model.hpp"
+
+namespace medspring {
+
+namespace {
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__SSE2__)
+#define MEDSPRING_VOLUME_F32_VECTOR 1
+typedef float F4 __attribute__((vector_size(16)));
+typedef int I4 __attribute__((vector_size(16)));
+inline F4 yzx(F4 a) {
+  return __builtin_shuffle(a, I4{1, 2, 0, 3});
+}
+inline F4 zxy(F4 a) {
+  return __builtin_shuffle(a, I4{2, 0, 1, 3});
+}
+inline F4 splat(float s) {
+  return F4{s, s, s, s};
+}
+#else
+struct F4 {
+  float v[4];
+  float operator[](int i) const { return v[i]; }
+};
+inline F4 operator+(F4 a, F4 b) {
+  return {{a.v[0] + b.v[0], a.v[1] + b.v[1], a.v[2] + b.v[2], a.v[3] + b.v[3]}};
+}
+inline F4 operator-(F4 a, F4 b) {
+  return {{a.v[0] - b.v[0], a.v[1] - b.v[1], a.v[2] - b.v[2], a.v[3] - b.v[3]}};
+}
+inline F4 operator*(F4 a, F4 b) {
+  return {{a.v[0] * b.v[0], a.v[1] * b.v[1], a.v[2] * b.v[2], a.v[3] * b.v[3]}};
+}
+inline F4 operator-(F4 a) {
+  return {{-a.v[0], -a.v[1], -a.v[2], -a.v[3]}};
+}
+inline F4 yzx(F4 a) {
+  return {{a.v[1], a.v[2], a.v[0], a.v[3]}};
+}
+inline F4 zxy(F4 a) {
+  return {{a.v[2], a.v[0], a.v[1], a.v[3]}};
+}
+inline F4 splat(float s) {
+  return {{s, s, s, s}};
+}
+#endif
+
+inline F4 ld(const float* p) {
+  F4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline void st(float* p, F4 v) {
+  std::memcpy(p, &v, sizeof v);
+}
+// u x v (the fourth lane: a3 b3 - a3 b3 = 0 for finite lanes)
+inline F4 cross(F4 a, F4 b) {
+  return yzx(a) * zxy(b) - zxy(a) * yzx(b);
+}
+inline float dot3(F4 a, F4 b) {
+  const F4 p = a * b;
+  return p[0] + p[1] + p[2];
+}
+// min and max as minss / maxss (no branch on J < 1 or J < J_min; tet_kernel.hpp's min_nb, max_nb)
+inline float min_f(float a, float b) {
+#if defined(__SSE2__)
+  return _mm_cvtss_f32(_mm_min_ss(_mm_set_ss(a), _mm_set_ss(b)));
+#else
+  return a < b ? a : b;
+#endif
+}
+inline float max_f(float a, float b) {
+#if defined(__SSE2__)
+  return _mm_cvtss_f32(_mm_max_ss(_mm_set_ss(a), _mm_set_ss(b)));
+#else
+  return a > b ? a : b;
+#endif
+}
+
+// The tetrahedron's forces: f_k = s (6 dV/dx_k), s = -alpha (6V - 6V0) - kc h'(J) / 6 (tet_record with Comp,
+// compression_dh6, in float). u: the displacement mirror (4 floats a node), g: the force mirror.
+template <bool Comp, bool Diff>
+[[gnu::always_inline]] inline void record_f32(const VolumeTermsF32::Record& r, const float* u, float* g) {
+  const F4 u0 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[0]));
+  const F4 E0 = ld(r.E[0]), E1 = ld(r.E[1]), E2 = ld(r.E[2]);
+  const F4 D0 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[1])) - u0;
+  const F4 D1 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[2])) - u0;
+  const F4 D2 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[3])) - u0;
+  const F4 e0 = E0 + D0, e1 = E1 + D1, e2 = E2 + D2;  // fourth lanes: alpha, 6 V0, kc / 6 (u's is 0)
+  const F4 c0 = cross(e1, e2), c1 = cross(e2, e0), c2 = cross(e0, e1);
+  const float alpha = E0[3], V06 = E1[3];
+  float dv6;  // 6V - 6V0
+  if constexpr (Diff)
+    dv6 = dot3(D0, c0) + dot3(E0, cross(D1, e2) + cross(E1, D2));
+  else
+    dv6 = dot3(e0, c0) - V06;
+  float s = -alpha * dv6;
+  if constexpr (Comp) {  // compression_dh6, compression_scalar
+    constexpr float jm = static_cast<float>(kCompressionJMin), d2m = 1.0f / (jm * jm) - 1.0f;
+    const float kc6 = E2[3];
+    const float lo = (jm - 1.0f) * V06;
+    const float d = max_f(min_f(dv6, 0.0f), lo);
+    const float bl = min_f(dv6 - lo, 0.0f);
+    const float W = V06 + d;
+    const float rr = 1.0f / (V06 * W);
+    s += -kc6 * (rr * (d2m * bl * W - d * d));
+  }
+  const F4 S = splat(s);
+  const F4 F1 = S * c0, F2 = S * c1, F3 = S * c2;
+  const F4 F0 = -(F1 + F2 + F3);
+  const F4 Fk[4] = {F0, F1, F2, F3};
+  for (int k = 0; k < 4; ++k) {
+    float* o = g + 4 * static_cast<std::ptrdiff_t>(r.n[k]);
+    st(o, ld(o) + Fk[k]);
+  }
+}
+
+#if defined(MEDSPRING_VOLUME_F32_VECTOR) && defined(__AVX__)
+#define MEDSPRING_VOLUME_F32_X8 1
+// Eight records at a time in 256-bit vectors (one tetrahedron a lane): the corners' and the records' 4-float
+// rows transposed in registers (no gathers), the arithmetic of record_f32 lane-wise (the same operations: the
+// same numbers), the forces transposed back to 4-float rows and added record by record, corner by corner.
+typedef float F8 __attribute__((vector_size(32)));
+
+// Rows p[0..8) (4 floats each) -> their x, y, z and w as 8-lane vectors.
+[[gnu::always_inline]] inline void rows_to_lanes(const float* const (&p)[8], F8 (&o)[4]) {
+  __m256 a[4];
+  for (int j = 0; j < 4; ++j)
+    a[j] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p[j])), _mm_loadu_ps(p[j + 4]), 1);
+  const __m256 t0 = _mm256_unpacklo_ps(a[0], a[1]), t1 = _mm256_unpacklo_ps(a[2], a[3]);
+  const __m256 t2 = _mm256_unpackhi_ps(a[0], a[1]), t3 = _mm256_unpackhi_ps(a[2], a[3]);
+  o[0] = (F8)_mm256_shuffle_ps(t0, t1, 0x44);
+  o[1] = (F8)_mm256_shuffle_ps(t0, t1, 0xEE);
+  o[2] = (F8)_mm256_shuffle_ps(t2, t3, 0x44);
+  o[3] = (F8)_mm256_shuffle_ps(t2, t3, 0xEE);
+}
+
+inline F8 min8(F8 a, F8 b) {
+  return (F8)_mm256_min_ps((__m256)a, (__m256)b);
+}  // a < b ? a : b (minss)
+inline F8 max8(F8 a, F8 b) {
+  return (F8)_mm256_max_ps((__m256)a, (__m256)b);
+}
+inline void cross8(const F8 (&a)[3], const F8 (&b)[3], F8 (&w)[3]) {
+  w[0] = a[1] * b[2] - a[2] * b[1];
+  w[1] = a[2] * b[0] - a[0] * b[2];
+  w[2] = a[0] * b[1] - a[1] * b[0];
+}
+inline F8 dot8(const F8 (&a)[3], const F8 (&b)[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+template <bool Comp, bool Diff>
+[[gnu::always_inline]] inline void records8_f32(const VolumeTermsF32::Record* r, const float* u, float* g) {
+  std::ptrdiff_t n[4][8];
+  for (int k = 0; k < 4; ++k)
+    for (int j = 0; j < 8; ++j) n[k][j] = 4 * static_cast<std::ptrdiff_t>(r[j].n[k]);
+  F8 U[4][4], E[3][4];
+  for (int k = 0; k < 4; ++k) {
+    const float* const p[8] = {u + n[k][0], u + n[k][1], u + n[k][2], u + n[k][3],
+                               u + n[k][4], u + n[k][5], u + n[k][6], u + n[k][7]};
+    rows_to_lanes(p, U[k]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const float* const p[8] = {r[0].E[k], r[1].E[k], r[2].E[k], r[3].E[k],
+                               r[4].E[k], r[5].E[k], r[6].E[k], r[7].E[k]};
+    rows_to_lanes(p, E[k]);
+  }
+  const F8 alpha = E[0][3], V06 = E[1][3];
+  F8 D[3][3], e[3][3], Ek[3][3];
+  for (int k = 0; k < 3; ++k)
+    for (int d = 0; d < 3; ++d) {
+      D[k][d] = U[k + 1][d] - U[0][d];
+      Ek[k][d] = E[k][d];
+      e[k][d] = E[k][d] + D[k][d];
+    }
+  F8 c[3][3];
+  cross8(e[1], e[2], c[0]);
+  cross8(e[2], e[0], c[1]);
+  cross8(e[0], e[1], c[2]);
+  F8 dv6;
+  if constexpr (Diff) {
+    F8 a[3], b[3], ab[3];
+    cross8(D[1], e[2], a);
+    cross8(Ek[1], D[2], b);
+    for (int d = 0; d < 3; ++d) ab[d] = a[d] + b[d];
+    dv6 = dot8(D[0], c[0]) + dot8(Ek[0], ab);
+  } else {
+    dv6 = dot8(e[0], c[0]) - V06;
+  }
+  F8 s = -alpha * dv6;
+  if constexpr (Comp) {
+    constexpr float jm = static_cast<float>(kCompressionJMin), d2m = 1.0f / (jm * jm) - 1.0f;
+    const F8 zero{}, kc6 = E[2][3];
+    const F8 lo = (jm - 1.0f) * V06;
+    const F8 d = max8(min8(dv6, zero), lo);
+    const F8 bl = min8(dv6 - lo, zero);
+    const F8 W = V06 + d;
+    const F8 rr = 1.0f / (V06 * W);
+    s += -kc6 * (rr * (d2m * bl * W - d * d));
+  }
+  F8 Fk[4][3];
+  for (int d = 0; d < 3; ++d) {
+    Fk[1][d] = s * c[0][d];
+    Fk[2][d] = s * c[1][d];
+    Fk[3][d] = s * c[2][d];
+    Fk[0][d] = -(Fk[1][d] + Fk[2][d] + Fk[3][d]);
+  }
+  const __m256 z = _mm256_setzero_ps();
+  for (int k = 0; k < 4; ++k) {
+    const __m256 t0 = _mm256_unpacklo_ps((__m256)Fk[k][0], (__m256)Fk[k][1]);
+    const __m256 t1 = _mm256_unpackhi_ps((__m256)Fk[k][0], (__m256)Fk[k][1]);
+    const __m256 t2 = _mm256_unpacklo_ps((__m256)Fk[k][2], z), t3 = _mm256_unpackhi_ps((__m256)Fk[k][2], z);
+    const __m256 q[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
+                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+    for (int j = 0; j < 4; ++j) {  // records j and j + 4, in the records' order
+      float* o = g + n[k][j];
+      _mm_storeu_ps(o, _mm_add_ps(_mm_loadu_ps(o), _mm256_castps256_ps128(q[j])));
+    }
+    for (int j = 0; j < 4; ++j) {
+      float* o = g + n[k][j + 4];
+      _mm_storeu_ps(o, _mm_add_ps(_mm_loadu_ps(o), _mm256_extractf128_ps(q[j], 1)));
+    }
+  }
+}
+#endif
+
+std::atomic<bool> g_f32_x8{true};
+
+template <bool Comp, bool Diff>
+void records_f32(const VolumeTermsF32& F, const float* u, float* g) {
+  const VolumeTermsF32::Record* r = F.rec.data();
+  const std::size_t nr = F.rec.size();
+  std::size_t i = 0;
+#if defined(MEDSPRING_VOLUME_F32_X8)
+  if (g_f32_x8.load(std::memory_order_relaxed))
+    for (; i + 8 <= nr; i += 8) records8_f32<Comp, Diff>(r + i, u, g);
+#endif
+  for (; i < nr; ++i) record_f32<Comp, Diff>(r[i], u, g);
+}
+
+}  // namespace
+
+void build_volume_f32(const VolumeTerms& T, const MatX3& x0, VolumeTermsF32& F) {
+  require(static_cast<Index>(T.packed.size()) == T.size(), "volume terms (single precision): not finalized");
+  const bool comp = !T.kc.empty();
+  F.nodes = static_cast<Index>(x0.rows());
+  F.comp = comp;
+  F.x0.resize(static_cast<std::size_t>(3 * F.nodes));
+  for (Index i = 0; i < F.nodes; ++i)
+    for (int d = 0; d < 3; ++d) F.x0[static_cast<std::size_t>(3 * i + d)] = x0(i, d);
+  F.rec.resize(T.packed.size());
+  for (std::size_t t = 0; t < T.packed.size(); ++t) {
+    const VolumeTerms::Packed& p = T.packed[t];
+    VolumeTermsF32::Record& r = F.rec[t];
+    for (int k = 0; k < 4; ++k) {
+      require(p.n[k] >= 0 && p.n[k] < F.nodes, "volume terms (single precision): record ", t, " corner ", k,
+              " out of range");
+      r.n[k] = p.n[k];
+    }
+    for (int k = 0; k < 3; ++k) {
+      for (int d = 0; d < 3; ++d) r.E[k][d] = static_cast<float>(x0(p.n[k + 1], d) - x0(p.n[0], d));
+      r.E[k][3] = 0.0f;
+    }
+    // 6 V0: the kernel's own volume of the rounded edges (dot3(e0, c0) at u = 0), so that the rest is
+    // exactly force-free also without Diff
+    const F4 E0 = ld(r.E[0]), E1 = ld(r.E[1]), E2 = ld(r.E[2]);
+    const float v06 = dot3(E0, cross(E1, E2));
+    require(v06 > 0.0f, "volume terms (single precision): record ", t,
+            " has no positive rest volume in float (6 V0 = ", v06, " mm^3)");
+    r.E[0][3] = static_cast<float>(p.alpha);
+    r.E[1][3] = v06;
+    r.E[2][3] = comp ? static_cast<float>(p.kc6) : 0.0f;
+  }
+}
+
+void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
+                                           float* scratch, bool diff) {
+  const Index n = F.nodes;
+  float* u = scratch;
+  float* g = scratch + 4 * n;
+  const double* x0 = F.x0.data();
+  for (Index i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      u[4 * i + d] = static_cast<float>(x[3 * i + d] - x0[3 * i + d]);
+      g[4 * i + d] = 0.0f;
+    }
+    u[4 * i + 3] = 0.0f;
+    g[4 * i + 3] = 0.0f;
+  }
+  if (F.comp)
+    diff ? records_f32<true, true>(F, u, g) : records_f32<true, false>(F, u, g);
+  else
+    diff ? records_f32<false, true>(F, u, g) : records_f32<false, false>(F, u, g);
+  for (Index i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
+}
+
+void set_volume_single_precision(Model& m, bool on) {
+  if (!on) {
+    m.volume_f32.reset();
+    return;
+  }
+  require(m.volume.size() > 0 && static_cast<Index>(m.volume.packed.size()) == m.volume.size(), m.name,
+          ": the single-precision volume pass needs finalized volume terms (the model has ", m.volume.size(),
+          ")");
+  auto F = std::make_shared<VolumeTermsF32>();
+  build_volume_f32(m.volume, m.x0, *F);
+  m.volume_f32 = std::move(F);
+}
+
+namespace detail {
+
+bool set_volume_f32_x8(bool on) {
+  return g_f32_x8.exchange(on);
+}
+
+bool volume_f32_vector_compiled() {
+#if defined(MEDSPRING_VOLUME_F32_VECTOR)
+  return true;
+#else
+  return false;
+#endif
+}
+
+}  // namespace detail
+
+}  // namespace medspring

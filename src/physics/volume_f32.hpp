@@ -1,0 +1,63 @@
+// The single-precision volume pass (issue 23, docs/volumetric-speed.md "A single-precision volume pass"):
+// the pass of the sub-steps without the stable step's bound (add_volume_and_compression_forces: the volume
+// terms and the fused compression terms) in float, one tetrahedron at a time with its corners as 4-float
+// vectors (x, y, z, 0): 4 loads of 16 bytes per tetrahedron and 4 read-modify-writes of 16 bytes instead of
+// 12 of 8. Internal to the physics layer; the double pass (volume_passes.cpp) is the reference.
+//
+// Precision: the float mirror holds the displacement u = x - x0 (not the position), and each record the rest
+// edge vectors E_k = x0_{k+1} - x0_0 rounded to float, so that e_k = E_k + (u_{k+1} - u_0): the rounding of
+// an edge is relative to the edge (and to the displacement), not to the coordinates (which on the real kidney
+// are ~10-100 edge lengths from the origin). With Diff, 6V - 6V0 is computed from the displacement
+// differences D_k = u_{k+1} - u_0 alone, D_0 . (e_1 x e_2) + E_0 . (D_1 x e_2 + E_1 x D_2) (exactly
+// e_0 . (e_1 x e_2) - E_0 . (E_1 x E_2)), instead of subtracting two nearly equal volumes: no cancellation at
+// small strain. 6V0 (for the compression term's J) is the float kernel's own volume of the rounded rest
+// edges, so the rest state is exactly force-free.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "medspring/core/types.hpp"
+#include "medspring/physics/volume_terms.hpp"
+
+namespace medspring {
+
+/// Single-precision rest data of a model's volume terms (and its fused compression terms), built from the
+/// finalized VolumeTerms (its `packed` order) and the rest positions.
+struct VolumeTermsF32 {
+  /// One record per term, 64 bytes: the corners, and the rest edges E_k = x0[n[k+1]] - x0[n[0]] (mm, float),
+  /// one 4-float row each, whose fourth floats hold alpha = kv / 36 V0 (1/mm), 6 V0 (mm^3, the float
+  /// kernel's volume of the rounded edges) and kc / 6 (0: no compression term).
+  struct Record {
+    std::int32_t n[4];
+    float E[3][4];
+  };
+  std::vector<Record> rec;
+  std::vector<double> x0;  // (3 #N) rest positions, mm: the pass's float mirror holds x - x0
+  Index nodes = 0;
+  bool comp = false;  // fused compression terms (VolumeTerms::kc not empty)
+};
+
+/// Builds F from T (finalized; fused compression terms taken when T.kc is set) and the rest positions x0.
+void build_volume_f32(const VolumeTerms& T, const MatX3& x0, VolumeTermsF32& F);
+
+/// Floats of scratch per node of add_volume_and_compression_forces_f32 (the displacement and force mirrors).
+inline constexpr Index kVolumeF32ScratchPerNode = 8;
+
+/// add_volume_and_compression_forces in single precision: adds the volume terms' (and the fused compression
+/// terms') forces at x (flat 3 #N, double) to f (flat 3 #N, double). The forces are accumulated in float per
+/// node and added to f once. `scratch`: kVolumeF32ScratchPerNode #N floats (overwritten). With `diff` (the
+/// default) 6V - 6V0 from the displacement differences (no cancellation, volume_f32.hpp); without, as the
+/// double pass computes it (for the benchmark's A/B and the precision test).
+void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
+                                           float* scratch, bool diff = true);
+
+namespace detail {
+/// Whether the pass uses GCC's vector extensions (else the same arithmetic on 4-float structs).
+bool volume_f32_vector_compiled();
+/// Eight records at a time in 256-bit vectors (GCC, AVX targets; on by default) or one at a time: for the
+/// benchmark's A/B. Returns the former setting.
+bool set_volume_f32_x8(bool on);
+}  // namespace detail
+
+}  // namespace medspring
