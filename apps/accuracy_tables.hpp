@@ -98,6 +98,12 @@ struct Settings {
   // --site-readout node (default) | disk-mean: the site term of the calibration objective reads the contact
   // node or the mean over the loaded disk (docs/accuracy-calibration.md)
   bool site_disk_mean = false;
+  // --site-weight W: the weight of that site term (fem::checked_site_weight; 1: the cost as before)
+  double site_weight = fem::kDefaultSiteWeight;
+  // --fit-surface-springs: the volumetric nonlinear fit also fits the surface-layer family
+  // (VolumetricSettings::surface_spring_scale, appended as the fourth multiplier;
+  // fem::refine_surface_springs)
+  bool fit_surface_springs = false;
   // accuracy --volume-term-variants: the volume term per tetrahedron / per node (docs/volumetric-mesh.md)
   bool volume_term_variants = false;
   std::vector<double> forces;  // --forces (N; default 0.2, 0.5, 1.0)

@@ -92,6 +92,16 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   } catch (const InvalidInput& e) {
     throw InvalidInput(cat(cmd, ": --site-readout ", e.what()));
   }
+  if (auto w = args.get("site-weight")) {  // the rule is fem::checked_site_weight, Python's site_weight=
+    try {
+      st.site_weight = fem::parse_site_weight(*w);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(cat(cmd, ": --site-weight ", e.what()));
+    }
+  }
+  st.fit_surface_springs = args.flag("fit-surface-springs");
+  require(!st.fit_surface_springs || st.fit_nonlinear, cmd,
+          ": --fit-surface-springs is fitted on the full response: it needs --fit nonlinear");
   VolumetricSettings thin;  // --thin-tet, --thin-tet-q-max through the declaration (thin_tet_options.hpp)
   read_thin_tet_options(args, thin, cmd);
   st.thin_tet = thin.thin_tet;
@@ -99,6 +109,8 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   st.compression = args.number("compression", st.compression);
   require(std::isfinite(st.compression) && st.compression >= 0, cmd, ": --compression must be >= 0 (got ",
           st.compression, ")");
+  require(!st.fit_surface_springs || st.compression > 0, cmd,
+          ": --fit-surface-springs is fitted in the nonlinear refine, which needs --compression > 0");
 }
 
 void note(const Settings& s, const std::string& line) {
@@ -141,6 +153,8 @@ int cmd_accuracy(const Args& args) {
                       "fit",
                       "train-force",
                       "site-readout",
+                      "site-weight",
+                      "fit-surface-springs",
                       "volume-term-variants",
                       "thin-tet",
                       "thin-tet-q-max"});
@@ -305,7 +319,8 @@ int cmd_accuracy(const Args& args) {
 int cmd_calibrate(const Args& args) {
   args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
                       "compression", "surface-subdivisions", "interior-sizing", "fit", "train-force",
-                      "site-readout", "thin-tet", "thin-tet-q-max", "local"});
+                      "site-readout", "site-weight", "fit-surface-springs", "thin-tet", "thin-tet-q-max",
+                      "local"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));
@@ -325,6 +340,10 @@ int cmd_calibrate(const Args& args) {
           "calibrate: --local needs --kind volumetric --linear (got --kind ", kind,
           args.flag("linear") ? "" : " without --linear", ")");
   read_kind_options(args, st, "calibrate");
+  require(!(local && st.fit_surface_springs),
+          "calibrate: --local and --fit-surface-springs are two different fourth families: use one");
+  require(!st.fit_surface_springs || kind == "volumetric",
+          "calibrate: --fit-surface-springs is a family of the volumetric kind (got --kind ", kind, ")");
   Organ o;
   FileLoader loader;
   if (organ == "phantom") {
@@ -370,6 +389,7 @@ int cmd_calibrate(const Args& args) {
       out["parameters"] = {{"k_N_per_mm", 0.05 * mult[0]}, {"k_r_N_per_mm", 0.02 * mult[1]}};
     else if (kind == "volumetric") {
       out["parameters"] = {{"spring_scale", mult[0]}, {"volume_scale", mult[1]}};
+      if (mult.size() > 3) out["parameters"]["surface_spring_scale"] = mult[3];  // --fit-surface-springs
       if (m.contains("fit")) {  // c and what the nonlinear fit moved (docs/accuracy.md)
         out["parameters"]["compression"] = m["fit"]["compression"];
         out["fit"] = m["fit"];

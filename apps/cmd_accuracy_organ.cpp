@@ -76,6 +76,8 @@ BodyPtr make_body(const Organ& o, const Kind& k, const std::vector<Index>& suppo
     s.volume_scale = m(1);
     s.moduli_correction = k.corrected;
     s.compression = o.compression * (m.size() > 2 ? m(2) : 1.0);  // m(2): the nonlinear fit's c multiplier
+    // --fit-surface-springs: the surface-layer family (volumetric + local holds the overlay compliance there)
+    if (m.size() > 3 && !k.local) s.surface_spring_scale = m(3);
     s.thin_tet = o.thin_tet;  // opt-in thin-tetrahedron terms (docs/volumetric-mesh.md)
     s.thin_tet_q_max = o.thin_tet_q_max;
     if (k.nonlinear) s.duffing = DuffingSettings{};  // Strain, eta = 1 (D-3)
@@ -254,6 +256,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     for (const auto& c : cases) {
       if (!c.train) continue;
       fem::CalibrationCase t{c.load, c.u_fem, sites[static_cast<std::size_t>(c.site_index)]};
+      t.site_weight = st.site_weight;  // --site-weight
       if (st.site_disk_mean) {
         t.fem_mean = c.fem_mean;
         if (k.base == "volumetric") {
@@ -468,7 +471,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
               training);
           fit = {{"small_strain_multipliers", {m(0), m(1)}},
                  {"nonlinear", false},
-                 {"site_readout", st.site_disk_mean ? "disk-mean" : "node"}};
+                 {"site_readout", st.site_disk_mean ? "disk-mean" : "node"},
+                 {"site_weight", st.site_weight}};
           // then on the full response of the same training loads: the compression coefficient c, which the
           // small-strain response cannot see, and the two scales (docs/accuracy-nonlinear.md, "Calibration of
           // the nonlinear response")
@@ -486,6 +490,14 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
             fit["closed_forms_cost"] = vf.closed_forms_cost;
             fit["cost"] = rr.cost;
             fit["evaluations"] = rr.evaluations;
+            // --fit-surface-springs: the surface-layer family, from that fit (docs/accuracy-calibration.md)
+            if (st.fit_surface_springs) {
+              const fem::SurfaceSpringFit sf = fem::refine_surface_springs(
+                  [&](const VecX& mm, const fem::ContactLoad& l) { return response(k, mm, l); }, m, training);
+              m = sf.m;
+              fit["surface_springs"] = {
+                  {"multiplier", m(3)}, {"cost", sf.refine.cost}, {"evaluations", sf.refine.evaluations}};
+            }
             note(st, cat(o.name, ": nonlinear fit springs x ", m(0), ", volume x ", m(1), ", c ",
                          o.compression, " -> ", o.compression * m(2), " (cost ", rr.start_cost, " -> ",
                          rr.cost, ", ", rr.evaluations, " evaluations)"));

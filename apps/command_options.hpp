@@ -77,6 +77,18 @@ inline const OptionSpec kSiteReadout{
     .help =
         "the calibration's site term: the contact node, or the mean displacement over the loaded disk "
         "(the FEM's read-out; docs/accuracy-calibration.md)"};
+inline const OptionSpec kSiteWeight{
+    .name = "site-weight",
+    .value = "W",
+    .def = "1",
+    .help =
+        "the weight of the calibration's site term against the surface term (>= 0; "
+        "docs/accuracy-calibration.md)"};
+inline const OptionSpec kFitSurfaceSprings{
+    .name = "fit-surface-springs",
+    .help =
+        "volumetric calibration: also fit the springs between two surface nodes as a family of their own "
+        "(surface_spring_scale; needs --fit nonlinear; docs/accuracy-calibration.md)"};
 inline const OptionSpec kUnit{
     .name = "unit", .value = "mm|cm|m", .help = "length unit of the input's coordinates"};
 inline const OptionSpec kLabel{

@@ -22,6 +22,40 @@ fem::SupportRule support_rule(py::handle direction, double depth) {
   return {vec3_arg(direction, "support_direction"), depth};
 }
 
+// The training loads of medspring.calibrate and medspring.training_loads: each force row at its centre, or
+// with train_forces each centre at each of those magnitudes along its row's direction (the CLI's training
+// sites x --train-force, checked by fem::checked_train_forces), centre-major.
+std::vector<fem::ContactLoad> training_loads(const MatX3& C, const MatX3& Fs, py::object train_forces,
+                                             double radius) {
+  std::vector<fem::ContactLoad> loads;
+  if (train_forces.is_none()) {
+    for (Index i = 0; i < C.rows(); ++i)
+      loads.push_back({C.row(i).transpose(), Fs.row(i).transpose(), radius});
+    return loads;
+  }
+  std::vector<double> mags;
+  try {
+    if (py::isinstance<py::float_>(train_forces) || py::isinstance<py::int_>(train_forces))
+      mags.push_back(train_forces.cast<double>());
+    else
+      for (py::handle f : train_forces.cast<py::sequence>()) mags.push_back(f.cast<double>());
+  } catch (const py::cast_error&) {
+    throw InvalidInput("calibrate: train_forces must be a force in N or a list of such");
+  }
+  try {
+    mags = fem::checked_train_forces(mags);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(cat("calibrate: train_forces ", e.what()));
+  }
+  for (Index i = 0; i < C.rows(); ++i) {
+    const Vec3 dir = Fs.row(i).transpose();
+    if (!(dir.norm() > 0))
+      throw InvalidInput(cat("calibrate: forces[", i, "] is zero: with train_forces it gives the direction"));
+    for (double f : mags) loads.push_back({C.row(i).transpose(), f * dir.normalized(), radius});
+  }
+  return loads;
+}
+
 }  // namespace
 
 void bind_fem(py::module_& m) {
@@ -99,7 +133,7 @@ void bind_fem(py::module_& m) {
       [](py::handle vertices, py::handle faces, py::handle atoms, py::handle centres, py::handle forces,
          double E_kPa, double nu, double radius, py::handle support_direction, double support_depth,
          bool nonlinear, py::object fem_displacements, const std::string& site_readout,
-         py::object train_forces, py::object fem_disk_means) {
+         py::object train_forces, py::object fem_disk_means, double site_weight) {
         SurfaceMesh s;
         s.V = points_arg(vertices, "vertices", -1, "V");
         s.F = faces_arg(faces, "faces", s.num_vertices());
@@ -115,35 +149,12 @@ void bind_fem(py::module_& m) {
         } catch (const InvalidInput& e) {
           throw InvalidInput(cat("calibrate: site_readout ", e.what()));
         }
-        // The training loads: each force row at its centre, or with train_forces each centre at each of
-        // those magnitudes along its row's direction (the CLI's training sites x --train-force),
-        // centre-major.
-        std::vector<fem::ContactLoad> loads;
-        if (train_forces.is_none()) {
-          for (Index i = 0; i < C.rows(); ++i)
-            loads.push_back({C.row(i).transpose(), Fs.row(i).transpose(), radius});
-        } else {
-          std::vector<double> mags;
-          try {
-            if (py::isinstance<py::float_>(train_forces) || py::isinstance<py::int_>(train_forces))
-              mags.push_back(train_forces.cast<double>());
-            else
-              for (py::handle f : train_forces.cast<py::sequence>()) mags.push_back(f.cast<double>());
-          } catch (const py::cast_error&) {
-            throw InvalidInput("calibrate: train_forces must be a force in N or a list of such");
-          }
-          try {
-            mags = fem::checked_train_forces(mags);
-          } catch (const InvalidInput& e) {
-            throw InvalidInput(cat("calibrate: train_forces ", e.what()));
-          }
-          for (Index i = 0; i < C.rows(); ++i) {
-            const Vec3 dir = Fs.row(i).transpose();
-            if (!(dir.norm() > 0))
-              throw InvalidInput(
-                  cat("calibrate: forces[", i, "] is zero: with train_forces it gives the direction"));
-            for (double f : mags) loads.push_back({C.row(i).transpose(), f * dir.normalized(), radius});
-          }
+        const std::vector<fem::ContactLoad> loads = training_loads(C, Fs, train_forces, radius);
+        double w_site = fem::kDefaultSiteWeight;  // the rule of `medspring calibrate --site-weight`
+        try {
+          w_site = fem::checked_site_weight(site_weight);
+        } catch (const InvalidInput& e) {
+          throw InvalidInput(cat("calibrate: site_weight ", e.what()));
         }
         const Index L = static_cast<Index>(loads.size());
         // Precomputed FEM displacements (one (V, 3) array per training load, e.g. solved as Dask tasks by
@@ -187,6 +198,7 @@ void bind_fem(py::module_& m) {
               if (given_means.rows() > 0) mean = given_means.row(i).transpose();
             }
             c.contact = nearest_node(s.V, c.load.centre);
+            c.site_weight = w_site;
             if (readout == fem::SiteReadout::DiskMean) {  // the model's disk mean on the same surface
               c.mean_weights = fem::disk_mean_weights(s.V, s.F, c.load);
               c.fem_mean = mean;
@@ -216,6 +228,7 @@ void bind_fem(py::module_& m) {
         out["k_loc"] = d.k_surf * mult(0);
         out["support"] = fem::support_nodes(s.V, rule);
         out["site_readout"] = std::string(to_string(readout));
+        out["site_weight"] = w_site;
         out["training_loads"] = L;
         return out;
       },
@@ -223,7 +236,7 @@ void bind_fem(py::module_& m) {
       "radius"_a = kCase.radius, "support_direction"_a = py::make_tuple(0.0, 0.0, -1.0),
       "support_depth"_a = kCase.support_depth, "nonlinear"_a = true, "fem_displacements"_a = py::none(),
       "site_readout"_a = std::string(to_string(fem::SiteReadout::Node)), "train_forces"_a = py::none(),
-      "fem_disk_means"_a = py::none(),
+      "fem_disk_means"_a = py::none(), "site_weight"_a = fem::kDefaultSiteWeight,
       "Fits the hybrid model's stiffnesses (k_surf, k_spoke, k_cl, k_r; N/mm) on the surface (vertices,\n"
       "faces; mm) with centerline atoms to the FEM response of a tissue (E in kPa, nu) on the training\n"
       "loads: force rows (L, 3) in N over contact disks at centres (L, 3). The support rule pins the same\n"
@@ -236,7 +249,30 @@ void bind_fem(py::module_& m) {
       "fem_disk_means (L, 3), fem_reference's 'disk_mean'), as `medspring calibrate --site-readout`.\n"
       "train_forces: a force in N or a list of such (each > 0): every centre is then loaded at each\n"
       "magnitude along its force row's direction, centre-major (L = centres x forces training loads), as\n"
-      "`medspring calibrate --train-force`. The dict also says 'site_readout' and 'training_loads'.");
+      "`medspring calibrate --train-force`. site_weight: the weight w >= 0 of the site term against the\n"
+      "surface term (default 1), as `medspring calibrate --site-weight`. The dict also says 'site_readout',\n"
+      "'site_weight' and 'training_loads'.");
+
+  m.def(
+      "training_loads",
+      [](py::handle centres, py::handle forces, py::object train_forces) {
+        const MatX3 C = points_arg(centres, "centres", -1, "L");
+        const MatX3 Fs = points_arg(forces, "forces", static_cast<Index>(C.rows()), "L");
+        const std::vector<fem::ContactLoad> loads = training_loads(C, Fs, train_forces, 0.0);
+        MatX3 Co(static_cast<Index>(loads.size()), 3), Fo(static_cast<Index>(loads.size()), 3);
+        for (std::size_t i = 0; i < loads.size(); ++i) {
+          Co.row(static_cast<Index>(i)) = loads[i].centre.transpose();
+          Fo.row(static_cast<Index>(i)) = loads[i].force.transpose();
+        }
+        return py::make_tuple(py::array_t<double>({Co.rows(), Eigen::Index(3)}, Co.data()),
+                              py::array_t<double>({Fo.rows(), Eigen::Index(3)}, Fo.data()));
+      },
+      "centres"_a, "forces"_a, "train_forces"_a = py::none(),
+      "The training loads medspring.calibrate fits with these arguments, as (centres, forces) arrays (L, "
+      "3):\n"
+      "the rows as given, or with train_forces (a force in N or a list, each > 0) every centre at each\n"
+      "magnitude along its force row's direction, centre-major; refused with calibrate's words otherwise.\n"
+      "medspring.study.fem.calibrate solves these loads (the same doubles) before it fits.");
 }
 
 }  // namespace medspring::python

@@ -1,6 +1,7 @@
-"""medspring.calibrate's site read-out and training forces (docs/accuracy-calibration.md, "From Python"):
-site_readout='node'|'disk-mean' and train_forces=[...] follow the rules of `medspring calibrate
---site-readout --train-force` (one declaration, fem::SiteReadout and fem::checked_train_forces), the
+"""medspring.calibrate's site read-out, training forces and site weight (docs/accuracy-calibration.md, "From
+Python"): site_readout='node'|'disk-mean', train_forces=[...] and site_weight=W follow the rules of `medspring
+calibrate --site-readout --train-force --site-weight` (one declaration each: fem::SiteReadout,
+fem::checked_train_forces, fem::checked_site_weight), the
 train_forces loads are the force rows rescaled, and the disk-mean fit reads the FEM's disk mean. The fits
 run on a coarse sphere (162 vertices, about 1 s per CalculiX solve); needs ccx and tetgen."""
 
@@ -38,6 +39,8 @@ def test_bad_site_readout_and_training_forces_are_refused_with_the_clis_words():
         (dict(train_forces=0.0), "must be > 0 N or a list of such (got '0')"),
         (dict(train_forces=[0.2, float("nan")]), "must be > 0 N or a list of such (got 'nan')"),
         (dict(train_forces=[]), "must list at least one force"),
+        (dict(site_weight=-1.0), "must be a number >= 0 (got '-1')"),
+        (dict(site_weight=float("inf")), "must be a number >= 0 (got 'inf')"),
     ]
     for kw, words in cases:
         name = next(iter(kw))
@@ -61,7 +64,8 @@ def test_bad_site_readout_and_training_forces_are_refused_with_the_clis_words():
                      fem_disk_means=np.zeros((2, 3)), **KW)
     if EXE.is_file():  # the CLI prints the same words for the same values
         for option, value, words in (("--site-readout", "centre", cases[0][1]),
-                                     ("--train-force", "0.2,-1", cases[2][1])):
+                                     ("--train-force", "0.2,-1", cases[2][1]),
+                                     ("--site-weight", "-1", cases[6][1])):
             r = subprocess.run([str(EXE), "calibrate", "--organ", "phantom", "--kind", "volumetric", option, value],
                                capture_output=True, text=True)
             assert r.returncode != 0
@@ -128,3 +132,34 @@ def test_the_dask_calibration_passes_the_read_out_and_the_solved_disk_means(tmp_
         assert dist["parameters"][k] == serial[k], k
     refs = fem.references(V, F, [{"centre": top, "force": rows[1]}], workers=0, **KW)
     assert refs[0]["disk_mean"].shape == (3,) and refs[0]["disk_mean"][2] < 0
+
+
+def test_the_dask_calibration_takes_train_forces_and_the_site_weight(tmp_path, monkeypatch):
+    """medspring.study.fem.calibrate(train_forces=, site_weight=) (in this process, workers=0) solves the loads
+    medspring.training_loads lists (each centre at each force, centre-major) and gives medspring.calibrate's
+    fit with the same arguments bit for bit; a bad list is refused with the CLI's words before any solve; the
+    weight reaches the fit (w = 16 fits other stiffnesses than w = 1)."""
+    from medspring.study import fem
+
+    monkeypatch.setenv("MEDSPRING_FEM_CACHE", str(tmp_path))
+    V, F = sphere()
+    top = V[np.argmax(V[:, 2])]
+    C, rows = top[None, :], np.array([[0.0, 0.0, -5.0]])
+    mags = [0.01, 0.02]
+    Ce, Fe = ms.training_loads(C, rows, mags)
+    assert np.array_equal(Ce, np.array([top, top])) and np.array_equal(Fe, [[0, 0, -0.01], [0, 0, -0.02]])
+    assert np.array_equal(ms.training_loads(C, rows)[1], rows)  # without train_forces: the rows as given
+    with pytest.raises(ms.InvalidInput) as e:
+        fem.calibrate(V, F, ATOMS, C, rows, workers=0, train_forces=[0.2, -1.0], **KW)
+    assert str(e.value) == "calibrate: train_forces must be > 0 N or a list of such (got '-1')"
+    assert not any(tmp_path.iterdir()), "a refused call solved something"
+    for w in (1.0, 16.0):
+        serial = ms.calibrate(V, F, ATOMS, C, rows, train_forces=mags, site_readout="disk-mean", site_weight=w, **KW)
+        dist = fem.calibrate(V, F, ATOMS, C, rows, workers=0, train_forces=mags, site_readout="disk-mean",
+                             site_weight=w, **KW)
+        assert dist["parameters"]["training_loads"] == 2 and dist["parameters"]["site_weight"] == w
+        for k in ("k_surf", "k_spoke", "k_cl", "k_r"):
+            assert dist["parameters"][k] == serial[k], (w, k)
+        if w == 1.0:
+            plain = serial
+    assert any(serial[k] != plain[k] for k in ("k_surf", "k_spoke", "k_cl", "k_r"))

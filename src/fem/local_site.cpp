@@ -49,7 +49,7 @@ OverlayCoefficients fit_overlay_coefficients(const std::vector<MatX3>& u, const 
     require(u[i].rows() >= n && v[i].rows() == u[i].rows(), "calibrate (overlay): load ", i,
             ": response has ", u[i].rows(), " rows, overlay ", v[i].rows(), ", the FEM ", n);
     const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
-    const double wn = 1.0 / (s * s * static_cast<double>(n)), wc = 1.0 / (s * s);
+    const double wn = 1.0 / (s * s * static_cast<double>(n)), wc = t.site_weight / (s * s);
     const auto ut = u[i].topRows(n), vt = v[i].topRows(n);
     const Vec3 su = site_readout(t, u[i]), sv = site_readout(t, v[i]), sU = fem_site_readout(t);
     uu += wn * ut.squaredNorm() + wc * su.squaredNorm();

@@ -201,6 +201,19 @@ std::vector<double> parse_train_forces(const std::string& text) {
   return checked_train_forces(out);
 }
 
+double checked_site_weight(double w) {
+  if (!(std::isfinite(w) && w >= 0)) throw InvalidInput(cat("must be a number >= 0 (got '", w, "')"));
+  return w;
+}
+
+double parse_site_weight(const std::string& text) {
+  char* end = nullptr;
+  const double w = std::strtod(text.c_str(), &end);
+  if (text.empty() || !(end && *end == '\0'))
+    throw InvalidInput(cat("must be a number >= 0 (got '", text, "')"));
+  return checked_site_weight(w);
+}
+
 namespace {
 
 // The disk load as nodal forces on the model's degrees of freedom (through the body's force map).
@@ -362,7 +375,7 @@ double calibration_cost(const Response& response, const VecX& m,
     const double scale = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
     const Eigen::Index n = t.u_fem.rows();
     c += (u.topRows(n) - t.u_fem).squaredNorm() / (scale * scale * static_cast<double>(n));
-    c += (site_readout(t, u) - fem_site_readout(t)).squaredNorm() / (scale * scale);
+    c += t.site_weight * (site_readout(t, u) - fem_site_readout(t)).squaredNorm() / (scale * scale);
   }
   return c;
 }
@@ -417,7 +430,7 @@ VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<
       const auto u = us[i].topRows(n);
       const Vec3 site = site_readout(t, us[i]), site_fem = fem_site_readout(t);
       const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
-      const double wn = 1.0 / (s * s * static_cast<double>(n)), wc = 1.0 / (s * s);
+      const double wn = 1.0 / (s * s * static_cast<double>(n)), wc = t.site_weight / (s * s);
       uu += wn * u.squaredNorm() + wc * site.squaredNorm();
       uU += wn * (u.array() * t.u_fem.array()).sum() + wc * site.dot(site_fem);
     }
@@ -428,7 +441,7 @@ VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<
       const Eigen::Index n = t.u_fem.rows();
       const double s = std::max(t.u_fem.rowwise().norm().maxCoeff(), 1e-12);
       cst += (a * us[i].topRows(n) - t.u_fem).squaredNorm() / (s * s * static_cast<double>(n));
-      cst += (a * site_readout(t, us[i]) - fem_site_readout(t)).squaredNorm() / (s * s);
+      cst += t.site_weight * (a * site_readout(t, us[i]) - fem_site_readout(t)).squaredNorm() / (s * s);
     }
     if (cst < best_cost) {
       best_cost = cst;
@@ -517,6 +530,29 @@ VolumetricFit calibrate_volumetric_nonlinear(const Response& response, const Vec
                          training, probes, sweeps);
   out.refine.start_cost = std::min(a.start_cost, b.start_cost);
   out.refine.evaluations += a.evaluations + b.evaluations;
+  out.m = to_m(out.refine.m);
+  return out;
+}
+
+SurfaceSpringFit refine_surface_springs(const Response& response, const VecX& fit,
+                                        const std::vector<CalibrationCase>& training, int probes,
+                                        int sweeps) {
+  require(fit.size() == 3 && fit.minCoeff() > 0,
+          "calibrate: the surface-layer family refines a fit of three positive multipliers (springs, volume "
+          "terms, c)");
+  auto to_m = [](const VecX& p) {  // (s, r, c, q) -> (springs, volume terms, c, surface springs)
+    VecX m(4);
+    m << p(0), p(0) * p(1), p(2), p(3);
+    return m;
+  };
+  const Response in_p = [&](const VecX& p, const ContactLoad& l) { return response(to_m(p), l); };
+  VecX start(4);
+  start << fit(0), fit(1) / fit(0), fit(2), 1.0;
+  SurfaceSpringFit out;
+  out.refine = refine_multipliers(
+      in_p, start,
+      {kVolumetricRefineSpans[0], kVolumetricRefineSpans[1], kVolumetricRefineSpans[1], kSurfaceSpringSpan},
+      training, probes, sweeps);
   out.m = to_m(out.refine.m);
   return out;
 }

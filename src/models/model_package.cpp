@@ -265,6 +265,7 @@ std::string encode_model_package(const ModelPackage& p) {
     w.f64(s.compression);                          // version 6
     w.i64(static_cast<std::int64_t>(s.thin_tet));  // version 7
     w.f64(s.thin_tet_q_max);
+    w.f64(s.surface_spring_scale);  // version 8
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -384,6 +385,8 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
       s.thin_tet = static_cast<ThinTetMode>(mode);
       s.thin_tet_q_max = r.f64();
     }
+    // the surface-layer family (none before version 8)
+    s.surface_spring_scale = version >= 8 ? r.f64() : 1.0;
   } else {  // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));

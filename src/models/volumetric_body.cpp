@@ -79,6 +79,8 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
   require(std::isfinite(s.beta) && s.beta >= 0, w, ": beta must be >= 0 (got ", s.beta, ")");
   require(std::isfinite(s.spring_scale) && s.spring_scale > 0, w, ": spring_scale must be > 0");
   require(std::isfinite(s.volume_scale) && s.volume_scale >= 0, w, ": volume_scale must be >= 0");
+  require(std::isfinite(s.surface_spring_scale) && s.surface_spring_scale > 0, w,
+          ": surface_spring_scale must be > 0 (got ", s.surface_spring_scale, ")");
   require(std::isfinite(s.compression) && s.compression >= 0, w, ": compression must be >= 0 (got ",
           s.compression, ")");
   const Index n = static_cast<Index>(mesh.X.rows()), ns = mesh.surface_nodes,
@@ -238,6 +240,12 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
     }
     for (int k = 0; k < 4; ++k) mass[static_cast<std::size_t>(T(t, k))] += 0.25 * s.density * V;
   }
+  // the opt-in surface-layer family: the springs between two surface nodes scaled once more (1: untouched)
+  for (auto& [e, k] : edge_k)
+    if (e.first < ns && e.second < ns) {
+      ++stats_.surface_springs;
+      if (s.surface_spring_scale != 1.0) k *= s.surface_spring_scale;
+    }
   require(std::isfinite(s.min_mass_fraction) && s.min_mass_fraction >= 0 && s.min_mass_fraction <= 1, w,
           ": min_mass_fraction must be in [0, 1]");
   require(std::isfinite(s.mass_scaling_dt) && s.mass_scaling_dt >= 0, w,

@@ -235,3 +235,87 @@ TEST(Calibration, SiteReadoutAndTrainingForceRulesRoundTripAndRefuseWithTheDefec
             "must be > 0 N or a list of such (got 'nan')");
   EXPECT_EQ(message([] { fem::checked_train_forces({0.0}); }), "must be > 0 N or a list of such (got '0')");
 }
+
+// The site weight w (CalibrationCase::site_weight, --site-weight, docs/accuracy-calibration.md "The site
+// weight"): the cost is the surface term plus w times the site term, by hand (1e-12); w = 1 is the cost of
+// a case that never set it, bit for bit; w = 0 leaves the surface term alone; the closed-form scale of
+// calibrate_scale_and_ratio is the optimum of the weighted objective (1e-9) and moves towards the site's
+// own optimum as w grows. The rule (>= 0, finite) refuses with the words the CLI and Python print.
+TEST(Calibration, SiteWeightScalesTheSiteTermAgainstAHandComputation) {
+  MatX3 A(4, 3);
+  A << 0, 0, -2.0,   //
+      0.1, 0, -1.5,  //
+      0, 0.2, -1.0,  //
+      0, 0, -0.3;
+  const fem::Response r = [&](const VecX& m, const fem::ContactLoad&) -> MatX3 { return A / m(0); };
+  const fem::BatchResponse batch = [&](const VecX& m, const std::vector<fem::ContactLoad>& ls) {
+    return std::vector<MatX3>(ls.size(), A / m(0));
+  };
+  fem::CalibrationCase plain;
+  plain.u_fem = A / 1.25;
+  plain.u_fem.row(0) *= 1.3;  // the site wants a softer model than the rest of the surface
+  plain.contact = 0;
+  VecX m(1);
+  m << 1.0;
+  const double scale = plain.u_fem.rowwise().norm().maxCoeff();
+  const double surface = (A - plain.u_fem).squaredNorm() / (4 * scale * scale),
+               site = (A.row(0) - plain.u_fem.row(0)).squaredNorm() / (scale * scale);
+  ASSERT_GT(site, 0.1 * surface);  // both terms matter
+  fem::CalibrationCase one = plain;
+  one.site_weight = 1.0;
+  EXPECT_EQ(plain.site_weight, fem::kDefaultSiteWeight);
+  EXPECT_EQ(fem::calibration_cost(r, m, {one}), fem::calibration_cost(r, m, {plain}));  // bit for bit
+  EXPECT_EQ(fem::calibrate_scale_and_ratio(batch, {one}), fem::calibrate_scale_and_ratio(batch, {plain}));
+  double last = 0;
+  for (double w : {0.0, 0.25, 4.0, 16.0}) {
+    fem::CalibrationCase c = plain;
+    c.site_weight = w;
+    EXPECT_NEAR(fem::calibration_cost(r, m, {c}), surface + w * site, 1e-12) << "w = " << w;
+    // the optimum of s (u = A / s): a = 1 / s minimises sum_i |a A_i - U_i|^2 / 4 + w |a A_0 - U_0|^2
+    const double num = (A.array() * plain.u_fem.array()).sum() / 4 + w * A.row(0).dot(plain.u_fem.row(0)),
+                 den = A.squaredNorm() / 4 + w * A.row(0).squaredNorm();
+    const double s_opt = den / num;
+    EXPECT_NEAR(fem::calibrate_scale_and_ratio(batch, {c})(0), s_opt, 1e-9 * s_opt) << "w = " << w;
+    if (w > 0) EXPECT_LT(s_opt, last) << "a larger weight follows the (softer) site";
+    last = s_opt;
+  }
+  const auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(fem::parse_site_weight("4"), 4.0);
+  EXPECT_EQ(fem::parse_site_weight("0"), 0.0);
+  EXPECT_EQ(message([] { fem::parse_site_weight("-1"); }), "must be a number >= 0 (got '-1')");
+  EXPECT_EQ(message([] { fem::parse_site_weight("x"); }), "must be a number >= 0 (got 'x')");
+  EXPECT_EQ(message([] { fem::parse_site_weight(""); }), "must be a number >= 0 (got '')");
+  EXPECT_EQ(message([] { fem::checked_site_weight(std::nan("")); }), "must be a number >= 0 (got 'nan')");
+}
+
+// The surface-layer family's refinement (fem::refine_surface_springs) on an analytic response whose fourth
+// multiplier scales one row: from the three-multiplier fit and q = 1 it finds q within its span, keeps the
+// others, and its cost never rises above the start's (the three-multiplier fit's).
+TEST(Calibration, SurfaceFamilyRefinementFindsTheFourthMultiplier) {
+  const fem::Response r = [](const VecX& m, const fem::ContactLoad&) {
+    EXPECT_EQ(m.size(), 4);
+    MatX3 u(3, 3);
+    u << 1.0 / m(0), 0, 0,          //
+        0, 1.0 / (m(0) + m(1)), 0,  //
+        0, 0, 1.0 / (m(0) * m(3));
+    return u;
+  };
+  VecX truth(4), fit(3);
+  truth << 1.0, 1.0, 1.0, 3.0;
+  fit << 1.0, 1.0, 1.0;
+  const std::vector<fem::CalibrationCase> training = {analytic_case(r, truth)};
+  const fem::SurfaceSpringFit f = fem::refine_surface_springs(r, fit, training, 14, 2);
+  EXPECT_NEAR(f.m(3), 3.0, 0.05);
+  EXPECT_NEAR(f.m(0), 1.0, 0.02);
+  EXPECT_NEAR(f.m(1), 1.0, 0.05);
+  EXPECT_LE(f.refine.cost, f.refine.start_cost);
+  EXPECT_LT(f.refine.cost, 1e-3 * f.refine.start_cost);
+  EXPECT_THROW(fem::refine_surface_springs(r, VecX::Ones(2), training), InvalidInput);
+}

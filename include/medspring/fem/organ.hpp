@@ -128,6 +128,14 @@ struct SurfaceError {
 };
 SurfaceError compare(const MatX3& u_model, const MatX3& u_fem, Index contact);
 
+/// The weight w of the calibration's site term (CalibrationCase::site_weight; CLI --site-weight W, Python
+/// site_weight=W; docs/accuracy-calibration.md, "The site weight"), declared once: default 1 (the cost as it
+/// was, bit for bit), each value finite and >= 0 (0: the surface term alone). InvalidInput "must be a
+/// number >= 0 (got 'TEXT')" otherwise; the text form reads one number.
+inline constexpr double kDefaultSiteWeight = 1.0;
+double checked_site_weight(double w);
+double parse_site_weight(const std::string& text);
+
 /// Calibration (docs/accuracy.md): multipliers m (one per stiffness family of the model) fitted in log
 /// space by coordinate descent (golden section per family over [1e-3, 1e3], then a second sweep within
 /// a factor 10) to minimise, over the training loads, the mean squared surface error plus the squared
@@ -146,6 +154,7 @@ struct CalibrationCase {
   Index contact = 0;                                     // surface node nearest the disk centre
   std::vector<std::pair<Index, double>> mean_weights{};  // (response row, weight): the disk mean; empty: node
   Vec3 fem_mean = Vec3::Zero();                          // the FEM's disk mean (with mean_weights)
+  double site_weight = kDefaultSiteWeight;               // w on the site term (checked_site_weight)
 };
 
 /// The disk-mean weights of `load` on the linear triangles (V, F): the nonzero (vertex, w_i) of
@@ -188,8 +197,8 @@ VecX calibrate_scale_and_ratio(const BatchResponse& response, const std::vector<
                                int evaluations = 18);
 
 /// The cost calibrate_multipliers minimises, of multipliers m over the training loads (mean squared surface
-/// error plus the squared site error, contact node or disk mean as the case reads it, each relative to the
-/// load's largest FEM displacement);
+/// error plus the squared site error times the case's site_weight, contact node or disk mean as the case
+/// reads it, each relative to the load's largest FEM displacement);
 /// infinite where the response throws SolverError.
 double calibration_cost(const Response& response, const VecX& m,
                         const std::vector<CalibrationCase>& training);
@@ -228,5 +237,21 @@ struct VolumetricFit {
 VolumetricFit calibrate_volumetric_nonlinear(const Response& response, const VecX& small_strain,
                                              const std::vector<CalibrationCase>& training, int probes = 8,
                                              int sweeps = 2);
+
+/// The opt-in surface-layer family of the volumetric calibration (docs/accuracy-calibration.md, "A
+/// surface-layer spring family"; CLI --fit-surface-springs): from a VolumetricFit's multipliers (springs,
+/// volume terms, c) and q = 1, all four (overall scale s, ratio r, c, q) refined on the full response for
+/// `sweeps` sweeps within factors 1.5 (s), 4 (r), 4 (c) and kSurfaceSpringSpan (q, first).
+/// response(m, load) takes m = (springs, volume terms, c multiplier, surface springs) with q =
+/// VolumetricSettings::surface_spring_scale, appended after the existing multipliers. Returns the four
+/// multipliers and the refinement (its start_cost: the fit's own cost).
+inline constexpr double kSurfaceSpringSpan = 8.0;
+struct SurfaceSpringFit {
+  VecX m;  // springs, volume terms, c multiplier, surface springs
+  RefineResult refine;
+};
+SurfaceSpringFit refine_surface_springs(const Response& response, const VecX& fit,
+                                        const std::vector<CalibrationCase>& training, int probes = 8,
+                                        int sweeps = 2);
 
 }  // namespace medspring::fem

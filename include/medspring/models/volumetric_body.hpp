@@ -91,6 +91,10 @@ struct VolumetricSettings {
   std::optional<double> return_k;  // N/mm per surface node; default: 0 with supports, else 0.02
   double spring_scale = 1.0;       // calibration multipliers of the spring and volume families
   double volume_scale = 1.0;
+  // Opt-in surface-layer family (docs/accuracy-calibration.md, "A surface-layer spring family"): a further
+  // multiplier of the springs whose two ends are both surface nodes (the edges of the organ's surface and any
+  // chord between two surface nodes), on top of spring_scale. 1 (the default) leaves every spring as it was.
+  double surface_spring_scale = 1.0;
   // Opt-in (off by default): measure the mesh's effective moduli (models/volumetric_moduli.hpp) and multiply
   // spring_scale and volume_scale so that they match (mu, lambda). The body then stores the corrected scales
   // and this flag off (settings()), so a model package rebuilds the same model. ~1 s per 2,000 nodes.
@@ -131,6 +135,12 @@ void for_each_field(S& s, V&& v) {
   v(ParamSpec{"spring_scale", "", "calibration multiplier of the edge springs"}.positive(), s.spring_scale);
   v(ParamSpec{"volume_scale", "", "calibration multiplier of the volume terms"}.nonnegative(),
     s.volume_scale);
+  v(
+      ParamSpec{
+          "surface_spring_scale", "",
+          "further multiplier of the springs whose two ends are surface nodes (docs/accuracy-calibration.md)"}
+          .positive(),
+      s.surface_spring_scale);
   v(ParamSpec{"compression", "", "compression stiffening c: kc = c mu spring_scale per tetrahedron (0 = off)"}
         .nonnegative(),
     s.compression);
@@ -178,6 +188,8 @@ struct VolumetricStats {
   Index scaled_nodes = 0;          // nodes whose mass mass_scaling_dt raised
   // moduli_correction: the multipliers applied and the effective mu, K of the mesh / target before them
   double spring_correction = 1, volume_correction = 1, mu_ratio_before = 0, K_ratio_before = 0;
+  // surface_spring_scale: the springs whose two ends are surface nodes (the ones it scales)
+  Index surface_springs = 0;
   // thin_tet: tetrahedra with a term, and the mean factor on their spring share (1 with clip)
   Index thin_tets = 0;
   double thin_spring_factor = 1;

@@ -165,6 +165,8 @@ def calibrate(
     scheduler: str | None = None,
     workers: int | None = None,
     site_readout: str = "node",
+    train_forces: Any = None,
+    site_weight: float | None = None,
 ) -> dict:
     """medspring.calibrate with its FEM reference solves run as Dask tasks: the training loads (force rows
     `forces` (L, 3) N over contact disks at `centres` (L, 3)) and the `held_out` cases (dicts with centre
@@ -174,13 +176,20 @@ def calibrate(
     ok, error, contact_fem, contact_model, contact_error, rms_error), fem_seconds (wall time of the solves).
     A failed training solve is dropped from the fit and recorded; InvalidInput when none solved.
     site_readout: 'node' or 'disk-mean', medspring.calibrate's (checked there, by the rules of `medspring
-    calibrate --site-readout`); with 'disk-mean' the solved disk means go in as fem_disk_means."""
+    calibrate --site-readout`); with 'disk-mean' the solved disk means go in as fem_disk_means.
+    train_forces: a force in N or a list of such, medspring.calibrate's (the rules of `medspring calibrate
+    --train-force`, checked before any solve): every centre is loaded at each magnitude along its force row's
+    direction, centre-major (medspring.training_loads), and those loads are solved and fitted.
+    site_weight: the weight of the site term, medspring.calibrate's (`--site-weight`; None: its default, 1)."""
     import medspring as ms
 
     C = np.asarray(centres, dtype=float).reshape(-1, 3)
     Fs = np.asarray(forces, dtype=float).reshape(-1, 3)
     if C.shape[0] == 0 or Fs.shape[0] != C.shape[0]:
         raise InvalidInput(f"calibrate: expected L >= 1 centres and as many forces; got {C.shape[0]} and {Fs.shape[0]}")
+    if train_forces is not None:  # the loads medspring.calibrate would fit, the same doubles (checked there)
+        C, Fs = ms.training_loads(C, Fs, train_forces)
+    weight = {} if site_weight is None else {"site_weight": site_weight}
     V = np.ascontiguousarray(vertices, dtype=float)
     F = np.ascontiguousarray(faces, dtype=np.int64)
     common = dict(E_kPa=E_kPa, nu=nu, radius=radius, support_direction=tuple(support_direction),
@@ -198,7 +207,7 @@ def calibrate(
                        support_direction=support_direction, support_depth=support_depth, nonlinear=nonlinear,
                        fem_displacements=[train[i]["displacement"] for i in good], site_readout=site_readout,
                        fem_disk_means=(np.array([train[i]["disk_mean"] for i in good])
-                                       if site_readout == "disk-mean" else None))
+                                       if site_readout == "disk-mean" else None), **weight)
     rows = []
     if held_out:
         settings = ms.HybridSettings()
