@@ -276,7 +276,9 @@ TEST(Calibration, SiteWeightScalesTheSiteTermAgainstAHandComputation) {
                  den = A.squaredNorm() / 4 + w * A.row(0).squaredNorm();
     const double s_opt = den / num;
     EXPECT_NEAR(fem::calibrate_scale_and_ratio(batch, {c})(0), s_opt, 1e-9 * s_opt) << "w = " << w;
-    if (w > 0) EXPECT_LT(s_opt, last) << "a larger weight follows the (softer) site";
+    if (w > 0) {
+      EXPECT_LT(s_opt, last) << "a larger weight follows the (softer) site";
+    }
     last = s_opt;
   }
   const auto message = [](auto&& f) {
