@@ -317,9 +317,26 @@ int cmd_accuracy(const Args& args) {
 }
 
 int cmd_calibrate(const Args& args) {
-  args.require_known({"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes",
-                      "compression", "surface-subdivisions", "interior-sizing", "fit", "train-force",
-                      "site-readout", "site-weight", "fit-surface-springs", "thin-tet", "thin-tet-q-max",
+  args.require_known({"organ",
+                      "kind",
+                      "linear",
+                      "E-kPa",
+                      "nu",
+                      "radius",
+                      "json",
+                      "quiet",
+                      "scenes",
+                      "nodes",
+                      "compression",
+                      "surface-subdivisions",
+                      "interior-sizing",
+                      "fit",
+                      "train-force",
+                      "site-readout",
+                      "site-weight",
+                      "fit-surface-springs",
+                      "thin-tet",
+                      "thin-tet-q-max",
                       "local"});
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
