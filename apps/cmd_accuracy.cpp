@@ -40,6 +40,14 @@
 namespace medspring::cli::accuracy {
 
 // --kinds surface,hybrid,volumetric (default all) and --nodes N (volumetric node count, default 2000).
+// `known` plus the options read_kind_options reads, which accuracy and calibrate both accept.
+std::vector<std::string> with_kind_options(std::vector<std::string> known) {
+  for (const char* o : {"compression", "surface-subdivisions", "interior-sizing", "fit", "train-force",
+                        "site-readout", "site-weight", "fit-surface-springs", "thin-tet", "thin-tet-q-max"})
+    known.emplace_back(o);
+  return known;
+}
+
 void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
   if (auto k = args.get("kinds")) {
     std::stringstream ss(*k);
@@ -126,38 +134,28 @@ using json = nlohmann::json;
 using namespace accuracy;
 
 int cmd_accuracy(const Args& args) {
-  args.require_known({"out",
-                      "force",
-                      "quick",
-                      "quiet",
-                      "json",
-                      "E-kPa",
-                      "nu",
-                      "radius",
-                      "level",
-                      "scenes",
-                      "kinds",
-                      "nodes",
-                      "no-validation",
-                      "forces",
-                      "organs",
-                      "vessel-E-kPa",
-                      "wall-ratio",
-                      "no-vessel",
-                      "vessel-only",
-                      "indentation-only",
-                      "no-indentation",
-                      "compression",
-                      "surface-subdivisions",
-                      "interior-sizing",
-                      "fit",
-                      "train-force",
-                      "site-readout",
-                      "site-weight",
-                      "fit-surface-springs",
-                      "volume-term-variants",
-                      "thin-tet",
-                      "thin-tet-q-max"});
+  args.require_known(with_kind_options({"out",
+                                        "force",
+                                        "quick",
+                                        "quiet",
+                                        "json",
+                                        "E-kPa",
+                                        "nu",
+                                        "radius",
+                                        "level",
+                                        "scenes",
+                                        "kinds",
+                                        "nodes",
+                                        "no-validation",
+                                        "forces",
+                                        "organs",
+                                        "vessel-E-kPa",
+                                        "wall-ratio",
+                                        "no-vessel",
+                                        "vessel-only",
+                                        "indentation-only",
+                                        "no-indentation",
+                                        "volume-term-variants"}));
   const auto out = args.get("out");
   if (!out) throw InvalidInput("accuracy: --out DIR is required");
   Settings st;
@@ -317,27 +315,8 @@ int cmd_accuracy(const Args& args) {
 }
 
 int cmd_calibrate(const Args& args) {
-  args.require_known({"organ",
-                      "kind",
-                      "linear",
-                      "E-kPa",
-                      "nu",
-                      "radius",
-                      "json",
-                      "quiet",
-                      "scenes",
-                      "nodes",
-                      "compression",
-                      "surface-subdivisions",
-                      "interior-sizing",
-                      "fit",
-                      "train-force",
-                      "site-readout",
-                      "site-weight",
-                      "fit-surface-springs",
-                      "thin-tet",
-                      "thin-tet-q-max",
-                      "local"});
+  args.require_known(with_kind_options(
+      {"organ", "kind", "linear", "E-kPa", "nu", "radius", "json", "quiet", "scenes", "nodes", "local"}));
   Settings st;
   const FemCaseSettings def{};  // the declared defaults (scene/study_settings.hpp)
   st.material = fem::Material::from_kpa(args.number("E-kPa", def.E_kPa), args.number("nu", def.nu));
