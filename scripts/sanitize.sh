@@ -50,7 +50,8 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/scripts/lsan.supp:print_s
 # tests added in the session of 2026-11-26 evening (5 s each unsanitized): the tangent refresh up to large
 # strain (its estimate and default-rule tests stay), the thin-tetrahedron cube at large strain (the term's
 # model, energy, implicit and package tests stay) and the SIMD volume pass on the real kidney (its cube and
-# tail tests stay).
+# tail tests stay); from the session of 2026-11-26 night, the single-precision pass on the real kidney (3 s
+# unsanitized, 68 s under ASan here; its cube and 300-frame step tests stay).
 heavy='VesselTreeSkeleton\.RealAorta|CliBuildVessel\..*AortaSegmentation|SpokeVisibility\.NoSpokeOfTheRealKidney'
 heavy+='|RealKidneyTool\.CalibratedKidneySettles|ThousandfoldForce\..*/TubeImplicit'
 heavy+='|Compression\.CubeStiffensUnderLargeCompressionOnly|Calibration\.NonlinearFitRecovers'
@@ -59,7 +60,7 @@ heavy+='|RealKidney\.(ModelSurfaceIsWithin|GatherFusedAndTwoPass|AtLeast85Percen
 heavy+='|RealKidneyTool\.SweepEpisode2021'
 heavy+='|PackedTable\.MillionNodeTube|RealKidneyTable\.PackedTable|Compression\.BlockBoundIsAbove'
 heavy+='|SmrmRealData\.AortaSpokesMarched'
-heavy+='|StableStepRefresh\.RefreshedStepStaysBelow|ThinTetModel\.LargeStrainCompression|VolumeSimd\.RealKidney'
+heavy+='|StableStepRefresh\.RefreshedStepStaysBelow|ThinTetModel\.LargeStrainCompression|VolumeSimd\.RealKidney|VolumeF32\.RealKidney'
 ctest --test-dir "$build" -LE '^(long|web)$' -E "$heavy" --output-on-failure --parallel "$jobs" --timeout 1500
 t2=$(date +%s)
 
