@@ -17,7 +17,7 @@
 #include "accuracy_summary.hpp"
 #include "accuracy_tables.hpp"
 #include "commands.hpp"
-#include "medspring/builders/output_folder.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/validation.hpp"

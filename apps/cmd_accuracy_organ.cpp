@@ -19,7 +19,7 @@
 #include "accuracy_tables.hpp"
 #include "accuracy_volume_terms.hpp"
 #include "commands.hpp"
-#include "medspring/builders/output_folder.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/fem/local_site.hpp"
 #include "medspring/fem/organ.hpp"

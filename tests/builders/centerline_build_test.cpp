@@ -8,7 +8,7 @@
 #include <cmath>
 #include <limits>
 
-#include "medspring/builders/output_folder.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"

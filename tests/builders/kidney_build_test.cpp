@@ -7,7 +7,7 @@
 
 #include <filesystem>
 
-#include "medspring/builders/output_folder.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"
 #include "medspring/io/volume_io.hpp"

@@ -1,5 +1,5 @@
 // Output folders written under a temporary name and renamed into place when complete (the CLI's
-// `run`, `paper`, `export`, `haptics`, `build`; builders/output_folder.hpp): the temporary folder of
+// `run`, `paper`, `export`, `haptics`, `build`; io/output_folder.hpp): the temporary folder of
 // process PID for the target folder NAME is the hidden sibling ".NAME.tmp-PID". A process killed with
 // SIGKILL cannot remove it; the next write into the same place does, when that process is gone.
 //
@@ -34,7 +34,7 @@ std::vector<StaleTempFolder> remove_stale_temp_folders(const std::filesystem::pa
 /// one is renamed aside (".<name>.old-<pid>"), the new one moved in, then the old one removed; when
 /// moving the new one in fails the old one is put back. Throws IoError "TARGET: cannot move the old
 /// folder aside: ..." or "TARGET: cannot move the new folder into place: ...". The one folder swap of
-/// every staged output (builders/output_folder.hpp, the CLI's StagedOutput).
+/// every staged output (io/output_folder.hpp, the CLI's StagedOutput).
 void move_folder_into_place(const std::filesystem::path& stage, const std::filesystem::path& target,
                             long pid);
 

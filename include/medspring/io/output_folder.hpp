@@ -1,5 +1,7 @@
-// Writing a builder's files all at once: into a temporary folder beside the target, renamed into
-// place when every file is complete, so that a failure leaves nothing half-written.
+// Writing a command's output files all at once (`medspring build`, `accuracy`, ...): into a temporary
+// folder beside the target, renamed into place when every file is complete, so that a failure leaves
+// nothing half-written. In the io layer (it needs only io/temp_folders.hpp), so that a build without the
+// CGAL edge (MEDSPRING_WITH_CGAL=OFF: no builders layer) links the CLI.
 //
 //   check_output_folder(out, force);          // before the (slow) build: refuse early
 //   write_output_folder(out, force, [&](const std::filesystem::path& dir) {

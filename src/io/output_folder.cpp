@@ -1,4 +1,4 @@
-#include "medspring/builders/output_folder.hpp"
+#include "medspring/io/output_folder.hpp"
 
 #include <unistd.h>
 
