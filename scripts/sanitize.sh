@@ -7,6 +7,14 @@
 #
 #   bash scripts/sanitize.sh               # fuzz/ci-runs.txt inputs per target, at most FUZZ_SECONDS=60 each
 #                                          # (0: no fuzzing; FUZZ_RUNS_FILE= : time only), JOBS=$(nproc)
+#                                          # (also the number of targets fuzzed at once)
+#   SANITIZE_CGAL=ON bash scripts/sanitize.sh   # the CGAL edge too (meshing, builders; see below)
+#
+# Left out of the sanitized tree by default: the CGAL edge layers, meshing and builders (MEDSPRING_WITH_CGAL=OFF;
+# their tests, `medspring build` and the builders' CLI tests run in scripts/test.sh's plain build). CGAL's
+# templates were a tenth of the sanitized build and the builders' tests over a third of the sanitized suite's
+# time, and CI must stay under 45 minutes (docs/reliability.md, "Build time in CI"). SANITIZE_CGAL=ON puts
+# them back (the full sanitized suite: twice the CI's time on this step).
 #
 # Left out of the sanitized suite, with the reason (docs/reliability.md): label `long` (the 80-cycle
 # press/release runs: minutes under ASan; the plain build runs them), label `web` (the WebAssembly build
@@ -26,7 +34,7 @@ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
   "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
   -DMEDSPRING_SANITIZE=ON -DMEDSPRING_FUZZ=ON -DMEDSPRING_BUILD_TESTS=ON \
-  -DMEDSPRING_BUILD_BENCH=OFF -DMEDSPRING_BUILD_PYTHON=OFF
+  -DMEDSPRING_BUILD_BENCH=OFF -DMEDSPRING_BUILD_PYTHON=OFF "-DMEDSPRING_WITH_CGAL=${SANITIZE_CGAL:-OFF}"
 cmake --build "$build" --parallel "$jobs"
 t1=$(date +%s)
 
@@ -70,7 +78,7 @@ if [ "$secs" != 0 ]; then
   # amount of fuzzing on every machine (a time budget alone let a faster CI machine go further than any
   # run made before the submission; fuzz/README.md). FUZZ_SECONDS only caps each target.
   rm -rf "$build/fuzz-corpus"
-  FUZZ_ARGS=${FUZZ_ARGS:--seed=1} FUZZ_RUNS_FILE=${FUZZ_RUNS_FILE-$root/fuzz/ci-runs.txt} \
+  FUZZ_ARGS=${FUZZ_ARGS:--seed=1} FUZZ_JOBS=${FUZZ_JOBS:-$jobs} FUZZ_RUNS_FILE=${FUZZ_RUNS_FILE-$root/fuzz/ci-runs.txt} \
     FUZZ_BUILD_DIR=$build FUZZ_NO_BUILD=1 FUZZ_CORPUS_DIR=$build/fuzz-corpus bash "$root/fuzz/run" "$secs"
 fi
 t3=$(date +%s)
