@@ -24,9 +24,9 @@
 #ifdef MEDSPRING_HAVE_BUILDERS
 #include "medspring/builders/centerline_build.hpp"
 #include "medspring/builders/kidney_build.hpp"
-#include "medspring/io/output_folder.hpp"
 #include "medspring/builders/vessel_build.hpp"
 #include "medspring/io/data_dir.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/io/temp_folders.hpp"
 #include "medspring/sim/simulation.hpp"
 #ifdef MEDSPRING_HAVE_FEM

@@ -8,10 +8,10 @@
 
 #include "medspring/builders/centerline_build.hpp"
 #include "medspring/builders/kidney_build.hpp"
-#include "medspring/io/output_folder.hpp"
 #include "medspring/core/error.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/io/mesh_io.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/io/volume_io.hpp"
 #include "test_support.hpp"
 

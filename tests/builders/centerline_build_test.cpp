@@ -8,10 +8,10 @@
 #include <cmath>
 #include <limits>
 
-#include "medspring/io/output_folder.hpp"
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/io/volume_io.hpp"
 #include "test_support.hpp"
 

@@ -7,9 +7,9 @@
 
 #include <filesystem>
 
-#include "medspring/io/output_folder.hpp"
 #include "medspring/io/centerline_io.hpp"
 #include "medspring/io/mesh_io.hpp"
+#include "medspring/io/output_folder.hpp"
 #include "medspring/io/volume_io.hpp"
 #include "medspring/meshing/surface_distance.hpp"
 #include "medspring/physics/integrators.hpp"
