@@ -13,6 +13,9 @@
 //
 //   medspring_stable_step_probe [--nodes 2000] [--loads 0.5,1,2] [--mass-scaling 0,0.25] [--steps 10000]
 //                               [--lanczos 300] [--bisect 7]
+//   --frame-times N [--precision double|float|both]: instead, N frames at the first load from rest, the
+//     rules bound and refresh (and with both, each also with the opt-in single-precision volume pass,
+//     VolumetricSettings::volume_precision) alternated frame by frame; wall and CPU time per frame.
 #include <time.h>  // clock_gettime(CLOCK_THREAD_CPUTIME_ID): the frame's CPU time, robust to a loaded machine
 
 #include <algorithm>
@@ -73,6 +76,7 @@ int main(int argc, char** argv) {
   std::vector<double> loads{0.5, 1.0, 2.0}, scalings{0.0, 0.25};
   long steps = 10000, frame_times = 0;
   int lanczos = 300, bisect = 7;
+  std::string precision = "double";
   for (int a = 1; a + 1 < argc; a += 2) {
     if (!std::strcmp(argv[a], "--nodes"))
       nodes = static_cast<Index>(std::atol(argv[a + 1]));
@@ -88,6 +92,10 @@ int main(int argc, char** argv) {
       frame_times = std::atol(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--bisect"))
       bisect = std::atoi(argv[a + 1]);
+    else if (!std::strcmp(argv[a], "--precision") &&
+             (!std::strcmp(argv[a + 1], "double") || !std::strcmp(argv[a + 1], "float") ||
+              !std::strcmp(argv[a + 1], "both")))
+      precision = argv[a + 1];
     else {
       std::fprintf(stderr, "stable_step_probe: unknown option %s\n", argv[a]);
       return 2;
@@ -99,49 +107,61 @@ int main(int argc, char** argv) {
   if (frame_times > 0) {  // wall time of each frame, stable_step bound and refresh alternated frame by frame
     VolumetricSettings vs;  // 10 kPa, nu = 0.45, the bench's kidney (apps/cmd_bench_volumetric.cpp)
     vs.fixed = fem::support_nodes(surf.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
-    const auto body = std::make_shared<VolumetricBody>(vm, vs, "volumetric kidney");
+    std::vector<std::shared_ptr<const VolumetricBody>> bodies;  // the precisions asked for
+    std::vector<std::string> names;
+    for (const VolumePrecision p : {VolumePrecision::Double, VolumePrecision::Float}) {
+      if (precision != "both" && precision != to_string(p)) continue;
+      vs.volume_precision = p;
+      bodies.push_back(std::make_shared<const VolumetricBody>(vm, vs, "volumetric kidney"));
+      for (const char* rule : {"bound", "refresh"})
+        names.push_back(std::string(rule) +
+                        (precision == "both" && p == VolumePrecision::Float ? " f32" : ""));
+    }
+    const auto& body = bodies.front();
     Index top = 0;
     for (Index i = 0; i < body->num_surface_nodes(); ++i)
       if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
     const double load = loads.empty() ? 0.5 : loads.front();
     std::vector<std::unique_ptr<Simulation>> sims;
-    for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
-      SimulationSettings ss;
-      ss.normals = false;
-      ss.local.enabled = false;
-      ss.step.stable_step = rule;
-      sims.push_back(std::make_unique<Simulation>(body, ss));
-      sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
-    }
-    std::vector<std::vector<double>> us(4);  // wall, then the thread's CPU time, of each rule
+    for (const auto& b : bodies)
+      for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
+        SimulationSettings ss;
+        ss.normals = false;
+        ss.local.enabled = false;
+        ss.step.stable_step = rule;
+        sims.push_back(std::make_unique<Simulation>(b, ss));
+        sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
+      }
+    const int ns = static_cast<int>(sims.size());
+    std::vector<std::vector<double>> us(static_cast<std::size_t>(2 * ns));  // wall, then CPU time, of each
     const auto cpu_us = [] {
       timespec t{};
       clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
       return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
     };
     for (long f = 0; f < frame_times; ++f)
-      for (int k = 0; k < 2; ++k) {
+      for (int k = 0; k < ns; ++k) {
         const double c0 = cpu_us();
         const auto t0 = std::chrono::steady_clock::now();
-        sims[k]->update();
-        us[k].push_back(
+        sims[static_cast<std::size_t>(k)]->update();
+        us[static_cast<std::size_t>(k)].push_back(
             std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-        us[k + 2].push_back(cpu_us() - c0);
+        us[static_cast<std::size_t>(k + ns)].push_back(cpu_us() - c0);
       }
     std::printf("nodes %ld, load %g N, %ld frames from rest, frame wall time (us), then CPU time (us):\n",
                 static_cast<long>(body->model().num_nodes()), load, frame_times);
-    for (int k = 0; k < 4; ++k) {
-      std::vector<double> v = us[k];
+    for (int k = 0; k < 2 * ns; ++k) {
+      std::vector<double> v = us[static_cast<std::size_t>(k)];
       std::sort(v.begin(), v.end());
       const auto at = [&](double q) {
         return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
       };
       long slow = 0;
       for (double x : v) slow += x > 5000.0 ? 1 : 0;
-      std::printf("  %-11s median %.0f  p99 %.0f  p99.9 %.0f  max %.0f  frames > 5 ms %ld  sub-steps %llu\n",
-                  k % 2 == 0 ? (k < 2 ? "bound" : "bound/cpu") : (k < 2 ? "refresh" : "refresh/cpu"), at(0.5),
-                  at(0.99), at(0.999), v.back(), slow,
-                  static_cast<unsigned long long>(sims[k % 2]->state().substeps));
+      const std::string name = names[static_cast<std::size_t>(k % ns)] + (k < ns ? "" : "/cpu");
+      std::printf("  %-15s median %.0f  p99 %.0f  p99.9 %.0f  max %.0f  frames > 5 ms %ld  sub-steps %llu\n",
+                  name.c_str(), at(0.5), at(0.99), at(0.999), v.back(), slow,
+                  static_cast<unsigned long long>(sims[static_cast<std::size_t>(k % ns)]->state().substeps));
     }
     return 0;
   }

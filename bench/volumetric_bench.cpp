@@ -85,11 +85,12 @@ double former_compression_bound(const CompressionTerms& T, const MatX3& x, const
 // One update of the kidney of `nodes` nodes with mass scaling for `mass_scaling_dt` (ms, 0: off) under a
 // point load of `load` N on its top node, with the counters of its stable step.
 void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, double load,
-                   VolumePrecision precision = VolumePrecision::Double) {
+                   VolumePrecision precision = VolumePrecision::Double, StableStep rule = StableStep::Bound) {
   const auto body = kidney(nodes, mass_scaling_dt, precision);
   SimulationSettings ss;
   ss.normals = false;
   ss.local.enabled = false;
+  ss.step.stable_step = rule;
   Simulation sim(body, ss);
   Index top = 0;
   for (Index i = 0; i < body->num_surface_nodes(); ++i)
@@ -192,6 +193,17 @@ BENCHMARK(BM_VolumetricKidneyUpdateF32)
     ->Args({2000, 0})
     ->Args({2000, 250})
     ->Unit(benchmark::kMicrosecond);
+// The opt-in tangent refresh (StepSettings::stable_step = refresh), with the volume pass in double and with
+// the opt-in single-precision pass (both opt-ins together); mass scaling off. The mean includes the frames
+// that carry one product of the re-estimate.
+void BM_VolumetricKidneyUpdateRefresh(benchmark::State& st) {
+  kidney_update(st, static_cast<Index>(st.range(0)), 0.0, 0.5, VolumePrecision::Double, StableStep::Refresh);
+}
+void BM_VolumetricKidneyUpdateF32Refresh(benchmark::State& st) {
+  kidney_update(st, static_cast<Index>(st.range(0)), 0.0, 0.5, VolumePrecision::Float, StableStep::Refresh);
+}
+BENCHMARK(BM_VolumetricKidneyUpdateRefresh)->Arg(500)->Arg(2000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_VolumetricKidneyUpdateF32Refresh)->Arg(500)->Arg(2000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_VolumetricKidneyUpdate)
     ->Args({500, 0})
     ->Args({700, 0})
