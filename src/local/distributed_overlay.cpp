@@ -24,15 +24,15 @@ DistributedOverlay::DistributedOverlay(Adjacency adj, double k_loc, std::vector<
 
 void DistributedOverlay::reserve(Index nodes) {
   if (nodes <= capacity_) return;
-  capacity_ = nodes;
-  const auto c = static_cast<std::size_t>(nodes);
+  capacity_ = std::max(nodes, 2 * capacity_);  // at least doubled: a handful of growths per run at most
+  const auto c = static_cast<std::size_t>(capacity_);
   last_.reserve(c);
   nodes_.reserve(c);
   fixed_.reserve(c);
   free_.reserve(c);
   L_.resize(c * c);
   rhs_.resize(3 * c);
-  MatX3 U = MatX3::Zero(nodes, 3);
+  MatX3 U = MatX3::Zero(capacity_, 3);
   U.topRows(P_) = U_.topRows(P_);
   U_ = std::move(U);
 }
@@ -43,11 +43,10 @@ Index DistributedOverlay::patch_size_of(const std::vector<Index>& loaded) {
   const auto add = [&](Index g) {
     if (mark_[static_cast<std::size_t>(g)] < 0) mark_[static_cast<std::size_t>(g)] = P++;
   };
-  for (Index g : loaded) {
+  for (Index g : loaded)  // every node checked before any is marked: a refusal leaves the marks clean
     require(g >= 0 && g < n, "local overlay (distributed load): loaded node ", g, " out of range [0, ", n,
             ")");
-    add(g);
-  }
+  for (Index g : loaded) add(g);
   for (Index g : loaded)
     for (const Index* q = adj_.begin(g); q != adj_.end(g); ++q) add(*q);
   for (Index g : loaded) {  // unmark: the loaded nodes and their neighbours
@@ -62,7 +61,7 @@ bool DistributedOverlay::prepare(const std::vector<Index>& loaded) {
   const Index size = patch_size_of(loaded);      // validates the nodes
   if (size > capacity_) {                        // a patch larger than any before: the one allocation
     ++growths_;
-    reserve(std::max(size, 2 * capacity_));
+    reserve(size);
   }
   last_.assign(loaded.begin(), loaded.end());  // within the capacity: no allocation
   prepared_ = true;

@@ -130,4 +130,7 @@ TEST(DistributedOverlay, ReusesTheFactorAndRefusesBadInput) {
   refused([&] { DistributedOverlay(adj, 0.05, std::vector<std::uint8_t>(3, 0)); },
           "model-fixed flags have 3");
   refused([&] { d.prepare({0, n}); }, "loaded node 458 out of range [0, 458)");
+  ASSERT_TRUE(d.prepare(loaded));  // the refusal left nothing behind: the same patch and U as before
+  d.solve(F);
+  EXPECT_LT((MatX3(d.displacement()) - U1).cwiseAbs().maxCoeff(), 1e-15);
 }

@@ -30,8 +30,8 @@ class DistributedOverlay {
   /// The number of nodes of the patch of `loaded` (the loaded nodes and their neighbours), without
   /// allocating. Throws InvalidInput for a node out of range.
   Index patch_size_of(const std::vector<Index>& loaded);
-  /// Sizes the workspace for patches of up to `nodes` nodes: allocates when that is above the capacity (a
-  /// set-up point), nothing otherwise.
+  /// Sizes the workspace for patches of up to `nodes` nodes: when that is above the capacity, allocates
+  /// for max(nodes, 2 x capacity) (a set-up point); nothing otherwise.
   void reserve(Index nodes);
   Index capacity() const { return capacity_; }
   /// Times prepare had to grow the workspace (a patch above the capacity; each time an allocation).
