@@ -168,7 +168,7 @@ void bind_sim(py::module_& m) {
           "local_nodes", [](const Simulation& s) { return copy_of(s.local_nodes()); },
           "Surface indices of the local patch of the last update (empty if none).")
       .def_property_readonly(
-          "local_displacement", [](const Simulation& s) { return copy_of(s.local_displacement()); },
+          "local_displacement", [](const Simulation& s) { return copy_of(MatX3(s.local_displacement())); },
           "Displacement (P, 3) of the local patch nodes in the last update, mm (a copy).")
       .def_property_readonly("settings", &Simulation::settings,
                              "SimulationSettings (a copy; use set_settings).")

@@ -266,6 +266,7 @@ std::string encode_model_package(const ModelPackage& p) {
     w.i64(static_cast<std::int64_t>(s.thin_tet));  // version 7
     w.f64(s.thin_tet_q_max);
     w.f64(s.surface_spring_scale);  // version 8
+    w.f64(s.overlay_compliance);    // version 9
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -387,6 +388,8 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     }
     // the surface-layer family (none before version 8)
     s.surface_spring_scale = version >= 8 ? r.f64() : 1.0;
+    // the overlay's compliance multiplier (before version 9: the overlay as it was, a = 1)
+    s.overlay_compliance = version >= 9 ? r.f64() : 1.0;
   } else {  // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));

@@ -81,6 +81,8 @@ VolumetricBody::VolumetricBody(const VolumetricMesh& mesh, const VolumetricSetti
   require(std::isfinite(s.volume_scale) && s.volume_scale >= 0, w, ": volume_scale must be >= 0");
   require(std::isfinite(s.surface_spring_scale) && s.surface_spring_scale > 0, w,
           ": surface_spring_scale must be > 0 (got ", s.surface_spring_scale, ")");
+  require(std::isfinite(s.overlay_compliance) && s.overlay_compliance >= 0, w,
+          ": overlay_compliance must be >= 0 (0 = no local overlay; got ", s.overlay_compliance, ")");
   require(std::isfinite(s.compression) && s.compression >= 0, w, ": compression must be >= 0 (got ",
           s.compression, ")");
   const Index n = static_cast<Index>(mesh.X.rows()), ns = mesh.surface_nodes,

@@ -19,16 +19,24 @@ void Simulation::set_settings(const SimulationSettings& s) {
   settings_ = s;
   prepare_step(body_->model(), state_, settings_.step);  // worker pool started here, not in update()
   local_.reset();
-  local_active_ = false;
-  if (s.local.enabled) {
+  spread_.reset();
+  local_active_ = spread_active_ = false;
+  // the overlay's compliance multiplier a (VolumetricSettings::overlay_compliance): k_loc / a; a = 0: none
+  const double a = body_->local_compliance();
+  require(std::isfinite(a) && a >= 0, "simulation: the body's local overlay compliance must be >= 0 (got ", a,
+          ")");
+  if (s.local.enabled && a > 0) {
     LocalDeformationSettings ls = s.local.settings;
     if (s.local.use_body_stiffness) ls.patch.k_loc = body_->local_stiffness();
+    ls.patch.k_loc /= a;
     const GridLayout g = body_->grid();
     std::vector<std::uint8_t> fixed = body_->fixed_surface_nodes();
     if (g.valid()) {
       local_ = LocalDeformer::tube(g.rings, g.spokes, ls, body_->rest_surface(), fixed);
     } else {
       Adjacency adj = vertex_adjacency(body_->num_surface_nodes(), unique_edges(body_->faces()));
+      if (body_->distributed_local() && ls.solver.stiffness == LocalStiffness::Isotropic)
+        spread_.emplace(adj, ls.patch.k_loc, fixed);  // the calibrated form (Isotropic, one ring)
       local_ = LocalDeformer::mesh(std::move(adj), body_->rest_surface(), ls, fixed);
     }
   }
@@ -54,6 +62,12 @@ void Simulation::set_surface_forces(const SurfaceForces* forces) {
   if (forces && local_ && forces->centre >= 0 && forces->total.allFinite()) {
     require_index(forces->centre, body_->num_surface_nodes(), "surface forces: centre node");
     local_->prepare(forces->centre);  // a new centre's patch factored now, a cached one found
+    if (spread_ && forces->nodes.size() > 1) {
+      require(forces->force.rows() == body_->num_surface_nodes(), "surface forces: force has ",
+              forces->force.rows(), " rows, the surface has ", body_->num_surface_nodes(), " nodes");
+      // the workspace sized for this patch here, not in update(); validates the nodes
+      spread_->reserve(spread_->patch_size_of(forces->nodes));
+    }
   }
   surface_forces_ = forces;
 }
@@ -93,7 +107,7 @@ StepStatus Simulation::advance(long frames) {
 void Simulation::refresh_surface() {
   body_->map_to_surface(state_, global_);
   surface_ = global_;
-  local_active_ = false;
+  local_active_ = spread_active_ = false;
   if (local_) {
     // contact = the loaded node with the largest current force (eq. 6 uses the same force)
     Index contact = -1;
@@ -104,10 +118,12 @@ void Simulation::refresh_surface() {
       contact = tool_node_;
       F = tool_force_;
     }
+    bool surface = false;  // the surface forces are the largest load
     if (surface_forces_ && surface_forces_->centre >= 0 && surface_forces_->total.norm() > best) {
       best = surface_forces_->total.norm();
       contact = surface_forces_->centre;
       F = surface_forces_->total;
+      surface = true;
     }
     for (const PointLoad& L : loads_) {
       const Vec3 f = L.at(state_.t);
@@ -115,9 +131,18 @@ void Simulation::refresh_surface() {
         best = f.norm();
         contact = L.node;
         F = f;
+        surface = false;
       }
     }
-    if (contact >= 0) {
+    // a distributed load: its own nodal forces on the patch of its nodes (the calibrated disk overlay)
+    if (spread_ && surface && surface_forces_->nodes.size() > 1) {
+      if (spread_->prepare(surface_forces_->nodes)) {  // factored only when the loaded set changed
+        spread_->solve(surface_forces_->force);
+        const auto U = spread_->displacement();
+        for (Index a = 0; a < spread_->size(); ++a) surface_.row(spread_->nodes()[a]) += U.row(a);  // §6.5
+        local_active_ = spread_active_ = true;
+      }
+    } else if (contact >= 0) {
       local_->compute(contact, F, U_);  // may throw only when a new patch is factored (set-up error)
       if (settings_.local.guard && body_->spoke_length(contact) > 0)
         limit_local_displacement(local_->patch(), U_, body_->spoke_length(contact), {});
@@ -141,11 +166,13 @@ const MatX3& Simulation::normals() const {
 
 const std::vector<Index>& Simulation::local_nodes() const {
   static const std::vector<Index> none;
+  if (spread_active_) return spread_->nodes();
   return local_ && local_active_ ? local_->patch().nodes : none;
 }
 
-const MatX3& Simulation::local_displacement() const {
+Eigen::Ref<const MatX3> Simulation::local_displacement() const {
   static const MatX3 none(0, 3);
+  if (spread_active_) return spread_->displacement();
   return local_ && local_active_ ? U_ : none;
 }
 

@@ -2,9 +2,13 @@
 // loop), counted by the shared counter of tests/support/alloc_counter.hpp.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <vector>
+
 #include "alloc_counter.hpp"
 #include "local_fixtures.hpp"
 #include "medspring/local/deformer.hpp"
+#include "medspring/local/distributed_overlay.hpp"
 #include "medspring/local/overlay.hpp"
 #include "medspring/local/solver.hpp"
 
@@ -64,6 +68,36 @@ TEST(LocalNoAllocation, CachedDeformerUpdateDoesNotAllocate) {
   const long before = testing::heap_allocations();
   for (int t = 0; t < 10; ++t) d.compute(607, Vec3(0, 0, -0.01 * t), U);
   EXPECT_EQ(testing::heap_allocations() - before, 0);
+}
+
+// The distributed load's patch (local/distributed_overlay.hpp): after reserve() for the largest patch, a
+// loaded set that changes on every call (select + factor + solve) and one that stays (solve only) allocate
+// nothing.
+TEST(LocalNoAllocation, DistributedOverlayDoesNotAllocateWithinItsCapacity) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+  const SurfaceMesh kid = kidney_phantom();
+  DistributedOverlay d(testing::mesh_adjacency(kid), 0.05);
+  std::vector<std::vector<Index>> sets;
+  for (Index c : {40, 223, 301})
+    for (double r : {3.0, 9.0}) {
+      sets.emplace_back();
+      for (Index i = 0; i < kid.num_vertices(); ++i)
+        if ((kid.V.row(i) - kid.V.row(c)).norm() < r) sets.back().push_back(i);
+    }
+  Index largest = 0;
+  for (const auto& s : sets) largest = std::max(largest, d.patch_size_of(s));
+  d.reserve(largest);
+  MatX3 F = MatX3::Constant(kid.num_vertices(), 3, -0.01), surface = kid.V;
+  const long before = testing::heap_allocations();
+  for (int t = 0; t < 60; ++t) {
+    const auto& s = sets[static_cast<std::size_t>(t / 2) % sets.size()];  // each set twice: factor, reuse
+    ASSERT_TRUE(d.prepare(s));
+    d.solve(F);
+    for (Index a = 0; a < d.size(); ++a) surface.row(d.nodes()[a]) += d.displacement().row(a);
+  }
+  EXPECT_EQ(testing::heap_allocations() - before, 0);
+  EXPECT_EQ(d.growths(), 0);
+  EXPECT_GT(d.displacement().cwiseAbs().maxCoeff(), 0.0);
 }
 
 }  // namespace

@@ -38,6 +38,8 @@ struct Result {
   long allocations = 0;
   std::size_t distinct_patches = 0;  // local patches (by their first node) met while counting
   double max_local = 0;              // largest |U| of the overlay while counting, mm
+  std::size_t largest_patch = 0;     // most nodes of a local patch while counting (a volumetric body's
+                                     // distributed patch: the tool's contact nodes plus one ring)
   Index tool_contacts = 0;           // nodes in contact with the tool at the end
   int failed_updates = 0;
 };
@@ -77,6 +79,7 @@ Result run(const BodyPtr& body, const std::vector<Index>& sites, Index ring_spok
     if (!tools.update().ok()) ++r.failed_updates;
     if (!counting || sim.local_nodes().empty()) return;
     const Index first = sim.local_nodes().front();
+    r.largest_patch = std::max(r.largest_patch, sim.local_nodes().size());
     if (std::find(patches.begin(), patches.end(), first) == patches.end() &&
         patches.size() < patches.capacity())
       patches.push_back(first);
@@ -98,8 +101,8 @@ void expect_no_allocation(const char* kind, const BodyPtr& body, const std::vect
   SCOPED_TRACE(kind);
   const Result r = run(body, sites, ring_spokes, rule);
   std::cout << "[ " << kind << " ] " << r.allocations << " allocations in " << kUpdates << " updates; "
-            << r.distinct_patches << " local patches, max |U| " << r.max_local << " mm, " << r.tool_contacts
-            << " tool contacts at the end\n";
+            << r.distinct_patches << " local patches (the largest " << r.largest_patch << " nodes), max |U| "
+            << r.max_local << " mm, " << r.tool_contacts << " tool contacts at the end\n";
   EXPECT_EQ(r.allocations, 0) << kind << ": heap allocations in " << kUpdates << " updates after warm-up";
   EXPECT_EQ(r.failed_updates, 0);
   // the loop did what it claims: the tool touched, the overlay moved nodes, the contact moved

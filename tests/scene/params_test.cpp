@@ -259,7 +259,8 @@ TEST(DeclaredParameters, LoadToolRecordAndVolumetricErrorsNameTheJsonPath) {
       {error(kVolumetric, "parameters", R"({"E_kPa": 3})"),
        "t.json: model.parameters.E_kPa: unknown key (expected one of: nodes, mesh_sizing, density, beta, "
        "k_r, "
-       "spring_scale, volume_scale, surface_spring_scale, compression, mass_scaling_dt, min_mass_fraction, "
+       "spring_scale, volume_scale, surface_spring_scale, overlay_compliance, compression, mass_scaling_dt, "
+       "min_mass_fraction, "
        "moduli_correction, "
        "duffing, thin_tet, thin_tet_q_max, volume_precision, fixed)"},
       {error(kVolumetric, "parameters", R"({"duffing": {"mode": "cubic"}})"),

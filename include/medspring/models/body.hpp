@@ -43,6 +43,14 @@ class Body {
   virtual GridLayout grid() const { return {}; }
   /// Surface springs' stiffness used for the local patch (k_loc default), N/mm.
   virtual double local_stiffness() const = 0;
+  /// Compliance multiplier a of the local overlay (the patch springs get k_loc / a; 0 = no overlay). 1 unless
+  /// the model stores a calibrated one (VolumetricSettings::overlay_compliance).
+  virtual double local_compliance() const { return 1.0; }
+  /// True when a force spread over several surface nodes (a tool's contact area, a disk load) gets the
+  /// overlay of its own nodal forces on the patch of the loaded nodes plus one ring (local/distributed.hpp),
+  /// the form the volumetric kind's overlay_compliance is calibrated with; false: the whole force on the
+  /// contact node (§6.3).
+  virtual bool distributed_local() const { return false; }
   /// Surface nodes fixed by the model (excluded from local patches). Empty = none.
   virtual std::vector<std::uint8_t> fixed_surface_nodes() const { return {}; }
   /// Spoke length (distance surface node -> its atom) at rest, used by the local-deformation guard

@@ -95,6 +95,12 @@ struct VolumetricSettings {
   // multiplier of the springs whose two ends are both surface nodes (the edges of the organ's surface and any
   // chord between two surface nodes), on top of spring_scale. 1 (the default) leaves every spring as it was.
   double surface_spring_scale = 1.0;
+  // The compliance multiplier a of the local overlay (eq. 6, docs/local-deformation.md, "The volumetric kind:
+  // the calibrated disk overlay"): the patch springs get k_loc / a, k_loc = local_stiffness() (or the scene's
+  // local.k_loc); a = 0 turns the overlay off. Fitted by `medspring calibrate --kind volumetric --linear
+  // --local` (docs/accuracy-calibration.md); 1 (the default, and what packages before version 9 read) is the
+  // overlay as before.
+  double overlay_compliance = 1.0;
   // Opt-in (off by default): measure the mesh's effective moduli (models/volumetric_moduli.hpp) and multiply
   // spring_scale and volume_scale so that they match (mu, lambda). The body then stores the corrected scales
   // and this flag off (settings()), so a model package rebuilds the same model. ~1 s per 2,000 nodes.
@@ -141,6 +147,11 @@ void for_each_field(S& s, V&& v) {
           "further multiplier of the springs whose two ends are surface nodes (docs/accuracy-calibration.md)"}
           .positive(),
       s.surface_spring_scale);
+  v(ParamSpec{"overlay_compliance", "",
+              "compliance multiplier a of the local overlay: patch springs k_loc / a; 0 = overlay off "
+              "(docs/local-deformation.md)"}
+        .nonnegative(),
+    s.overlay_compliance);
   v(ParamSpec{"compression", "", "compression stiffening c: kc = c mu spring_scale per tetrahedron (0 = off)"}
         .nonnegative(),
     s.compression);
@@ -209,6 +220,8 @@ class VolumetricBody final : public Body {
   void map_to_surface(const State& state, MatX3& surface) const override;
   void transfer_force(Index node, const Vec3& F, MatX3& f_dof) const override;
   double local_stiffness() const override { return k_local_; }
+  double local_compliance() const override { return settings_.overlay_compliance; }
+  bool distributed_local() const override { return true; }
   std::vector<std::uint8_t> fixed_surface_nodes() const override;
   const VolumetricSettings& settings() const { return settings_; }
   const VolumetricMesh& mesh() const { return mesh_; }

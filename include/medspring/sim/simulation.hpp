@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "medspring/local/deformer.hpp"
+#include "medspring/local/distributed_overlay.hpp"
 #include "medspring/models/body.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/loads.hpp"
@@ -69,10 +70,14 @@ class Simulation {
   Index tool_node() const { return tool_node_; }
   const Vec3& tool_force() const { return tool_force_; }
 
-  /// Forces on surface nodes from rigid tools (tools/contact.hpp, sim/tool_sim.hpp), refreshed by
-  /// their owner before every update and added to that update's loads; their centre node gets the
-  /// local patch when its total force is the largest load. nullptr: none. The pointee must outlive its
-  /// use. A new centre's patch is factored here (throws InvalidInput like set_tool_force).
+  /// Forces on surface nodes from rigid tools (tools/contact.hpp, sim/tool_sim.hpp) or a distributed load
+  /// (a disk), refreshed by their owner before every update and added to that update's loads; they get
+  /// the local overlay when their total force is the largest load: on a body with distributed_local()
+  /// (volumetric) and two or more loaded nodes, the patch of the loaded nodes plus one ring under their own
+  /// nodal forces (local/distributed_overlay.hpp, factored when the loaded set changes); otherwise the
+  /// whole force on the centre node. nullptr: none. The pointee must outlive its use. A new centre's patch
+  /// is factored and the distributed patch's workspace sized here (throws InvalidInput for a node out of
+  /// range).
   void set_surface_forces(const SurfaceForces* forces);
   /// A force re-evaluated at every substep of update() (physics/integrators.hpp; the tools' contact at
   /// the substep rate, sim/tool_sim.hpp). nullptr: none. The pointee must outlive its use.
@@ -103,9 +108,10 @@ class Simulation {
   MatX3 displacement() const { return surface_ - body_->rest_surface(); }
   /// Total external force currently applied (loads + tool force, N) = minus the reaction on the tool.
   Vec3 applied_force() const;
-  /// The local patch (global surface indices) and its displacement of the last update (empty if none).
+  /// The local patch (global surface indices) and its displacement (#P x 3, mm) of the last update (empty
+  /// if none).
   const std::vector<Index>& local_nodes() const;
-  const MatX3& local_displacement() const;
+  Eigen::Ref<const MatX3> local_displacement() const;
   const SimulationSettings& settings() const { return settings_; }
   void set_settings(const SimulationSettings& settings);
   /// Back to rest: x = x0, v = 0, t = 0 (loads kept).
@@ -124,7 +130,8 @@ class Simulation {
   mutable MatX3 normals_;  // valid when !normals_stale_ (see normals())
   mutable bool normals_stale_ = true;
   std::optional<LocalDeformer> local_;
-  bool local_active_ = false;
+  std::optional<DistributedOverlay> spread_;  // distributed_local() bodies: the patch of a distributed load
+  bool local_active_ = false, spread_active_ = false;
   Index tool_node_ = -1;
   Vec3 tool_force_ = Vec3::Zero();
   const SurfaceForces* surface_forces_ = nullptr;
