@@ -15,6 +15,7 @@
 
 #include "accuracy_indentation.hpp"
 #include "accuracy_overlay.hpp"
+#include "accuracy_regions.hpp"
 #include "accuracy_summary.hpp"
 #include "accuracy_tables.hpp"
 #include "accuracy_volume_terms.hpp"
@@ -547,7 +548,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                         {"rms_mm", e.rms},
                         {"rms_pct", 100 * e.rel(e.rms)},
                         {"max_mm", e.max},
-                        {"max_pct", 100 * e.rel(e.max)}});
+                        {"max_pct", 100 * e.rel(e.max)},
+                        {"regions", regions_json(o.surface.V, u, c.u_fem, c.load, support, e.contact_fem)}});
         if (!c.train) {
           sum_rms_rel_held += e.rel(e.rms);
           n_held += 1;
