@@ -385,7 +385,8 @@ int cmd_calibrate(const Args& args) {
       out["parameters"] = {{"k_N_per_mm", 0.05 * mult[0]}, {"k_r_N_per_mm", 0.02 * mult[1]}};
     else if (kind == "volumetric") {
       out["parameters"] = {{"spring_scale", mult[0]}, {"volume_scale", mult[1]}};
-      if (mult.size() > 3) out["parameters"]["surface_spring_scale"] = mult[3];  // --fit-surface-springs
+      if (mult.size() > 3 && !local)
+        out["parameters"]["surface_spring_scale"] = mult[3];  // --fit-surface-springs
       if (m.contains("fit")) {  // c and what the nonlinear fit moved (docs/accuracy.md)
         out["parameters"]["compression"] = m["fit"]["compression"];
         out["fit"] = m["fit"];
