@@ -6,6 +6,9 @@ build=${BUILD_DIR:-$root/build}
 bash "$root/scripts/install-deps.sh"
 bash "$root/scripts/install-web-deps.sh" || echo "test: web tools not installed: the web tests will be skipped" >&2
 bash "$root/scripts/build.sh" -DMEDSPRING_BUILD_TESTS=ON -DMEDSPRING_BUILD_BENCH=ON
+# A fresh tree gets the measured test costs, so CTest starts the longest tests first (scripts/ctest_costs.py).
+costs=$build/Testing/Temporary/CTestCostData.txt
+[ -f "$costs" ] || { mkdir -p "$(dirname "$costs")" && cp "$root/tests/ctest-costs/plain.txt" "$costs"; }
 ctest --test-dir "$build" --output-on-failure --parallel "${JOBS:-$(nproc)}" --timeout 600
 if [ -d "$root/python/tests" ]; then
   PYTHONPATH="$build/python:${PYTHONPATH:-}" /usr/bin/python3 -m pytest -q "$root/python/tests"
