@@ -10,6 +10,18 @@
 # Declares the library target medspring_<layer>, alias MedSpring::<layer>, with the public
 # headers under include/ and the house warning flags; installs and exports it in `component`
 # (default: engine, the Eigen-only layers).
+# libFuzzer's coverage hooks in a MEDSPRING_FUZZ tree: the layers and files that hold what the fuzz targets
+# parse (fuzz/CMakeLists.txt), and the fuzz targets themselves. Not the engine's numerical code or the tests:
+# the hooks (a callback on every edge and comparison) made the sanitized suite's physics 2.5x slower for
+# nothing the parsers' fuzzing uses (docs/reliability.md, "Build time in CI").
+set(MEDSPRING_FUZZ_COVERAGE_LAYERS core geometry io scene)
+set(MEDSPRING_FUZZ_COVERAGE_FILES sim/checkpoint.cpp models/model_package.cpp fem/frd.cpp)
+function(medspring_fuzz_coverage target)
+  if(MEDSPRING_FUZZ)
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)
+  endif()
+endfunction()
+
 function(medspring_add_layer layer)
   cmake_parse_arguments(ARG "" "COMPONENT" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
   if(NOT ARG_COMPONENT)
@@ -32,6 +44,15 @@ function(medspring_add_layer layer)
   endif()
   medspring_shared_library_properties(${target})
   medspring_install_target(${target} COMPONENT ${ARG_COMPONENT} DEPS ${ARG_DEPS})
+  if(MEDSPRING_FUZZ AND layer IN_LIST MEDSPRING_FUZZ_COVERAGE_LAYERS)
+    medspring_fuzz_coverage(${target})
+  elseif(MEDSPRING_FUZZ)
+    foreach(file IN LISTS MEDSPRING_FUZZ_COVERAGE_FILES)
+      if(file MATCHES "^${layer}/(.+)$")
+        set_property(SOURCE ${CMAKE_MATCH_1} APPEND PROPERTY COMPILE_OPTIONS -fsanitize=fuzzer-no-link)
+      endif()
+    endforeach()
+  endif()
 endfunction()
 
 # medspring_install_target(target COMPONENT component [DEPS ...])
