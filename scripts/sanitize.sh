@@ -2,8 +2,8 @@
 # CI step after scripts/test.sh (.ci/run; issue 9): the C++ test suite built with clang 14 at -O1 under
 # AddressSanitizer + UndefinedBehaviorSanitizer, then every fuzz target for a short, bounded time.
 # One tree (${BUILD_DIR:-build-asan}) serves both: MEDSPRING_SANITIZE + MEDSPRING_FUZZ compile the
-# libraries once with ASan/UBSan and libFuzzer's coverage hooks, the tests and the fuzz binaries link
-# against them. Any sanitizer report, failed test or fuzz crash fails the step.
+# libraries once with ASan/UBSan (the parsing code also with libFuzzer's coverage hooks), the tests and the
+# fuzz binaries link against them. Any sanitizer report, failed test or fuzz crash fails the step.
 #
 #   bash scripts/sanitize.sh               # fuzz/ci-runs.txt inputs per target, at most FUZZ_SECONDS=60 each
 #                                          # (0: no fuzzing; FUZZ_RUNS_FILE= : time only), JOBS=$(nproc)
