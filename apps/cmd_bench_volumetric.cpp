@@ -3,10 +3,10 @@
 // the bottom 20 %, 0.5 N on the top node; one update = Simulation::update (a 0.5 ms frame with the sub-steps
 // its stable step needs). The same set-up as bench/volumetric_bench.cpp. Needs the fem layer (TetGen).
 // kidney_volumetric_2000_explicit_linear_refresh: the same with the opt-in tangent refresh
-// (StepSettings::stable_step = refresh; its re-estimate is spread over 15 frames, one product each). The _f32
-// cases: the default and the mass-scaled case with the opt-in single-precision volume pass
-// (VolumetricSettings::volume_precision = float); kidney_volumetric_2000_explicit_linear_refresh_f32: both
-// opt-ins together (the tangent refresh and the single-precision pass).
+// (StepSettings::stable_step = refresh; its re-estimate is spread over 15 frames, one product each). Every
+// case without a suffix runs the default volume pass, single precision (VolumetricSettings::volume_precision
+// = float, the default since h23b); the _f64 cases are the plain, mass-scaled and refresh cases with the
+// volume pass in double (the default before h23b, which measured the _f32 cases of then against them).
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,21 +29,21 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
 #ifdef MEDSPRING_HAVE_FEM
   for (const Index target : {500, 1000, 2000})
     for (const int variant : {0, 1, 2, 3, 4, 5}) {  // the default; opt-in selective mass scaling; the tangent
-                                                    // refresh; 3, 4: 0, 1 with the single-precision volume
-                                                    // pass; 5: 2 with it
+                                                    // refresh; 3, 4: 0, 1 with the volume pass in double;
+                                                    // 5: 2 with it
       // StepSettings::stable_step = refresh: 2,000 nodes only
       if ((variant == 2 || variant == 5) && target != 2000) continue;
       const double mass_scaling_dt = variant == 1 || variant == 4 ? 0.25 : 0.0;
-      const bool refresh = variant == 2 || variant == 5, f32 = variant >= 3;
+      const bool refresh = variant == 2 || variant == 5, f64 = variant >= 3;
       const std::string name =
           cat("kidney_volumetric_", target, "_explicit_linear",
-              mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""), f32 ? "_f32" : "");
+              mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""), f64 ? "_f64" : "");
       if (!filter.empty() && name.find(filter) == std::string::npos) continue;
       const SurfaceMesh s = kidney_phantom();
       const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
       VolumetricSettings st;  // 10 kPa, nu = 0.45
       st.mass_scaling_dt = mass_scaling_dt;
-      if (f32) st.volume_precision = VolumePrecision::Float;
+      if (f64) st.volume_precision = VolumePrecision::Double;
       st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
       auto body = std::make_shared<const VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = target}),
                                                          st, "volumetric kidney");

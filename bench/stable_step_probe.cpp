@@ -14,8 +14,9 @@
 //   medspring_stable_step_probe [--nodes 2000] [--loads 0.5,1,2] [--mass-scaling 0,0.25] [--steps 10000]
 //                               [--lanczos 300] [--bisect 7]
 //   --frame-times N [--precision double|float|both]: instead, N frames at the first load from rest, the
-//     rules bound and refresh (and with both, each also with the opt-in single-precision volume pass,
-//     VolumetricSettings::volume_precision) alternated frame by frame; wall and CPU time per frame.
+//     rules bound and refresh (and with both, each also with the single-precision volume pass,
+//     VolumetricSettings::volume_precision, the default since h23b) alternated frame by frame; wall and CPU
+//     time per frame. Without --frame-times the model has the default settings (float since h23b).
 #include <time.h>  // clock_gettime(CLOCK_THREAD_CPUTIME_ID): the frame's CPU time, robust to a loaded machine
 
 #include <algorithm>

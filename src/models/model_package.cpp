@@ -265,8 +265,9 @@ std::string encode_model_package(const ModelPackage& p) {
     w.f64(s.compression);                          // version 6
     w.i64(static_cast<std::int64_t>(s.thin_tet));  // version 7
     w.f64(s.thin_tet_q_max);
-    w.f64(s.surface_spring_scale);  // version 8
-    w.f64(s.overlay_compliance);    // version 9
+    w.f64(s.surface_spring_scale);                         // version 8
+    w.f64(s.overlay_compliance);                           // version 9
+    w.i64(static_cast<std::int64_t>(s.volume_precision));  // version 10
   } else {
     throw InvalidInput(cat("model package '", p.name, "': unknown kind '", p.kind, "'"));
   }
@@ -390,6 +391,15 @@ ModelPackage decode_model_package(std::string_view bytes, const std::string& wha
     s.surface_spring_scale = version >= 8 ? r.f64() : 1.0;
     // the overlay's compliance multiplier (before version 9: the overlay as it was, a = 1)
     s.overlay_compliance = version >= 9 ? r.f64() : 1.0;
+    // the sub-steps' volume pass: stored from version 10; earlier packages were written while double was
+    // the default (and a float model's package did not say so): they read double, as they were run
+    s.volume_precision = VolumePrecision::Double;
+    if (version >= 10) {
+      const std::int64_t prec = r.i64();
+      if (prec < 0 || prec > 1)
+        r.fail(cat("volumetric volume_precision: ", prec, " (expected 0 double or 1 float)"));
+      s.volume_precision = static_cast<VolumePrecision>(prec);
+    }
   } else {  // smrm_tree
     const Index nb = r.count("tree branches", 4 + 8 + 8 + 8);
     p.tree.branches.resize(static_cast<std::size_t>(nb));

@@ -328,6 +328,11 @@ std::uint64_t model_fingerprint(const Model& m) {
     for (const Mat3& D : C.DmInv) h = hash_dense(D, h);
     for (const Mat6& c : C.C) h = hash_dense(c, h);
   }
+  if (m.volume_f32) {  // appended only when present (issue 23): the float volume pass changes the trajectory,
+    // so a checkpoint resumes, and a package rebuilds, with the precision it was saved with
+    static constexpr char kF32[] = "volume_precision=float";
+    h = fnv1a64(kF32, sizeof kF32 - 1, h);
+  }
   return h;
 }
 

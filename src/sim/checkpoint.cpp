@@ -151,7 +151,12 @@ void apply_checkpoint(const Checkpoint& c, Simulation& sim, const std::string& w
     throw InvalidInput(cat(what, ": saved from another model: '", c.model_name, "' (", c.body_kind, ", ",
                            c.state.x.rows(), " nodes, fingerprint ", hex64(c.fingerprint),
                            "), this simulation runs '", m.name, "' (", sim.body().kind(), ", ", n,
-                           " nodes, fingerprint ", hex64(fp), ")"));
+                           " nodes, fingerprint ", hex64(fp), ")",
+                           c.body_kind == "volumetric" && c.body_kind == sim.body().kind()
+                               ? "; a volumetric model's fingerprint covers its volume_precision (float by "
+                                 "default; a run saved while double was the default resumes with "
+                                 "volume_precision \"double\")"
+                               : ""));
   // validate everything before changing the simulation
   const State& in = c.state;
   require_state_in_reach(m, in.x, in.v, what);

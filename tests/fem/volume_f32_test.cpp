@@ -139,19 +139,20 @@ TEST(VolumeF32, CubeFromTensionToPushedThroughWithinTheRoundingBound) {
   }
 }
 
-// The opt-in setting (VolumetricSettings::volume_precision = float) in the step: the 800-node kidney phantom
-// (TetGen, supports on the bottom 20 %), 0.5 N on its top node, 300 frames of 0.5 ms against the double
-// model: the float pass serves the sub-steps without the stable step's bound (1 of the 2 per frame here), the
-// frame's last sub-step stays double. The positions differ (the float pass ran) but stay within 1e-5 of the
-// peak displacement of the double run (the float forces are within ~1e-5 of the largest force, the tests
-// above, and the damped dynamics does not amplify that; measured 8.2e-8), the same sub-steps, no NaN, the
-// same warnings (inverted elements are counted in double once per frame).
+// The setting (VolumetricSettings::volume_precision, float by default) in the step: the 800-node kidney
+// phantom (TetGen, supports on the bottom 20 %), 0.5 N on its top node, 300 frames of 0.5 ms against the
+// double model: the float pass serves the sub-steps without the stable step's bound (1 of the 2 per frame
+// here), the frame's last sub-step stays double. The positions differ (the float pass ran) but stay within
+// 1e-5 of the peak displacement of the double run (the float forces are within ~1e-5 of the largest force,
+// the tests above, and the damped dynamics does not amplify that; measured 8.2e-8), the same sub-steps, no
+// NaN, the same warnings (inverted elements are counted in double once per frame).
 TEST(VolumeF32, StepWithTheFloatPassStaysWithinToleranceOfTheDoubleStep) {
   const SurfaceMesh s = kidney_phantom();
   const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
   VolumetricSettings vs;
   vs.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = 800});
+  vs.volume_precision = VolumePrecision::Double;  // both set: the test compares the two
   const VolumetricBody b64(vm, vs, "kidney");
   vs.volume_precision = VolumePrecision::Float;
   const VolumetricBody b32(vm, vs, "kidney (float)");

@@ -181,8 +181,9 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
 #ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
   const SurfaceMesh s = kidney_phantom();
   const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
-  VolumetricSettings st;  // 10 kPa, nu = 0.45, supports on the bottom 20 %
+  VolumetricSettings st;  // 10 kPa, nu = 0.45, supports on the bottom 20 %, the volume pass in double
   st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  st.volume_precision = VolumePrecision::Double;
   auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
   ASSERT_GT(body->model().volume.size(), 0);
   // four sites on the upper half of the surface, away from the supports
@@ -194,7 +195,8 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
   expect_no_allocation("volumetric", body, sites);
   // the opt-in tangent refresh (StepSettings::stable_step): its scratch is sized before the counted updates
   expect_no_allocation("volumetric, stable_step refresh", body, sites, 0, StableStep::Refresh);
-  // the opt-in single-precision volume pass (volume_precision float): its float scratch sized with the state
+  // the single-precision volume pass (volume_precision float, the default): its float scratch sized with the
+  // state
   st.volume_precision = VolumePrecision::Float;
   auto body32 =
       std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney (float)");

@@ -30,7 +30,7 @@
 namespace medspring {
 
 inline constexpr char kModelPackageMagic[9] = "MSPRMODL";
-inline constexpr std::uint32_t kModelPackageVersion = 9;     // 2: smrm bending mode and wall (issue 17);
+inline constexpr std::uint32_t kModelPackageVersion = 10;    // 2: smrm bending mode and wall (issue 17);
                                                              // 3: hybrid settings by declared name (issue 22)
                                                              // 4: volumetric mass_scaling_dt (issue 23)
                                                              // 5: surface and smrm settings by declared
@@ -39,6 +39,8 @@ inline constexpr std::uint32_t kModelPackageVersion = 9;     // 2: smrm bending 
                                                              // 7: volumetric thin_tet, q_max (issue 23)
                                                              // 8: volumetric surface_spring_scale (issue 23)
                                                              // 9: volumetric overlay_compliance (issue 23)
+                                                             // 10: volumetric volume_precision (issue 23;
+                                                             //     earlier packages read double)
 inline constexpr std::uint32_t kModelPackageMinVersion = 1;  // version 1 smrm: bending = chain.kb
 
 /// Everything needed to rebuild a Body with the engine layers alone.

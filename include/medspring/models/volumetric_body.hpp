@@ -65,8 +65,9 @@ inline ThinTetMode parse_enum(const std::string& text, ThinTetMode*) {
 }
 /// Precision of the volume pass of the sub-steps without the stable step's bound (issue 23,
 /// docs/volumetric-speed.md "A single-precision volume pass"; physics/model.hpp set_volume_single_precision):
-/// double (default) or float (opt-in: the volume and compression terms' forces of those sub-steps in single
-/// precision; the frame's last sub-step, energies, Hessians and static solves stay double).
+/// float (the default since issue 23, h23b: the volume and compression terms' forces of those sub-steps in
+/// single precision; the frame's last sub-step, energies, Hessians and static solves stay double) or double.
+/// Model packages store it from version 10 (earlier packages read double, what they were run with).
 enum class VolumePrecision { Double, Float };
 const char* to_string(VolumePrecision p);
 /// "double" | "float"; InvalidInput naming the text otherwise.
@@ -116,7 +117,7 @@ struct VolumetricSettings {
   MeshSizing mesh_sizing = MeshSizing::Volume;  // how that build sizes the interior
   ThinTetMode thin_tet = ThinTetMode::Off;      // correction term on thin tetrahedra (opt-in)
   double thin_tet_q_max = kDefaultThinTetQMax;  // ... on those with h_min / L_max below this, (0, 1]
-  VolumePrecision volume_precision = VolumePrecision::Double;  // the sub-steps' volume pass (float: opt-in)
+  VolumePrecision volume_precision = VolumePrecision::Float;  // the sub-steps' volume pass (double: opt-in)
 };
 
 /// The declaration of VolumetricSettings (core/params.hpp): the "parameters" of a volumetric model in a
@@ -176,8 +177,8 @@ void for_each_field(S& s, V&& v) {
         .at_most(1),
     s.thin_tet_q_max);
   v(ParamSpec{"volume_precision", "",
-              "volume pass of the sub-steps without the stable step's bound: double, or float (opt-in, "
-              "docs/volumetric-speed.md)"},
+              "volume pass of the sub-steps without the stable step's bound: float, or double (the former "
+              "default; docs/volumetric-speed.md)"},
     s.volume_precision);
   v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
   v(ParamSpec{"E_kPa", "kPa", "Young's modulus, from model.material"}.positive().set_by_program(), s.E_kPa);
