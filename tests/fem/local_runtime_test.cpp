@@ -41,13 +41,15 @@ const VolumetricMesh& kidney_mesh() {
   return vm;
 }
 
-std::shared_ptr<const VolumetricBody> kidney(double a) {
+std::shared_ptr<const VolumetricBody> kidney(
+    double a, VolumePrecision precision = VolumetricSettings{}.volume_precision) {
   const VolumetricMesh& vm = kidney_mesh();
   const MatX3 S = vm.X.topRows(vm.surface_nodes);
   const double zmin = S.col(2).minCoeff(), zmax = S.col(2).maxCoeff();
   VolumetricSettings st;
   st.fixed = fem::support_nodes(S, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
   st.overlay_compliance = a;
+  st.volume_precision = precision;
   return std::make_shared<VolumetricBody>(vm, st, "real kidney");
 }
 
@@ -169,13 +171,16 @@ TEST(LocalRuntime, PackageKeepsTheComplianceAndBadValuesAreRefused) {
   const ModelPackage p = decode_model_package(bytes, "kidney.msm");
   EXPECT_EQ(p.volumetric.overlay_compliance, kA);
   EXPECT_EQ(make_body(p)->local_compliance(), kA);
-  // version 8: the same payload without a (the f64 before the trailing fingerprint)
-  std::string payload = bytes.substr(kFrameHeaderSize);
-  payload.erase(payload.size() - 16, 8);
+  // version 8: a double-precision body's payload (the precision every version <= 9 package ran with) without
+  // a and the precision (version 9's f64 and version 10's i64, before the trailing fingerprint)
+  const auto body8 = kidney(kA, VolumePrecision::Double);
+  std::string payload = encode_model_package(package_of(*body8, "kidney")).substr(kFrameHeaderSize);
+  payload.erase(payload.size() - 24, 16);
   const ModelPackage v8 =
       decode_model_package(frame_payload(kModelPackageMagic, 8, payload), "kidney_v8.msm");
   EXPECT_EQ(v8.volumetric.overlay_compliance, 1.0);
   EXPECT_EQ(v8.volumetric.spring_scale, body->settings().spring_scale);
+  EXPECT_EQ(v8.volumetric.volume_precision, VolumePrecision::Double);
   EXPECT_TRUE(check_fingerprint(v8, *make_body(v8)));
 
   for (double bad : {-0.1, std::nan(""), -std::numeric_limits<double>::infinity()}) {
