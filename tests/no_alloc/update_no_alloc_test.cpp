@@ -184,6 +184,7 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
   VolumetricSettings st;  // 10 kPa, nu = 0.45, supports on the bottom 20 %, the volume pass in double
   st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
   st.volume_precision = VolumePrecision::Double;
+  st.overlay_compliance = 1.0;  // the local overlay on (off by default), so that its patches are counted too
   auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
   ASSERT_GT(body->model().volume.size(), 0);
   // four sites on the upper half of the surface, away from the supports
@@ -218,6 +219,7 @@ TEST(UpdateNoAllocation, VolumetricKidneyWithThinTetTerms) {
   st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
   st.thin_tet = ThinTetMode::ScaleSprings;
   st.thin_tet_q_max = 0.5;
+  st.overlay_compliance = 1.0;  // the local overlay on (off by default), so that its patches are counted too
   auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
   ASSERT_GT(body->model().thin.size(), 0);
   std::vector<Index> sites;
