@@ -42,7 +42,8 @@ const VolumetricMesh& kidney_mesh() {
 }
 
 std::shared_ptr<const VolumetricBody> kidney(
-    double a, VolumePrecision precision = VolumetricSettings{}.volume_precision) {
+    double a = VolumetricSettings{}.overlay_compliance,
+    VolumePrecision precision = VolumetricSettings{}.volume_precision) {
   const VolumetricMesh& vm = kidney_mesh();
   const MatX3 S = vm.X.topRows(vm.surface_nodes);
   const double zmin = S.col(2).minCoeff(), zmax = S.col(2).maxCoeff();
@@ -106,9 +107,12 @@ TEST(LocalRuntime, DiskLoadOverlayOnTheRealKidneyEqualsTheCalibrationsOverlay) {
 }
 
 // a = 0 with the overlay on is the run with it off, bit for bit, over 40 updates (a does not touch the
-// model: same fingerprint); no patch is reported.
-TEST(LocalRuntime, ZeroComplianceIsTheRunWithoutOverlay) {
-  const auto off = kidney(0.0), calibrated = kidney(kA);
+// model: same fingerprint); no patch is reported. a = 0 is the default: a body built with the default
+// settings is that run (the uncalibrated overlay, a = 1, left the load site far too soft).
+TEST(LocalRuntime, ZeroComplianceIsTheRunWithoutOverlayAndTheDefault) {
+  EXPECT_EQ(VolumetricSettings{}.overlay_compliance, 0.0);
+  const auto off = kidney(), calibrated = kidney(kA);
+  EXPECT_EQ(off->local_compliance(), 0.0);
   EXPECT_EQ(model_fingerprint(off->model()), model_fingerprint(calibrated->model()));
   const SurfaceForces sf = surface_forces_of(*off, top_load(*off));
   Simulation a0(off, with_local(true)), plain(calibrated, with_local(false));
@@ -199,6 +203,6 @@ TEST(LocalRuntime, PackageKeepsTheComplianceAndBadValuesAreRefused) {
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("overlay_compliance"), std::string::npos) << e.what();
   }
-  set_param(s, "overlay_compliance", "0");
-  EXPECT_EQ(s.overlay_compliance, 0.0);
+  set_param(s, "overlay_compliance", "0.25");
+  EXPECT_EQ(s.overlay_compliance, 0.25);
 }

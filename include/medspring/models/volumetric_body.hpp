@@ -99,9 +99,11 @@ struct VolumetricSettings {
   // The compliance multiplier a of the local overlay (eq. 6, docs/local-deformation.md, "The volumetric kind:
   // the calibrated disk overlay"): the patch springs get k_loc / a, k_loc = local_stiffness() (or the scene's
   // local.k_loc); a = 0 turns the overlay off. Fitted by `medspring calibrate --kind volumetric --linear
-  // --local` (docs/accuracy-calibration.md); 1 (the default, and what packages before version 9 read) is the
-  // overlay as before.
-  double overlay_compliance = 1.0;
+  // --local` (docs/accuracy-calibration.md). The default is 0, off: the volumetric body resolves the contact
+  // with its own interior, and the uncalibrated overlay (a = 1) left the load site far too soft (held-out
+  // site error 68-172 % against 4-19 % without it, docs/accuracy-calibration.md). Packages before version 9
+  // read 1, the overlay they were written and run with.
+  double overlay_compliance = 0.0;
   // Opt-in (off by default): measure the mesh's effective moduli (models/volumetric_moduli.hpp) and multiply
   // spring_scale and volume_scale so that they match (mu, lambda). The body then stores the corrected scales
   // and this flag off (settings()), so a model package rebuilds the same model. ~1 s per 2,000 nodes.
@@ -149,8 +151,8 @@ void for_each_field(S& s, V&& v) {
           .positive(),
       s.surface_spring_scale);
   v(ParamSpec{"overlay_compliance", "",
-              "compliance multiplier a of the local overlay: patch springs k_loc / a; 0 = overlay off "
-              "(docs/local-deformation.md)"}
+              "compliance multiplier a of the local overlay: patch springs k_loc / a; 0 = overlay off, the "
+              "default: the interior carries the contact (docs/local-deformation.md)"}
         .nonnegative(),
     s.overlay_compliance);
   v(ParamSpec{"compression", "", "compression stiffening c: kc = c mu spring_scale per tetrahedron (0 = off)"}
