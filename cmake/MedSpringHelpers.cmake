@@ -165,8 +165,23 @@ function(medspring_pch_launcher target)
 endfunction()
 
 # medspring_add_test(NAME SOURCES ... DEPS ...): one GoogleTest executable, tests discovered by CTest.
+# An executable with a label in MEDSPRING_TEST_EXCLUDE_LABELS is defined but not built (EXCLUDE_FROM_ALL) and
+# not registered with CTest: a tree that never runs those labels does not compile them (the sanitized CI tree
+# leaves out `long`, scripts/sanitize.sh; docs/reliability.md, "Build time in CI").
+set(MEDSPRING_TEST_EXCLUDE_LABELS "" CACHE STRING "Test labels whose executables this build leaves out, e.g. \"long\"")
 function(medspring_add_test name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  set(excluded FALSE)
+  foreach(label IN LISTS ARG_LABELS)
+    if(label IN_LIST MEDSPRING_TEST_EXCLUDE_LABELS)
+      set(excluded TRUE)
+    endif()
+  endforeach()
+  if(excluded)
+    add_executable(${name} EXCLUDE_FROM_ALL ${ARG_SOURCES})
+    target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main MedSpring::options medspring_test_support)
+    return()
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main MedSpring::options medspring_test_support)
   if(TARGET medspring_test_pch)

@@ -11,6 +11,7 @@ PACKAGES=(
   libcli11-dev                       # CLI: the medspring command line (CLI11, header-only)
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-matplotlib
+  python3-pytest-xdist               # scripts/test.sh: pytest on every core (-n)
   xvfb xauth                         # offscreen rendering of the report figures (VTK under Xvfb)
   python3-jinja2                     # medspring paper: report.md rendered from results.json (scripts/paper/report.py)
   python3-distributed python3-dask python3-zarr python3-pandas python3-tqdm python3-xarray  # medspring study (Dask)

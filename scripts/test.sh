@@ -11,5 +11,8 @@ costs=$build/Testing/Temporary/CTestCostData.txt
 [ -f "$costs" ] || { mkdir -p "$(dirname "$costs")" && cp "$root/tests/ctest-costs/plain.txt" "$costs"; }
 ctest --test-dir "$build" --output-on-failure --parallel "${JOBS:-$(nproc)}" --timeout 600
 if [ -d "$root/python/tests" ]; then
-  PYTHONPATH="$build/python:${PYTHONPATH:-}" /usr/bin/python3 -m pytest -q "$root/python/tests"
+  # one pytest worker per core (pytest-xdist, installed above): the Python suite ran on one core of two
+  par=()
+  /usr/bin/python3 -c "import xdist" 2>/dev/null && par=(-n "${JOBS:-$(nproc)}")
+  PYTHONPATH="$build/python:${PYTHONPATH:-}" /usr/bin/python3 -m pytest -q "${par[@]}" "$root/python/tests"
 fi
