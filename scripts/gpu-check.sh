@@ -110,6 +110,7 @@ want() { [[ ",${GPU_CHECK_STAGES:-bench,gpu_tests,gpu_scene_tests,cpu_kernel_tes
 
 full() {
   local deps=${1:-$root/shared/gpu-deps}
+  [ ! -d "$deps" ] || deps=$(cd "$deps" && pwd)  # CMake refuses relative include directories
   # The build and the copied dependencies go to GPU_CHECK_WORK (default $out): on the device machine put
   # them outside the folder whose files come back.
   local work=${GPU_CHECK_WORK:-$out}
@@ -165,9 +166,9 @@ EOF
   args+=(-DMEDSPRING_SKIP_LAYERS="$skip")
   if [ -n "${GPU_CHECK_USE_DEPS:-}" ] || ! ls /usr/lib/*/cmake/GTest/GTestConfig.cmake /usr/local/lib/cmake/GTest/GTestConfig.cmake >/dev/null 2>&1; then
     [ -d "$deps/googletest" ] || { echo "gpu-check: no GoogleTest here and none in $deps" >&2; exit 2; }
-    cmake -S "$deps/googletest" -B "$out/gtest-build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+    cmake -S "$deps/googletest" -B "$work/gtest-build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DCMAKE_INSTALL_PREFIX="$prefix/gtest" -DBUILD_GMOCK=OFF > "$out/gtest.log"
-    cmake --build "$out/gtest-build" >> "$out/gtest.log" && cmake --install "$out/gtest-build" >> "$out/gtest.log"
+    cmake --build "$work/gtest-build" >> "$out/gtest.log" && cmake --install "$work/gtest-build" >> "$out/gtest.log"
     args+=(-DGTest_DIR="$(dirname "$(find "$prefix/gtest" -name GTestConfig.cmake | head -1)")")
   fi
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${args[@]}" > "$out/configure.log"
