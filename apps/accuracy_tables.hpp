@@ -95,6 +95,8 @@ struct Settings {
   bool fit_nonlinear = true;
   // --train-force F[,F...] (N): the training sites' loads (empty: 0.5 N or the smallest force)
   std::vector<double> train_forces;
+  // --train-sites I[,I...]: the training sites' indices (empty: 0 and 1, --quick: 0)
+  std::vector<int> train_sites;
   // --site-readout node (default) | disk-mean: the site term of the calibration objective reads the contact
   // node or the mean over the loaded disk (docs/accuracy-calibration.md)
   bool site_disk_mean = false;

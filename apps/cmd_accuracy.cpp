@@ -42,8 +42,9 @@ namespace medspring::cli::accuracy {
 // --kinds surface,hybrid,volumetric (default all) and --nodes N (volumetric node count, default 2000).
 // `known` plus the options read_kind_options reads, which accuracy and calibrate both accept.
 std::vector<std::string> with_kind_options(std::vector<std::string> known) {
-  for (const char* o : {"compression", "surface-subdivisions", "interior-sizing", "fit", "train-force",
-                        "site-readout", "site-weight", "fit-surface-springs", "thin-tet", "thin-tet-q-max"})
+  for (const char* o :
+       {"compression", "surface-subdivisions", "interior-sizing", "fit", "train-force", "train-sites",
+        "site-readout", "site-weight", "fit-surface-springs", "thin-tet", "thin-tet-q-max"})
     known.emplace_back(o);
   return known;
 }
@@ -89,6 +90,22 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
     } catch (const InvalidInput& e) {
       throw InvalidInput(cat(cmd, ": --train-force ", e.what()));
     }
+  }
+  if (auto ts = args.get("train-sites")) {  // indices among the organ's sites: 4, or 2 with --quick
+    const long last = st.quick ? 1 : 3;
+    std::stringstream ss(*ts);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      char* end = nullptr;
+      const long v = std::strtol(item.c_str(), &end, 10);
+      require(!item.empty() && end && *end == '\0' && v >= 0 && v <= last, cmd, ": --train-sites: '", item,
+              "' is not a site index in [0, ", last, "]");
+      require(std::find(st.train_sites.begin(), st.train_sites.end(), static_cast<int>(v)) ==
+                  st.train_sites.end(),
+              cmd, ": --train-sites: site ", v, " is listed twice");
+      st.train_sites.push_back(static_cast<int>(v));
+    }
+    require(!st.train_sites.empty(), cmd, ": --train-sites must list at least one site");
   }
   const std::string fit = args.get_or("fit", st.quick ? "small-strain" : "nonlinear");  // --quick: seconds
   require(fit == "nonlinear" || fit == "small-strain", cmd,

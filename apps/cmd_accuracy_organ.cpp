@@ -146,8 +146,15 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
   for (double tf : train_forces)
     require(std::find(forces.begin(), forces.end(), tf) != forces.end(), "accuracy: --train-force ", tf,
             " N is not one of the forces");
-  // training: the first site at 0.5 N (quick) or the first two sites at 0.5 N; every other case is held out
-  const std::size_t train_sites = st.quick ? 1 : 2;
+  // training: the first site (quick) or the first two sites, or --train-sites; every other case is held out
+  const std::vector<int> train_sites = !st.train_sites.empty() ? st.train_sites
+                                       : st.quick              ? std::vector<int>{0}
+                                                               : std::vector<int>{0, 1};
+  for (int s : train_sites)
+    require(static_cast<std::size_t>(s) < sites.size(), "accuracy: --train-sites ", s, " is not one of the ",
+            sites.size(), " sites (0..", sites.size() - 1, ")");
+  require(train_sites.size() < sites.size() || train_forces.size() < forces.size(),
+          "accuracy: --train-sites and --train-force leave no case held out");
   json out = {{"organ", o.name},
               {"surface_nodes", o.surface.num_vertices()},
               {"support_nodes", support.size()},
@@ -164,7 +171,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
                  }()},
                 {"text", o.support_text}}},
               {"contact_radius_mm", st.radius},
-              {"sites", sites}};
+              {"sites", sites},
+              {"train_sites", train_sites}};
 
   fem::OrganMeshSettings ms;
   ms.subdivisions = st.level - 1;
@@ -196,7 +204,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
              0,
              false};
       c.train =
-          si < train_sites && std::find(train_forces.begin(), train_forces.end(), F) != train_forces.end();
+          std::find(train_sites.begin(), train_sites.end(), static_cast<int>(si)) != train_sites.end() &&
+          std::find(train_forces.begin(), train_forces.end(), F) != train_forces.end();
       bool cached = false;
       note(st, cat(o.name, ": FEM site ", si, ", ", F, " N"));
       MatX3 u_nodes;

@@ -70,6 +70,14 @@ inline const OptionSpec kTrainForce{
     .unit = "N",
     .def = "0.5, or the smallest of --forces",
     .help = "the load(s) of the two training sites (among the forces); every other case is held out"};
+inline const OptionSpec kTrainSites{
+    .name = "train-sites",
+    .value = "I[,I...]",
+    .def = "0,1; --quick: 0",
+    .help =
+        "the training sites, by index (0..3; --quick: 0..1); every other site is held out (a site left out "
+        "of "
+        "training scores a choice made on the others: docs/accuracy-calibration.md)"};
 inline const OptionSpec kSiteReadout{
     .name = "site-readout",
     .value = "node|disk-mean",

@@ -116,6 +116,14 @@ TEST(CliAccuracy, ImpossibleMaterialIsRefusedWithOneLineAndNothingWritten) {
   EXPECT_FALSE(fs::exists(out));
   EXPECT_NE(run("calibrate --organ phantom --kind volumetric --train-force 0.5,x", &err), 0);
   EXPECT_NE(err.find("--train-force must be > 0 N or a list of such (got 'x')"), std::string::npos) << err;
+  EXPECT_NE(run("calibrate --organ phantom --kind volumetric --train-sites 0,4", &err), 0);
+  EXPECT_NE(err.find("calibrate: --train-sites: '4' is not a site index in [0, 3]"), std::string::npos)
+      << err;
+  EXPECT_NE(run("calibrate --organ phantom --kind volumetric --train-sites 1,1", &err), 0);
+  EXPECT_NE(err.find("calibrate: --train-sites: site 1 is listed twice"), std::string::npos) << err;
+  EXPECT_NE(run("accuracy --quick --train-sites 2 --out '" + out.string() + "'", &err), 0);
+  EXPECT_NE(err.find("accuracy: --train-sites: '2' is not a site index in [0, 1]"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
   // the local overlay as a site family (docs/accuracy-calibration.md): the volumetric linear kind only
   EXPECT_NE(run("calibrate --organ phantom --kind surface --linear --local", &err), 0);
   EXPECT_NE(err.find("calibrate: --local needs --kind volumetric --linear (got --kind surface)"),
@@ -145,7 +153,7 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   std::string err;
   ASSERT_EQ(
       run("accuracy --quick --quiet --organs aorta --kinds volumetric,hybrid --nodes 1000 --no-validation "
-          "--no-vessel --volume-term-variants --out '" +
+          "--no-vessel --volume-term-variants --train-sites 1 --out '" +
               out.string() + "'",
           &err),
       0)
@@ -161,8 +169,12 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   EXPECT_LT(o["support_nodes"].get<int>(), 800 / 2);  // a bed, not the whole vessel
   EXPECT_NE(o["notes"].dump().find("hybrid kind left out"), std::string::npos) << o["notes"].dump();
   ASSERT_EQ(o["models"].size(), 2u);  // volumetric (linear), default and calibrated; no hybrid row
+  // --train-sites 1: the fit trains on the second site alone, the first is held out
+  EXPECT_EQ(o["train_sites"], nlohmann::json::array({1}));
   for (const auto& m : o["models"]) {
     EXPECT_EQ(m["base"], "volumetric");
+    for (const auto& c : m["cases"])
+      if (c.contains("train")) EXPECT_EQ(c["train"].get<bool>(), c["site"].get<int>() == 1) << c.dump();
     if (m["calibrated"].get<bool>()) continue;
     EXPECT_GT(m["held_out_mean_rms_pct"].get<double>(), 0.0);
     EXPECT_LT(m["held_out_mean_rms_pct"].get<double>(), 10.0);

@@ -97,7 +97,8 @@ struct Options {
   /// by M, M position gathers in flight per entry (gather_batch is then not used). The same arithmetic
   /// per model (physics_tests HdModels.*: bit for bit). Needs a batch that shares its spring parameters
   /// (copies of one model with their own loads; node parameters may differ) and the grid kernel:
-  /// GpuError otherwise. UNMEASURED on a device (docs/gpu.md): off until measured.
+  /// GpuError otherwise. Measured slower (8,448 real kidneys, H200 fp64: M = 2 477 µs, M = 4 793, against
+  /// 414 per substep: the shared table stays in L2, and M models' registers cost occupancy): off.
   int models_per_thread = 0;
   /// Packed spring table (docs/gpu.md, "Packed table"; pack_spring_table): each table entry one 32-bit
   /// word -- the other end's offset from its row's node and a class of (L0, k, k', 1/k) -- instead of
@@ -105,7 +106,10 @@ struct Options {
   /// the classes from L1; the same values, so the same results (physics_tests PackedTable.*). Where the
   /// batch shares its springs and the table fits (2^16 classes at most, offsets in the other bits);
   /// otherwise the unpacked table runs and pack_report() says why. Grid kernel only, not with
-  /// models_per_thread > 1 (GpuError). UNMEASURED on a device (docs/gpu.md): off until measured.
+  /// models_per_thread > 1 (GpuError). Measured (H100, docs/gpu-measurements.md): faster beyond one wave
+  /// (1M-node tube fp64 86.0 against 119.0 µs per substep, 16M 1,192 against 1,739, 8,448 real kidneys 388
+  /// against 418), slower in one wave (1,200-node tube 5.66 against 5.40): off by default; turn it on for
+  /// models beyond about 10^5 nodes or large batches.
   bool packed_table = false;
 };
 
