@@ -567,7 +567,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
           sum_mean += mean_pct, max_mean = std::max(max_mean, mean_pct);
           max_rms = std::max(max_rms, 100 * e.rel(e.rms));
         }
-        if (static_cast<std::size_t>(c.site_index) >= train_sites) {  // sites no training load touched
+        if (std::find(train_sites.begin(), train_sites.end(), static_cast<int>(c.site_index)) ==
+            train_sites.end()) {  // sites no training load touched
           sum_rms_rel_sites += e.rel(e.rms);
           n_sites += 1;
         }

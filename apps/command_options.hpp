@@ -69,7 +69,7 @@ inline const OptionSpec kTrainForce{
     .value = "F[,F...]",
     .unit = "N",
     .def = "0.5, or the smallest of --forces",
-    .help = "the load(s) of the two training sites (among the forces); every other case is held out"};
+    .help = "the load(s) of the training sites (among the forces); every other case is held out"};
 inline const OptionSpec kTrainSites{
     .name = "train-sites",
     .value = "I[,I...]",

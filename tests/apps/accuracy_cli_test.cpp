@@ -173,8 +173,11 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   EXPECT_EQ(o["train_sites"], nlohmann::json::array({1}));
   for (const auto& m : o["models"]) {
     EXPECT_EQ(m["base"], "volumetric");
-    for (const auto& c : m["cases"])
-      if (c.contains("train")) EXPECT_EQ(c["train"].get<bool>(), c["site"].get<int>() == 1) << c.dump();
+    for (const auto& c : m["cases"]) {
+      if (c.contains("train")) {
+        EXPECT_EQ(c["train"].get<bool>(), c["site"].get<int>() == 1) << c.dump();
+      }
+    }
     if (m["calibrated"].get<bool>()) continue;
     EXPECT_GT(m["held_out_mean_rms_pct"].get<double>(), 0.0);
     EXPECT_LT(m["held_out_mean_rms_pct"].get<double>(), 10.0);
