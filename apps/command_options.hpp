@@ -75,9 +75,8 @@ inline const OptionSpec kTrainSites{
     .value = "I[,I...]",
     .def = "0,1; --quick: 0",
     .help =
-        "the training sites, by index (0..3; --quick: 0..1); every other site is held out (a site left out "
-        "of "
-        "training scores a choice made on the others: docs/accuracy-calibration.md)"};
+        "the training sites, by index (0..3; --quick: 0..1); every other site is held out (a site left "
+        "out of training scores a choice made on the others: docs/accuracy-calibration.md)"};
 inline const OptionSpec kSiteReadout{
     .name = "site-readout",
     .value = "node|disk-mean",
