@@ -155,6 +155,9 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
             sites.size(), " sites (0..", sites.size() - 1, ")");
   require(train_sites.size() < sites.size() || train_forces.size() < forces.size(),
           "accuracy: --train-sites and --train-force leave no case held out");
+  const auto trains = [&](Index site) {
+    return std::find(train_sites.begin(), train_sites.end(), static_cast<int>(site)) != train_sites.end();
+  };
   json out = {{"organ", o.name},
               {"surface_nodes", o.surface.num_vertices()},
               {"support_nodes", support.size()},
@@ -203,9 +206,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
              {},
              0,
              false};
-      c.train =
-          std::find(train_sites.begin(), train_sites.end(), static_cast<int>(si)) != train_sites.end() &&
-          std::find(train_forces.begin(), train_forces.end(), F) != train_forces.end();
+      c.train = trains(static_cast<Index>(si)) &&
+                std::find(train_forces.begin(), train_forces.end(), F) != train_forces.end();
       bool cached = false;
       note(st, cat(o.name, ": FEM site ", si, ", ", F, " N"));
       MatX3 u_nodes;
@@ -567,8 +569,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
           sum_mean += mean_pct, max_mean = std::max(max_mean, mean_pct);
           max_rms = std::max(max_rms, 100 * e.rel(e.rms));
         }
-        if (std::find(train_sites.begin(), train_sites.end(), static_cast<int>(c.site_index)) ==
-            train_sites.end()) {  // sites no training load touched
+        if (!trains(c.site_index)) {  // sites no training load touched
           sum_rms_rel_sites += e.rel(e.rms);
           n_sites += 1;
         }
