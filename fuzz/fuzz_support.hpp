@@ -25,6 +25,11 @@ namespace medspring::fuzz {
 /// created on first use and removed at exit.
 const std::filesystem::path& scratch_dir();
 
+/// The extension of the scratch file of a target that reads one of several formats through the same source
+/// (mesh_fuzzer.cpp, volume_fuzzer.cpp): defined per target in a generated source (fuzz/CMakeLists.txt,
+/// medspring_fuzz_target's EXT).
+extern const char* const kExtension;
+
 /// Writes `data` to scratch_dir()/"input<ext>" (replacing it) and returns the path.
 std::filesystem::path write_scratch(const std::uint8_t* data, std::size_t size, const std::string& ext);
 
@@ -68,7 +73,7 @@ void decode_framed(const std::uint8_t* data, std::size_t size, const char* magic
 }  // namespace medspring::fuzz
 
 /// Aborts with a message when an accepted result breaks a promise of the API (e.g. a NaN coordinate).
-#define MEDSPRING_FUZZ_CHECK(cond, detail)                                                  \
-  do {                                                                                      \
+#define MEDSPRING_FUZZ_CHECK(cond, detail)                                                 \
+  do {                                                                                     \
     if (!(cond)) ::medspring::fuzz::report_bug("accepted input breaks: " #cond, (detail)); \
   } while (0)

@@ -1,20 +1,17 @@
-// Fuzz target: read_mesh_with_report (io/mesh_io.hpp) on one mesh format, chosen at compile time by
-// MEDSPRING_FUZZ_EXT (".obj", ".stl", ".ply", ".vtp", ".vtk"). The bytes go to a scratch file with that
-// extension. Accepted: IoError / InvalidInput. A result must be a finite mesh with valid indices.
+// Fuzz target: read_mesh_with_report (io/mesh_io.hpp) on one mesh format, chosen at link time by
+// fuzz::kExtension (".obj", ".stl", ".ply", ".vtp", ".vtk": one generated source per target,
+// fuzz/CMakeLists.txt). The bytes go to a scratch file with that extension. Accepted: IoError / InvalidInput.
+// A result must be a finite mesh with valid indices.
 #include <cmath>
 
 #include "fuzz_support.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/io/mesh_io.hpp"
 
-#ifndef MEDSPRING_FUZZ_EXT
-#error "define MEDSPRING_FUZZ_EXT"
-#endif
-
 using namespace medspring;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const auto path = fuzz::write_scratch(data, size, MEDSPRING_FUZZ_EXT);
+  const auto path = fuzz::write_scratch(data, size, fuzz::kExtension);
   MeshReadResult r;
   if (!fuzz::accepts([&] { r = read_mesh_with_report(path); })) return 0;
   const SurfaceMesh& m = r.mesh;

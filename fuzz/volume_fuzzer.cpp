@@ -1,5 +1,5 @@
-// Fuzz target: read_label_volume (io/volume_io.hpp) on one volume format, chosen at compile time by
-// MEDSPRING_FUZZ_EXT (".nii", ".mha", ".nrrd"); a NIfTI input that starts with the gzip magic is
+// Fuzz target: read_label_volume (io/volume_io.hpp) on one volume format, chosen at link time by
+// fuzz::kExtension (".nii", ".mha", ".nrrd"); a NIfTI input that starts with the gzip magic is
 // written as ".nii.gz". Accepted: IoError / InvalidInput. A result must be a non-empty volume whose
 // data size matches its dims, with finite positive spacing, a finite origin and an orthonormal
 // direction.
@@ -9,14 +9,10 @@
 #include "medspring/core/check.hpp"
 #include "medspring/io/volume_io.hpp"
 
-#ifndef MEDSPRING_FUZZ_EXT
-#error "define MEDSPRING_FUZZ_EXT"
-#endif
-
 using namespace medspring;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  std::string ext = MEDSPRING_FUZZ_EXT;
+  std::string ext = fuzz::kExtension;
   if (ext == ".nii" && size >= 2 && data[0] == 0x1f && data[1] == 0x8b) ext = ".nii.gz";
   const auto path = fuzz::write_scratch(data, size, ext);
   LabelVolume v;
@@ -26,8 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   MEDSPRING_FUZZ_CHECK(v.data.size() == v.size(), cat(v.data.size(), " values"));
   MEDSPRING_FUZZ_CHECK(v.spacing.allFinite() && v.spacing.minCoeff() > 0, "spacing");
   MEDSPRING_FUZZ_CHECK(v.origin.allFinite(), "origin");
-  MEDSPRING_FUZZ_CHECK(v.direction.allFinite() &&
-                           (v.direction.transpose() * v.direction - Mat3::Identity()).norm() < 1e-3,
-                       "direction is not a rotation");
+  MEDSPRING_FUZZ_CHECK(
+      v.direction.allFinite() && (v.direction.transpose() * v.direction - Mat3::Identity()).norm() < 1e-3,
+      "direction is not a rotation");
   return 0;
 }

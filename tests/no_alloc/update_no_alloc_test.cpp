@@ -228,9 +228,10 @@ TEST(UpdateNoAllocation, VolumetricKidneyWithThinTetTerms) {
   for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
     if (body->rest_surface()(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
   ASSERT_EQ(sites.size(), 4u);
-  // 2,000 counted updates (five rounds over the four sites after the warm-up): the thin-tetrahedron step is
-  // ~25x the plain volumetric one, and 10,000 updates made this the slowest test of the plain suite (91 s)
-  expect_no_allocation("volumetric_thin_tet", body, sites, 0, StableStep::Bound, 2000);
+  // 400 counted updates (one round over the four sites after the two-round warm-up): the thin-tetrahedron
+  // step is ~25x the plain volumetric one. 10,000 updates took 91 s, 2,000 still 23 s of the CI's two
+  // cores (docs/reliability.md, "Build time in CI").
+  expect_no_allocation("volumetric_thin_tet", body, sites, 0, StableStep::Bound, 400);
 #else
   GTEST_SKIP() << "built without the fem layer (TetGen)";
 #endif
