@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # CI step after scripts/test.sh (.ci/run; issue 9): the C++ test suite built with clang 14 at -O1 under
-# AddressSanitizer + UndefinedBehaviorSanitizer, then every fuzz target for a short, bounded time.
+# AddressSanitizer + UndefinedBehaviorSanitizer (without UBSan's null, pointer-overflow and object-size checks,
+# which ASan covers: MEDSPRING_SANITIZER_FLAGS, docs/reliability.md), then every fuzz target for a short,
+# bounded time.
 # One tree (${BUILD_DIR:-build-asan}) serves both: MEDSPRING_SANITIZE + MEDSPRING_FUZZ compile the
 # libraries once with ASan/UBSan (the parsing code also with libFuzzer's coverage hooks), the tests and the
 # fuzz binaries link against them. Any sanitizer report, failed test or fuzz crash fails the step.

@@ -15,11 +15,13 @@ flags=(-std=c++20 -O3 -DNDEBUG -fexceptions -I"$root/include" -I/usr/include/eig
 # Eigen and the standard headers, precompiled once with the same flags (about a second of each of the ~60
 # compiles; the rest is template instantiation, which a precompiled header does not save)
 pch="$build/obj/pch.hpp"
-if [[ ! -f "$pch.pch" || "$here/build.sh" -nt "$pch.pch" ]]; then
+# (made again when this script or emscripten is newer: a header precompiled by another compiler is refused)
+if [[ ! -f "$pch.pch" || "$here/build.sh" -nt "$pch.pch" || "$(readlink -f "$(command -v em++)")" -nt "$pch.pch" ]]; then
   printf '%s\n' '#include <Eigen/Dense>' '#include <Eigen/Sparse>' '#include <algorithm>' '#include <cmath>' \
     '#include <functional>' '#include <memory>' '#include <sstream>' '#include <stdexcept>' '#include <string>' \
     '#include <vector>' > "$pch"
-  em++ "${flags[@]}" -x c++-header "$pch" -o "$pch.pch.tmp" && mv "$pch.pch.tmp" "$pch.pch"
+  em++ "${flags[@]}" -x c++-header "$pch" -o "$pch.pch.tmp"
+  mv "$pch.pch.tmp" "$pch.pch"
 fi
 flags+=(-include-pch "$pch.pch")
 objs=()
