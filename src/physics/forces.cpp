@@ -122,14 +122,21 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
     const bool comp = m.compression.size() > 0, fused = compression_fused(m);
     double* trows = comp ? crows + kCompressionRowsPerNode * n : nullptr;  // the traces after the blocks
     double sv, ct = 0.0;
+    // single precision (Model::volume_f32, volume_f32.hpp): this pass too, bound included
+    const bool f32 = m.volume_f32 && local->f32 && (fused || !comp);
     if (fused) {
       double* s = trows + n;  // m_i^-1/2, 0 on a fixed node
       for (Index i = 0; i < n; ++i)
         s[i] = m.fixed[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
-      sv = add_volume_and_compression_forces_inc(m.volume, X, Fo, local->scratch + n, s, trows, n);
+      sv = f32 ? add_volume_and_compression_forces_inc_f32(*m.volume_f32, X, Fo, local->f32,
+                                                           local->scratch + n, s, trows)
+               : add_volume_and_compression_forces_inc(m.volume, X, Fo, local->scratch + n, s, trows, n);
       double tm = 0.0;
       for (Index i = 0; i < n; ++i) tm = trows[i] > tm ? trows[i] : tm;
       ct = tm / w2;
+    } else if (f32) {
+      sv = add_volume_and_compression_forces_inc_f32(*m.volume_f32, X, Fo, local->f32, local->scratch + n,
+                                                     nullptr, nullptr);
     } else {
       sv = add_volume_forces_inc(m.volume, X, Fo, local->scratch + n);
       if (comp)

@@ -33,6 +33,10 @@ inline F4 zxy(F4 a) {
 inline F4 splat(float s) {
   return F4{s, s, s, s};
 }
+inline F4 with_w(F4 a, float w) {  // a with its fourth lane set to w
+  a[3] = w;
+  return a;
+}
 #else
 struct F4 {
   float v[4];
@@ -58,6 +62,10 @@ inline F4 zxy(F4 a) {
 }
 inline F4 splat(float s) {
   return {{s, s, s, s}};
+}
+inline F4 with_w(F4 a, float w) {
+  a.v[3] = w;
+  return a;
 }
 #endif
 
@@ -93,16 +101,29 @@ inline float max_f(float a, float b) {
 #endif
 }
 
+// The outputs of the pass with the stable step's bound (Stiff): the records' 1 / G0, the increments
+// (s_t - 1)+ per record (doubles, for volume_row_max), and the largest s_t so far.
+struct StiffOut {
+  const float* iG0;
+  double* inc;
+  float sv;
+};
+
 // The tetrahedron's forces: f_k = s (6 dV/dx_k), s = -alpha (6V - 6V0) - kc h'(J) / 6 (tet_record with Comp,
 // compression_dh6, in float). u: the displacement mirror (4 floats a node), g: the force mirror.
-template <bool Comp, bool Diff>
-[[gnu::always_inline]] inline void record_f32(const VolumeTermsF32::Record& r, const float* u, float* g) {
+// With Stiff, also the stable step's bound of tet_record with Stiff and Local (record t's curvature growth
+// s_t, into so), and with Comp the compression bound's traces (compression_trace): u's fourth float holds
+// m_i^-1/2 and g's fourth float gathers the traces (the forces' fourth lane is set to them).
+template <bool Comp, bool Diff, bool Stiff = false>
+[[gnu::always_inline]] inline void record_f32(const VolumeTermsF32::Record& r, const float* u, float* g,
+                                              StiffOut* so = nullptr, std::size_t t = 0) {
   const F4 u0 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[0]));
+  const F4 u1 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[1]));
+  const F4 u2 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[2]));
+  const F4 u3 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[3]));
   const F4 E0 = ld(r.E[0]), E1 = ld(r.E[1]), E2 = ld(r.E[2]);
-  const F4 D0 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[1])) - u0;
-  const F4 D1 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[2])) - u0;
-  const F4 D2 = ld(u + 4 * static_cast<std::ptrdiff_t>(r.n[3])) - u0;
-  const F4 e0 = E0 + D0, e1 = E1 + D1, e2 = E2 + D2;  // fourth lanes: alpha, 6 V0, kc / 6 (u's is 0)
+  const F4 D0 = u1 - u0, D1 = u2 - u0, D2 = u3 - u0;
+  const F4 e0 = E0 + D0, e1 = E1 + D1, e2 = E2 + D2;  // fourth lanes: not used (alpha, 6 V0, kc / 6 are E's)
   const F4 c0 = cross(e1, e2), c1 = cross(e2, e0), c2 = cross(e0, e1);
   const float alpha = E0[3], V06 = E1[3];
   float dv6;  // 6V - 6V0
@@ -111,20 +132,47 @@ template <bool Comp, bool Diff>
   else
     dv6 = dot3(e0, c0) - V06;
   float s = -alpha * dv6;
+  [[maybe_unused]] float W = 0.0f, rr = 0.0f, d1 = 0.0f;
   if constexpr (Comp) {  // compression_dh6, compression_scalar
     constexpr float jm = static_cast<float>(kCompressionJMin), d2m = 1.0f / (jm * jm) - 1.0f;
     const float kc6 = E2[3];
     const float lo = (jm - 1.0f) * V06;
     const float d = max_f(min_f(dv6, 0.0f), lo);
     const float bl = min_f(dv6 - lo, 0.0f);
-    const float W = V06 + d;
-    const float rr = 1.0f / (V06 * W);
-    s += -kc6 * (rr * (d2m * bl * W - d * d));
+    W = V06 + d;
+    rr = 1.0f / (V06 * W);
+    d1 = rr * (d2m * bl * W - d * d);
+    s += -kc6 * d1;
   }
   const F4 S = splat(s);
   const F4 F1 = S * c0, F2 = S * c1, F3 = S * c2;
   const F4 F0 = -(F1 + F2 + F3);
-  const F4 Fk[4] = {F0, F1, F2, F3};
+  F4 Fk[4] = {F0, F1, F2, F3};
+  if constexpr (Stiff) {  // tet_record with Stiff and Local: |dV/dx|^2 + |V - V0| L_max / 2 over its rest
+                          // value
+    const F4 cs = c0 + c1 + c2;  // -6 dV/dx of corner a
+    const float gg = dot3(c0, c0) + dot3(c1, c1) + dot3(c2, c2) + dot3(cs, cs);
+    float l2 = max_f(max_f(dot3(e0, e0), dot3(e1, e1)), dot3(e2, e2));
+    l2 = max_f(max_f(l2, dot3(e1 - e0, e1 - e0)), max_f(dot3(e2 - e1, e2 - e1), dot3(e0 - e2, e0 - e2)));
+    const float sq = std::sqrt(l2);
+    const float q = (gg * (1.0f / 36.0f) + std::abs(dv6) * sq * (1.0f / 12.0f)) * so->iG0[t];
+    so->inc[t] = static_cast<double>(max_f(q - 1.0f, 0.0f));  // (s_t - 1)+; NaN gives 0, as the double pass
+    so->sv = max_f(q, so->sv);                                // a NaN q leaves sv (the double pass's branch)
+    float tr[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    if constexpr (Comp) {  // compression_trace
+      const float kc6 = E2[3];
+      const float iJ = V06 * V06 * rr;
+      const float a = 36.0f * kc6 * (W * rr) * max_f(iJ * iJ - 1.0f, 0.0f);
+      const float hb = std::abs(kc6 * d1) * sq;
+      const float gn[4] = {std::sqrt(dot3(cs, cs)) * (1.0f / 6.0f), std::sqrt(dot3(c0, c0)) * (1.0f / 6.0f),
+                           std::sqrt(dot3(c1, c1)) * (1.0f / 6.0f), std::sqrt(dot3(c2, c2)) * (1.0f / 6.0f)};
+      const float sk[4] = {u0[3], u1[3], u2[3], u3[3]};
+      const float Ss = sk[0] + sk[1] + sk[2] + sk[3];
+      const float sigma = sk[0] * gn[0] + sk[1] * gn[1] + sk[2] * gn[2] + sk[3] * gn[3];
+      for (int k = 0; k < 4; ++k) tr[k] = sk[k] * (a * sigma * gn[k] + 3.0f * hb * (Ss - sk[k]));
+    }
+    for (int k = 0; k < 4; ++k) Fk[k] = with_w(Fk[k], tr[k]);
+  }
   for (int k = 0; k < 4; ++k) {
     float* o = g + 4 * static_cast<std::ptrdiff_t>(r.n[k]);
     st(o, ld(o) + Fk[k]);
@@ -166,8 +214,19 @@ inline F8 dot8(const F8 (&a)[3], const F8 (&b)[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-template <bool Comp, bool Diff>
-[[gnu::always_inline]] inline void records8_f32(const VolumeTermsF32::Record* r, const float* u, float* g) {
+inline F8 sqrt8(F8 a) {
+  return (F8)_mm256_sqrt_ps((__m256)a);
+}
+inline F8 abs8(F8 a) {
+  return (F8)_mm256_andnot_ps(_mm256_set1_ps(-0.0f), (__m256)a);
+}
+
+// record_f32 for the eight records r[0..8) (record i0 onwards), lane-wise; with Stiff, svv gathers the
+// largest s_t lane by lane.
+template <bool Comp, bool Diff, bool Stiff = false>
+[[gnu::always_inline]] inline void records8_f32(const VolumeTermsF32::Record* r, const float* u, float* g,
+                                                StiffOut* so = nullptr, std::size_t i0 = 0,
+                                                F8* svv = nullptr) {
   std::ptrdiff_t n[4][8];
   for (int k = 0; k < 4; ++k)
     for (int j = 0; j < 8; ++j) n[k][j] = 4 * static_cast<std::ptrdiff_t>(r[j].n[k]);
@@ -205,28 +264,61 @@ template <bool Comp, bool Diff>
     dv6 = dot8(e[0], c[0]) - V06;
   }
   F8 s = -alpha * dv6;
+  [[maybe_unused]] F8 W{}, rr{}, d1{};
   if constexpr (Comp) {
     constexpr float jm = static_cast<float>(kCompressionJMin), d2m = 1.0f / (jm * jm) - 1.0f;
     const F8 zero{}, kc6 = E[2][3];
     const F8 lo = (jm - 1.0f) * V06;
     const F8 d = max8(min8(dv6, zero), lo);
     const F8 bl = min8(dv6 - lo, zero);
-    const F8 W = V06 + d;
-    const F8 rr = 1.0f / (V06 * W);
-    s += -kc6 * (rr * (d2m * bl * W - d * d));
+    W = V06 + d;
+    rr = 1.0f / (V06 * W);
+    d1 = rr * (d2m * bl * W - d * d);
+    s += -kc6 * d1;
   }
-  F8 Fk[4][3];
+  F8 Fk[4][4];
   for (int d = 0; d < 3; ++d) {
     Fk[1][d] = s * c[0][d];
     Fk[2][d] = s * c[1][d];
     Fk[3][d] = s * c[2][d];
     Fk[0][d] = -(Fk[1][d] + Fk[2][d] + Fk[3][d]);
   }
-  const __m256 z = _mm256_setzero_ps();
+  for (int k = 0; k < 4; ++k) Fk[k][3] = F8{};
+  if constexpr (Stiff) {  // record_f32's bound, lane-wise
+    F8 cs[3];
+    for (int d = 0; d < 3; ++d) cs[d] = c[0][d] + c[1][d] + c[2][d];
+    const F8 g0 = dot8(cs, cs), g1 = dot8(c[0], c[0]), g2 = dot8(c[1], c[1]), g3 = dot8(c[2], c[2]);
+    F8 l2 = max8(max8(dot8(e[0], e[0]), dot8(e[1], e[1])), dot8(e[2], e[2]));
+    for (int k = 0; k < 3; ++k) {
+      const int j = (k + 1) % 3;
+      F8 q[3];
+      for (int d = 0; d < 3; ++d) q[d] = e[j][d] - e[k][d];
+      l2 = max8(l2, dot8(q, q));
+    }
+    const F8 sq = sqrt8(l2);
+    const F8 q = ((g0 + g1 + g2 + g3) * (1.0f / 36.0f) + abs8(dv6) * sq * (1.0f / 12.0f)) *
+                 (F8)_mm256_loadu_ps(so->iG0 + i0);
+    const F8 st1 = max8(q - 1.0f, F8{});
+    _mm256_storeu_pd(so->inc + i0, _mm256_cvtps_pd(_mm256_castps256_ps128((__m256)st1)));
+    _mm256_storeu_pd(so->inc + i0 + 4, _mm256_cvtps_pd(_mm256_extractf128_ps((__m256)st1, 1)));
+    *svv = max8(q, *svv);
+    if constexpr (Comp) {  // compression_trace
+      const F8 kc6 = E[2][3];
+      const F8 iJ = V06 * V06 * rr;
+      const F8 a = 36.0f * kc6 * (W * rr) * max8(iJ * iJ - 1.0f, F8{});
+      const F8 hb = abs8(kc6 * d1) * sq;
+      const F8 gn[4] = {sqrt8(g0) * (1.0f / 6.0f), sqrt8(g1) * (1.0f / 6.0f), sqrt8(g2) * (1.0f / 6.0f),
+                        sqrt8(g3) * (1.0f / 6.0f)};
+      const F8 Ss = U[0][3] + U[1][3] + U[2][3] + U[3][3];
+      const F8 as = a * (U[0][3] * gn[0] + U[1][3] * gn[1] + U[2][3] * gn[2] + U[3][3] * gn[3]);
+      for (int k = 0; k < 4; ++k) Fk[k][3] = U[k][3] * (as * gn[k] + 3.0f * hb * (Ss - U[k][3]));
+    }
+  }
   for (int k = 0; k < 4; ++k) {
     const __m256 t0 = _mm256_unpacklo_ps((__m256)Fk[k][0], (__m256)Fk[k][1]);
     const __m256 t1 = _mm256_unpackhi_ps((__m256)Fk[k][0], (__m256)Fk[k][1]);
-    const __m256 t2 = _mm256_unpacklo_ps((__m256)Fk[k][2], z), t3 = _mm256_unpackhi_ps((__m256)Fk[k][2], z);
+    const __m256 t2 = _mm256_unpacklo_ps((__m256)Fk[k][2], (__m256)Fk[k][3]);
+    const __m256 t3 = _mm256_unpackhi_ps((__m256)Fk[k][2], (__m256)Fk[k][3]);
     const __m256 q[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
                          _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
     for (int j = 0; j < 4; ++j) {  // records j and j + 4, in the records' order
@@ -243,16 +335,20 @@ template <bool Comp, bool Diff>
 
 std::atomic<bool> g_f32_x8{true};
 
-template <bool Comp, bool Diff>
-void records_f32(const VolumeTermsF32& F, const float* u, float* g) {
+template <bool Comp, bool Diff, bool Stiff = false>
+void records_f32(const VolumeTermsF32& F, const float* u, float* g, StiffOut* so = nullptr) {
   const VolumeTermsF32::Record* r = F.rec.data();
   const std::size_t nr = F.rec.size();
   std::size_t i = 0;
 #if defined(MEDSPRING_VOLUME_F32_X8)
-  if (g_f32_x8.load(std::memory_order_relaxed))
-    for (; i + 8 <= nr; i += 8) records8_f32<Comp, Diff>(r + i, u, g);
+  if (g_f32_x8.load(std::memory_order_relaxed)) {
+    F8 svv = F8{} + 1.0f;
+    for (; i + 8 <= nr; i += 8) records8_f32<Comp, Diff, Stiff>(r + i, u, g, so, i, &svv);
+    if constexpr (Stiff)
+      for (int l = 0; l < 8; ++l) so->sv = max_f(svv[l], so->sv);
+  }
 #endif
-  for (; i < nr; ++i) record_f32<Comp, Diff>(r[i], u, g);
+  for (; i < nr; ++i) record_f32<Comp, Diff, Stiff>(r[i], u, g, so, i);
 }
 
 }  // namespace
@@ -266,6 +362,7 @@ void build_volume_f32(const VolumeTerms& T, const MatX3& x0, VolumeTermsF32& F) 
   for (Index i = 0; i < F.nodes; ++i)
     for (int d = 0; d < 3; ++d) F.x0[static_cast<std::size_t>(3 * i + d)] = x0(i, d);
   F.rec.resize(T.packed.size());
+  F.iG0.resize(T.packed.size());
   for (std::size_t t = 0; t < T.packed.size(); ++t) {
     const VolumeTerms::Packed& p = T.packed[t];
     VolumeTermsF32::Record& r = F.rec[t];
@@ -287,6 +384,7 @@ void build_volume_f32(const VolumeTerms& T, const MatX3& x0, VolumeTermsF32& F) 
     r.E[0][3] = static_cast<float>(p.alpha);
     r.E[1][3] = v06;
     r.E[2][3] = comp ? static_cast<float>(p.kc6) : 0.0f;
+    F.iG0[t] = static_cast<float>(p.iG0);
   }
 }
 
@@ -310,6 +408,34 @@ void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double
     diff ? records_f32<false, true>(F, u, g) : records_f32<false, false>(F, u, g);
   for (Index i = 0; i < n; ++i)
     for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
+}
+
+double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const double* x, double* f,
+                                                 float* scratch, double* inc, const double* s,
+                                                 double* trows) {
+  require(F.iG0.size() == F.rec.size(), "volume terms (single precision): no rest curvatures");
+  const Index n = F.nodes;
+  float* u = scratch;
+  float* g = scratch + 4 * n;
+  const double* x0 = F.x0.data();
+  for (Index i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      u[4 * i + d] = static_cast<float>(x[3 * i + d] - x0[3 * i + d]);
+      g[4 * i + d] = 0.0f;
+    }
+    u[4 * i + 3] = F.comp ? static_cast<float>(s[i]) : 0.0f;  // m_i^-1/2 for the traces
+    g[4 * i + 3] = 0.0f;
+  }
+  StiffOut so{F.iG0.data(), inc, 1.0f};
+  if (F.comp)
+    records_f32<true, true, true>(F, u, g, &so);
+  else
+    records_f32<false, true, true>(F, u, g, &so);
+  for (Index i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
+  if (F.comp)
+    for (Index i = 0; i < n; ++i) trows[i] = static_cast<double>(g[4 * i + 3]);
+  return static_cast<double>(so.sv);
 }
 
 void set_volume_single_precision(Model& m, bool on) {

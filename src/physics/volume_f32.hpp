@@ -33,6 +33,7 @@ struct VolumeTermsF32 {
     float E[3][4];
   };
   std::vector<Record> rec;
+  std::vector<float> iG0;  // per record: 1 / G0, the rest curvature's inverse (VolumeTerms::Packed::iG0)
   std::vector<double> x0;  // (3 #N) rest positions, mm: the pass's float mirror holds x - x0
   Index nodes = 0;
   bool comp = false;  // fused compression terms (VolumeTerms::kc not empty)
@@ -51,6 +52,17 @@ inline constexpr Index kVolumeF32ScratchPerNode = 8;
 /// double pass computes it (for the benchmark's A/B and the precision test).
 void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
                                            float* scratch, bool diff = true);
+
+/// add_volume_and_compression_forces_inc (compression_rows.hpp; add_volume_forces_inc where F has no fused
+/// compression terms) in single precision: the pass of a frame's last sub-step, with the stable step's bound.
+/// Adds the forces at x to f as add_volume_and_compression_forces_f32 does; writes inc[t] = (s_t - 1)+ per
+/// term (#T doubles, the local stiffening's increments, for volume_row_max) and returns the terms' largest
+/// curvature growth max(1, s_t), both from the float kernel. With fused compression terms, also writes the
+/// traces of their bound's blocks to trows (#N doubles, overwritten), `s`: m_i^-1/2 per node (0 on a fixed
+/// node); without, `s` and `trows` are not used. The forces, increments and traces are those of the double
+/// pass to float rounding (about 1e-6 relative): far inside the stable step's safety factor (0.8).
+double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const double* x, double* f,
+                                                 float* scratch, double* inc, const double* s, double* trows);
 
 namespace detail {
 /// Whether the pass uses GCC's vector extensions (else the same arithmetic on 4-float structs).

@@ -18,17 +18,7 @@
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/stability.hpp"
-
-namespace medspring::detail {  // the force pass with the stiffening optional (src/physics/spring_kernel.hpp)
-double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening);
-struct LocalStiffening {
-  double* scratch;
-  double frame_dt;
-  double safety;
-};
-double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3& f, bool stiffening,
-                       const LocalStiffening* local);
-}  // namespace medspring::detail
+#include "spring_kernel.hpp"  // the force pass with the stiffening optional, detail::LocalStiffening
 
 using namespace medspring;
 
