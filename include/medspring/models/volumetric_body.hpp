@@ -63,10 +63,11 @@ ThinTetMode parse_thin_tet_mode(const std::string& text);
 inline ThinTetMode parse_enum(const std::string& text, ThinTetMode*) {
   return parse_thin_tet_mode(text);
 }
-/// Precision of the volume pass of the sub-steps without the stable step's bound (issue 23,
-/// docs/volumetric-speed.md "A single-precision volume pass"; physics/model.hpp set_volume_single_precision):
-/// float (the default since issue 23, h23b: the volume and compression terms' forces of those sub-steps in
-/// single precision; the frame's last sub-step, energies, Hessians and static solves stay double) or double.
+/// Precision of the volume passes of the symplectic sub-steps (issue 23, docs/volumetric-speed.md "A
+/// single-precision volume pass"; physics/model.hpp set_volume_single_precision): float (the default since
+/// issue 23, h23b: the volume and compression terms' forces in single precision, and since the session of
+/// 2026-11-27 evening also the frame's last sub-step with the stable step's bound; the inversion count,
+/// energies, Hessians and static solves stay double) or double.
 /// Model packages store it from version 10 (earlier packages read double, what they were run with).
 enum class VolumePrecision { Double, Float };
 const char* to_string(VolumePrecision p);
@@ -179,8 +180,8 @@ void for_each_field(S& s, V&& v) {
         .at_most(1),
     s.thin_tet_q_max);
   v(ParamSpec{"volume_precision", "",
-              "volume pass of the sub-steps without the stable step's bound: float, or double (the former "
-              "default; docs/volumetric-speed.md)"},
+              "volume passes of the sub-steps, the stable step's bound included: float, or double (the "
+              "former default; docs/volumetric-speed.md)"},
     s.volume_precision);
   v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
   v(ParamSpec{"E_kPa", "kPa", "Young's modulus, from model.material"}.positive().set_by_program(), s.E_kPa);

@@ -100,8 +100,8 @@ void finalize(Model& model);
 
 /// The opt-in single-precision volume pass (issue 23, docs/volumetric-speed.md "A single-precision volume
 /// pass"): with `on`, builds model.volume_f32 from the finalized volume terms (and their fused compression
-/// terms), so that the symplectic step's sub-steps without the stable step's bound evaluate them in float
-/// (the frame's last sub-step, the energies, Hessians and static solves stay double); off clears it.
+/// terms), so that the symplectic step's sub-steps evaluate them in float, the frame's last with the stable
+/// step's bound (the inversion count, the energies, Hessians and static solves stay double); off clears it.
 /// Throws InvalidInput naming the model when `on` and it has no finalized volume terms.
 void set_volume_single_precision(Model& model, bool on);
 
