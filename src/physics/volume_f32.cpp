@@ -388,53 +388,56 @@ void build_volume_f32(const VolumeTerms& T, const MatX3& x0, VolumeTermsF32& F) 
   }
 }
 
-void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
-                                           float* scratch, bool diff) {
-  const Index n = F.nodes;
-  float* u = scratch;
-  float* g = scratch + 4 * n;
+namespace {
+
+// The pass's mirrors: u = x - x0 in float (4 floats a node, the fourth w[i], or 0 without w) and g = 0.
+void fill_mirrors(const VolumeTermsF32& F, const double* x, float* u, float* g, const double* w) {
   const double* x0 = F.x0.data();
-  for (Index i = 0; i < n; ++i) {
+  for (Index i = 0; i < F.nodes; ++i) {
     for (int d = 0; d < 3; ++d) {
       u[4 * i + d] = static_cast<float>(x[3 * i + d] - x0[3 * i + d]);
       g[4 * i + d] = 0.0f;
     }
-    u[4 * i + 3] = 0.0f;
+    u[4 * i + 3] = w ? static_cast<float>(w[i]) : 0.0f;
     g[4 * i + 3] = 0.0f;
   }
+}
+
+// f += the forces of the force mirror g.
+void add_forces(const VolumeTermsF32& F, const float* g, double* f) {
+  for (Index i = 0; i < F.nodes; ++i)
+    for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
+}
+
+}  // namespace
+
+void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
+                                           float* scratch, bool diff) {
+  float* u = scratch;
+  float* g = scratch + 4 * F.nodes;
+  fill_mirrors(F, x, u, g, nullptr);
   if (F.comp)
     diff ? records_f32<true, true>(F, u, g) : records_f32<true, false>(F, u, g);
   else
     diff ? records_f32<false, true>(F, u, g) : records_f32<false, false>(F, u, g);
-  for (Index i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
+  add_forces(F, g, f);
 }
 
 double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const double* x, double* f,
                                                  float* scratch, double* inc, const double* s,
                                                  double* trows) {
   require(F.iG0.size() == F.rec.size(), "volume terms (single precision): no rest curvatures");
-  const Index n = F.nodes;
   float* u = scratch;
-  float* g = scratch + 4 * n;
-  const double* x0 = F.x0.data();
-  for (Index i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) {
-      u[4 * i + d] = static_cast<float>(x[3 * i + d] - x0[3 * i + d]);
-      g[4 * i + d] = 0.0f;
-    }
-    u[4 * i + 3] = F.comp ? static_cast<float>(s[i]) : 0.0f;  // m_i^-1/2 for the traces
-    g[4 * i + 3] = 0.0f;
-  }
+  float* g = scratch + 4 * F.nodes;
+  fill_mirrors(F, x, u, g, F.comp ? s : nullptr);  // m_i^-1/2 in u's fourth floats, for the traces
   StiffOut so{F.iG0.data(), inc, 1.0f};
   if (F.comp)
     records_f32<true, true, true>(F, u, g, &so);
   else
     records_f32<false, true, true>(F, u, g, &so);
-  for (Index i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
+  add_forces(F, g, f);
   if (F.comp)
-    for (Index i = 0; i < n; ++i) trows[i] = static_cast<double>(g[4 * i + 3]);
+    for (Index i = 0; i < F.nodes; ++i) trows[i] = static_cast<double>(g[4 * i + 3]);
   return static_cast<double>(so.sv);
 }
 
