@@ -331,12 +331,13 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   // phases 10 + p: phase p with the volume passes one tetrahedron at a time (their vector path off)
   // phases 20 / 21: phase 6 in single precision (volume_f32.hpp), 6V - 6V0 from the displacement differences
   // (the default) / as a difference of the two volumes; 22: phase 20 one record at a time (4-float vectors,
-  // not eight records per 256-bit vector)
+  // not eight records per 256-bit vector); 23 / 24: phase 9 in single precision (the default's last sub-step
+  // since 2026-11-27, add_volume_and_compression_forces_inc_f32), eight records per vector / one at a time
   const int phase = st.range(0) >= 20 ? static_cast<int>(st.range(0)) : static_cast<int>(st.range(0)) % 10;
   const bool simd_was = detail::set_volume_simd(st.range(0) < 10 || st.range(0) >= 20);
   VolumeTermsF32 vf;
   std::vector<float> fscratch;
-  const bool x8_was = detail::set_volume_f32_x8(phase != 22);
+  const bool x8_was = detail::set_volume_f32_x8(phase != 22 && phase != 24);
   if (phase >= 20) {
     build_volume_f32(m.volume, m.x0, vf);
     fscratch.resize(static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()));
@@ -362,8 +363,11 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
       benchmark::DoNotOptimize(add_volume_and_compression_forces_inc(m.volume, x.data(), f.data(),
                                                                      rows.data() + m.num_nodes(), msq.data(),
                                                                      crows.data(), m.num_nodes()));
-    if (phase >= 20)
+    if (phase >= 20 && phase <= 22)
       add_volume_and_compression_forces_f32(vf, x.data(), f.data(), fscratch.data(), phase != 21);
+    if (phase >= 23)
+      benchmark::DoNotOptimize(add_volume_and_compression_forces_inc_f32(
+          vf, x.data(), f.data(), fscratch.data(), rows.data() + m.num_nodes(), msq.data(), crows.data()));
     benchmark::DoNotOptimize(f.data());
   }
   detail::set_volume_simd(simd_was);
@@ -379,6 +383,8 @@ BENCHMARK(BM_VolumetricKidneyPhases)
     ->Arg(20)
     ->Arg(21)
     ->Arg(22)
+    ->Arg(23)
+    ->Arg(24)
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
