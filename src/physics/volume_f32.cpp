@@ -148,8 +148,8 @@ template <bool Comp, bool Diff, bool Stiff = false>
   const F4 F1 = S * c0, F2 = S * c1, F3 = S * c2;
   const F4 F0 = -(F1 + F2 + F3);
   F4 Fk[4] = {F0, F1, F2, F3};
-  if constexpr (Stiff) {  // tet_record with Stiff and Local: |dV/dx|^2 + |V - V0| L_max / 2 over its rest
-                          // value
+  // tet_record's bound: s_t = (|dV/dx|^2 + |V - V0| L_max / 2) / G0
+  if constexpr (Stiff) {
     const F4 cs = c0 + c1 + c2;  // -6 dV/dx of corner a
     const float gg = dot3(c0, c0) + dot3(c1, c1) + dot3(c2, c2) + dot3(cs, cs);
     float l2 = max_f(max_f(dot3(e0, e0), dot3(e1, e1)), dot3(e2, e2));
