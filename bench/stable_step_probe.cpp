@@ -17,6 +17,8 @@
 //     rules bound and refresh (and with both, each also with the single-precision volume pass,
 //     VolumetricSettings::volume_precision, the default since h23b) alternated frame by frame; wall and CPU
 //     time per frame. Without --frame-times the model has the default settings (float since h23b).
+//     --springs both: each float simulation also with the gather pass's springs in double (the float
+//     springs' A/B, spring_f32.hpp; the float springs are the default since the session of 2026-11-27 night).
 #include <time.h>  // clock_gettime(CLOCK_THREAD_CPUTIME_ID): the frame's CPU time, robust to a loaded machine
 
 #include <algorithm>
@@ -37,6 +39,11 @@
 #include "medspring/physics/integrators.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/sim/simulation.hpp"
+
+namespace medspring::detail {  // the float springs of the gather pass on or off
+                               // (src/physics/spring_gather.hpp)
+bool set_gather_springs_f32(bool on);
+}  // namespace medspring::detail
 
 namespace {
 
@@ -78,6 +85,7 @@ int main(int argc, char** argv) {
   long steps = 10000, frame_times = 0;
   int lanczos = 300, bisect = 7;
   std::string precision = "double";
+  bool springs_both = false;
   for (int a = 1; a + 1 < argc; a += 2) {
     if (!std::strcmp(argv[a], "--nodes"))
       nodes = static_cast<Index>(std::atol(argv[a + 1]));
@@ -97,6 +105,8 @@ int main(int argc, char** argv) {
              (!std::strcmp(argv[a + 1], "double") || !std::strcmp(argv[a + 1], "float") ||
               !std::strcmp(argv[a + 1], "both")))
       precision = argv[a + 1];
+    else if (!std::strcmp(argv[a], "--springs") && !std::strcmp(argv[a + 1], "both"))
+      springs_both = true;
     else {
       std::fprintf(stderr, "stable_step_probe: unknown option %s\n", argv[a]);
       return 2;
@@ -124,14 +134,21 @@ int main(int argc, char** argv) {
       if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
     const double load = loads.empty() ? 0.5 : loads.front();
     std::vector<std::unique_ptr<Simulation>> sims;
+    std::vector<bool> fsprings;  // per simulation: the gather pass's springs in float (the default)
     for (const auto& b : bodies)
-      for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
-        SimulationSettings ss;
-        ss.normals = false;
-        ss.local.enabled = false;
-        ss.step.stable_step = rule;
-        sims.push_back(std::make_unique<Simulation>(b, ss));
-        sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
+      for (const bool fs : {true, false}) {
+        if (!fs && !(springs_both && b->model().volume_f32)) continue;
+        for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
+          SimulationSettings ss;
+          ss.normals = false;
+          ss.local.enabled = false;
+          ss.step.stable_step = rule;
+          sims.push_back(std::make_unique<Simulation>(b, ss));
+          sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
+          fsprings.push_back(fs);
+          // double springs: the float body is the last, so its names are the last two
+          if (!fs) names.push_back(names[names.size() - 2] + " ds");
+        }
       }
     const int ns = static_cast<int>(sims.size());
     std::vector<std::vector<double>> us(static_cast<std::size_t>(2 * ns));  // wall, then CPU time, of each
@@ -142,6 +159,7 @@ int main(int argc, char** argv) {
     };
     for (long f = 0; f < frame_times; ++f)
       for (int k = 0; k < ns; ++k) {
+        medspring::detail::set_gather_springs_f32(fsprings[static_cast<std::size_t>(k)]);
         const double c0 = cpu_us();
         const auto t0 = std::chrono::steady_clock::now();
         sims[static_cast<std::size_t>(k)]->update();

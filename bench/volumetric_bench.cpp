@@ -28,8 +28,11 @@ double add_volume_and_compression_forces_inc(const VolumeTerms& T, const double*
                                              const double* s, double* trows, Index nodes);
 namespace detail {  // the volume passes' vector path on or off (src/physics/compression_rows.hpp)
 bool set_volume_simd(bool on);
+// the float springs of the gather pass on or off (src/physics/spring_gather.hpp)
+bool set_gather_springs_f32(bool on);
 }  // namespace detail
 }  // namespace medspring
+#include "../src/physics/spring_f32.hpp"  // the float springs (internal to the physics layer)
 #include "../src/physics/volume_f32.hpp"  // the single-precision volume pass (internal to the physics layer)
 
 namespace {
@@ -194,6 +197,20 @@ BENCHMARK(BM_VolumetricKidneyUpdateF32)
     ->Args({2000, 0})
     ->Args({2000, 250})
     ->Unit(benchmark::kMicrosecond);
+// BM_VolumetricKidneyUpdateF32 (mass scaling off) with the gather pass's springs in double (second Arg 0: the
+// float volume passes alone, as before the session of 2026-11-27 night) and in float (1, the default since
+// then; spring_f32.hpp): the A/B of the float springs in one process.
+void BM_VolumetricKidneyUpdateF32Springs(benchmark::State& st) {
+  const bool was = detail::set_gather_springs_f32(st.range(1) != 0);
+  kidney_update(st, static_cast<Index>(st.range(0)), 0.0, 0.5, VolumePrecision::Float);
+  detail::set_gather_springs_f32(was);
+}
+BENCHMARK(BM_VolumetricKidneyUpdateF32Springs)
+    ->Args({500, 0})
+    ->Args({500, 1})
+    ->Args({2000, 0})
+    ->Args({2000, 1})
+    ->Unit(benchmark::kMicrosecond);
 // The opt-in tangent refresh (StepSettings::stable_step = refresh), with the volume pass in double and with
 // the single-precision pass (the default since h23b); mass scaling off. The mean includes the frames
 // that carry one product of the re-estimate.
@@ -332,7 +349,9 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   // phases 20 / 21: phase 6 in single precision (volume_f32.hpp), 6V - 6V0 from the displacement differences
   // (the default) / as a difference of the two volumes; 22: phase 20 one record at a time (4-float vectors,
   // not eight records per 256-bit vector); 23 / 24: phase 9 in single precision (the default's last sub-step
-  // since 2026-11-27, add_volume_and_compression_forces_inc_f32), eight records per vector / one at a time
+  // since 2026-11-27, add_volume_and_compression_forces_inc_f32), eight records per vector / one at a time;
+  // 25 / 26: the float springs' slots (spring_slots_f32, without the stiffening: the default's sub-steps
+  // since 2026-11-27 night), eight springs per vector / one at a time; 27: phase 25 with the stiffening
   const int phase = st.range(0) >= 20 ? static_cast<int>(st.range(0)) : static_cast<int>(st.range(0)) % 10;
   const bool simd_was = detail::set_volume_simd(st.range(0) < 10 || st.range(0) >= 20);
   VolumeTermsF32 vf;
@@ -340,8 +359,11 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   const bool x8_was = detail::set_volume_f32_x8(phase != 22 && phase != 24);
   if (phase >= 20) {
     build_volume_f32(m.volume, m.x0, vf);
+    detail::build_springs_f32(m, vf.springs);
     fscratch.resize(static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()));
   }
+  std::vector<float> slots(phase >= 25 ? static_cast<std::size_t>(4 * (2 * m.num_springs() + 1)) : 0);
+  if (phase >= 25) detail::fill_displacements_f32(vf, x.data(), fscratch.data());
   double row_max = 0;
   for (auto _ : st) {
     if (phase == 0) detail::internal_forces(springs_only, x, fe, f, false);
@@ -365,7 +387,10 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
                                                                      crows.data(), m.num_nodes()));
     if (phase >= 20 && phase <= 22)
       add_volume_and_compression_forces_f32(vf, x.data(), f.data(), fscratch.data(), phase != 21);
-    if (phase >= 23)
+    if (phase >= 25)
+      benchmark::DoNotOptimize(
+          detail::spring_slots_f32(vf.springs, fscratch.data(), slots.data(), phase == 27, phase != 26));
+    if (phase == 23 || phase == 24)
       benchmark::DoNotOptimize(add_volume_and_compression_forces_inc_f32(
           vf, x.data(), f.data(), fscratch.data(), rows.data() + m.num_nodes(), msq.data(), crows.data()));
     benchmark::DoNotOptimize(f.data());
@@ -385,6 +410,9 @@ BENCHMARK(BM_VolumetricKidneyPhases)
     ->Arg(22)
     ->Arg(23)
     ->Arg(24)
+    ->Arg(25)
+    ->Arg(26)
+    ->Arg(27)
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

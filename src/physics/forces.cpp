@@ -98,6 +98,11 @@ double with_compression(const Model& m, const double* x, double* f, bool stiffen
 
 namespace detail {
 
+bool volume_f32_substep(const Model& m, const LocalStiffening* local) {
+  return m.volume.size() > 0 && m.volume_f32 && local && local->f32 &&
+         (compression_fused(m) || m.compression.size() == 0);
+}
+
 namespace {
 
 // The volume terms' forces and stiffening, then the compression terms' forces and bound (its scratch after
@@ -156,8 +161,7 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
     if (fused) return R + fused_compression_blocks(m.volume, X, trows + n, crows, n) / w2;
     return R + compression_block_bound(m.compression, X, m.mass.data(), m.fixed.data(), crows, n) / w2;
   }
-  if (!stiffening && m.volume_f32 && local && local->f32 &&
-      (compression_fused(m) || m.compression.size() == 0)) {
+  if (!stiffening && volume_f32_substep(m, local)) {
     // opt-in single precision (set_volume_single_precision; volume_f32.hpp): the sub-steps without the bound
     add_volume_and_compression_forces_f32(*m.volume_f32, X, Fo, local->f32);
     return stiff;

@@ -3,6 +3,7 @@
 #include "spring_gather.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -13,6 +14,7 @@
 #endif
 
 #include "medspring/physics/kernels.hpp"
+#include "spring_f32.hpp"
 #include "spring_kernel.hpp"
 
 namespace medspring::detail {
@@ -98,6 +100,8 @@ constexpr Index kBlock = 128;
 // aligned), so the type asks for 8-byte alignment only.
 typedef double v4d __attribute__((
     vector_size(32), aligned(8)));  // springs per block of the spring pass (the gathered vectors stay in L1)
+// Four floats of a float slot (spring_f32.hpp): 16 bytes, at half the byte offset of the double slot.
+typedef float v4f __attribute__((vector_size(16), aligned(4)));
 
 // Spring vectors e = x_j - x_i of springs [0, nb) of a block. Scalar loads: the gather instructions
 // the vectoriser would use here are slower than them.
@@ -250,9 +254,10 @@ double slot_forces(const Model& m, const double* __restrict x, double* __restric
 
 // The node pass: every node's force (load, return spring, with Vol the volume terms' force already in
 // st.f, its slots in increasing spring index) into st.f and, for a free node, the symplectic update (§2.1)
-// in place: the spring pass has read every position already. Returns 0, or 1 / 2 after restoring the free
-// nodes already advanced.
-template <int W, bool Guard, bool Vol>
+// in place: the spring pass has read every position already. With F32 the slots are floats
+// (spring_slots_f32), summed in float and added to the rest once. Returns 0, or 1 / 2 after restoring the
+// free nodes already advanced.
+template <int W, bool Guard, bool Vol, bool F32 = false>
 int node_pass(const Model& m, State& st, double h, double vmax2) {
   const SpringGather& Gt = m.gather;
   const Index n = m.num_nodes();
@@ -284,9 +289,19 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
     if constexpr (Vol) acc += v4d{G[q], G[q + 1], G[q + 2], 0.0};
 #endif
     const Index* r = row + static_cast<std::size_t>(a) * W;
+    if constexpr (F32) {
+      // four partial sums: a chain of W / 4 dependent adds instead of W (the chain of one sum bounded the
+      // pass: its adds' latency, not the loads)
+      v4f p[4] = {};
 #pragma GCC unroll 16
-    for (int k = 0; k < W; ++k) acc += *reinterpret_cast<const v4d*>(F4 + r[k]);
-    for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += *reinterpret_cast<const v4d*>(F4 + xs[e]);
+      for (int k = 0; k < W; ++k) p[k & 3] += *reinterpret_cast<const v4f*>(F4 + (r[k] >> 1));
+      for (Index e = xb[a]; e < xb[a + 1]; ++e) p[0] += *reinterpret_cast<const v4f*>(F4 + (xs[e] >> 1));
+      acc += __builtin_convertvector((p[0] + p[1]) + (p[2] + p[3]), v4d);
+    } else {
+#pragma GCC unroll 16
+      for (int k = 0; k < W; ++k) acc += *reinterpret_cast<const v4d*>(F4 + r[k]);
+      for (Index e = xb[a]; e < xb[a + 1]; ++e) acc += *reinterpret_cast<const v4d*>(F4 + xs[e]);
+    }
 #if defined(MEDSPRING_FUSED_SPRING_PASS)
     if constexpr (Vol) {  // the next node loads its row of G: no masked store over it (see below)
       _mm_storeu_pd(G + q, _mm256_castpd256_pd128(v4r(acc)));
@@ -340,28 +355,54 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
   return 0;
 }
 
-template <bool Guard, bool Vol>
+template <bool Guard, bool Vol, bool F32 = false>
 int node_pass_any(const Model& m, State& st, double h, double vmax2) {
   switch (m.gather.width) {
     case 4:
-      return node_pass<4, Guard, Vol>(m, st, h, vmax2);
+      return node_pass<4, Guard, Vol, F32>(m, st, h, vmax2);
     case 6:
-      return node_pass<6, Guard, Vol>(m, st, h, vmax2);
+      return node_pass<6, Guard, Vol, F32>(m, st, h, vmax2);
     case 8:
-      return node_pass<8, Guard, Vol>(m, st, h, vmax2);
+      return node_pass<8, Guard, Vol, F32>(m, st, h, vmax2);
     case 10:
-      return node_pass<10, Guard, Vol>(m, st, h, vmax2);
+      return node_pass<10, Guard, Vol, F32>(m, st, h, vmax2);
     case 12:
-      return node_pass<12, Guard, Vol>(m, st, h, vmax2);
+      return node_pass<12, Guard, Vol, F32>(m, st, h, vmax2);
     default:
-      return node_pass<16, Guard, Vol>(m, st, h, vmax2);
+      return node_pass<16, Guard, Vol, F32>(m, st, h, vmax2);
   }
+}
+
+std::atomic<bool> g_springs_f32{true};
+
+// A sub-step with the springs in float (spring_f32.hpp): with the float volume pass, whose displacement
+// mirror they read. Without the stable step's bound the volume pass runs first and leaves the mirror; with
+// it, the springs' stiffening enters the volume pass's rule, so the springs fill the mirror themselves and
+// run first (the volume pass refills it: the same numbers).
+int gather_substep_f32(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening,
+                       const LocalStiffening* local) {
+  const VolumeTermsF32& V = *m.volume_f32;
+  float* F = reinterpret_cast<float*>(st.spring_force.data());
+  st.f.setZero();
+  if (stiffening) {
+    fill_displacements_f32(V, st.x.data(), local->f32);
+    const double ss = spring_slots_f32(V.springs, local->f32, F, true);
+    st.stiffening = volume_forces(m, st.x.data(), st.f.data(), true, ss, local);
+  } else {
+    volume_forces(m, st.x.data(), st.f.data(), false, 1.0, local);  // the float pass: u in local->f32
+    spring_slots_f32(V.springs, local->f32, F, false);
+  }
+  return guard ? node_pass_any<true, true, true>(m, st, h, vmax2)
+               : node_pass_any<false, true, true>(m, st, h, vmax2);
 }
 
 }  // namespace
 
 int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening,
                    const LocalStiffening* local) {
+  if (volume_f32_substep(m, local) && g_springs_f32.load(std::memory_order_relaxed) &&
+      m.volume_f32->springs.size() == static_cast<std::size_t>(m.num_springs()))
+    return gather_substep_f32(m, st, h, vmax2, guard, stiffening, local);
   double* F = st.spring_force.data();
   const double ss = stiffening ? slot_forces<true>(m, st.x.data(), F) : slot_forces<false>(m, st.x.data(), F);
   if (m.volume.size() > 0 || m.compression.size() > 0) {  // the volume (and compression) terms' forces
@@ -373,6 +414,10 @@ int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard
   }
   if (stiffening) st.stiffening = ss;
   return guard ? node_pass_any<true, false>(m, st, h, vmax2) : node_pass_any<false, false>(m, st, h, vmax2);
+}
+
+bool set_gather_springs_f32(bool on) {
+  return g_springs_f32.exchange(on);
 }
 
 }  // namespace medspring::detail

@@ -3,7 +3,9 @@
 // gathers its slots in increasing spring index, adds its return spring and load and is advanced at once.
 // The node sums have the same terms in the same order as the scatter pass (forces.cpp): a spring's force
 // on its end j is the negated force on its end i, as `f_j -= f` there. Equal to rounding (FMA
-// contraction may differ between the vectorised and the scalar loop).
+// contraction may differ between the vectorised and the scalar loop). With the float volume pass
+// (Model::volume_f32) the slots are float (spring_f32.hpp) and each node sums them in four partial sums:
+// equal to the double pass to float rounding (docs/volumetric-speed.md "Float springs").
 #pragma once
 
 #include <cstdint>
@@ -37,5 +39,10 @@ int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard
 /// non-negative double, start at 0).
 void spring_chunk_forces(const Model& m, Index s0, Index nb, const double* x, double* F, bool stiffening,
                          std::int64_t& stiff_bits);
+
+/// With the float volume pass (Model::volume_f32) the springs of every sub-step are in float too
+/// (spring_f32.hpp; on by default); off: in double, as without it. For the benchmark's and the tests' A/B.
+/// Returns the former setting.
+bool set_gather_springs_f32(bool on);
 
 }  // namespace medspring::detail

@@ -135,5 +135,8 @@ double internal_forces(const Model& m, const MatX3& x, const MatX3& f_ext, MatX3
 /// of springs (s_springs = `stiff`) and terms together by the rule above (s_springs without `stiffening`).
 double volume_forces(const Model& m, const double* X, double* Fo, bool stiffening, double stiff,
                      const LocalStiffening* local);
+/// Whether the volume pass of a sub-step without the stable step's bound takes the float pass
+/// (Model::volume_f32, volume_f32.hpp): it then leaves the displacement mirror in local->f32.
+bool volume_f32_substep(const Model& m, const LocalStiffening* local);
 
 }  // namespace medspring::detail

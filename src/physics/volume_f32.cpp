@@ -12,9 +12,11 @@
 #include <immintrin.h>
 #endif
 
+#include "f32_lanes.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/model.hpp"
+#include "spring_f32.hpp"
 
 namespace medspring {
 
@@ -184,42 +186,15 @@ template <bool Comp, bool Diff, bool Stiff = false>
 // Eight records at a time in 256-bit vectors (one tetrahedron a lane): the corners' and the records' 4-float
 // rows transposed in registers (no gathers), the arithmetic of record_f32 lane-wise (the same operations: the
 // same numbers), the forces transposed back to 4-float rows and added record by record, corner by corner.
-typedef float F8 __attribute__((vector_size(32)));
-
-// Rows p[0..8) (4 floats each) -> their x, y, z and w as 8-lane vectors.
-[[gnu::always_inline]] inline void rows_to_lanes(const float* const (&p)[8], F8 (&o)[4]) {
-  __m256 a[4];
-  for (int j = 0; j < 4; ++j)
-    a[j] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p[j])), _mm_loadu_ps(p[j + 4]), 1);
-  const __m256 t0 = _mm256_unpacklo_ps(a[0], a[1]), t1 = _mm256_unpacklo_ps(a[2], a[3]);
-  const __m256 t2 = _mm256_unpackhi_ps(a[0], a[1]), t3 = _mm256_unpackhi_ps(a[2], a[3]);
-  o[0] = (F8)_mm256_shuffle_ps(t0, t1, 0x44);
-  o[1] = (F8)_mm256_shuffle_ps(t0, t1, 0xEE);
-  o[2] = (F8)_mm256_shuffle_ps(t2, t3, 0x44);
-  o[3] = (F8)_mm256_shuffle_ps(t2, t3, 0xEE);
-}
-
-inline F8 min8(F8 a, F8 b) {
-  return (F8)_mm256_min_ps((__m256)a, (__m256)b);
-}  // a < b ? a : b (minss)
-inline F8 max8(F8 a, F8 b) {
-  return (F8)_mm256_max_ps((__m256)a, (__m256)b);
-}
-inline void cross8(const F8 (&a)[3], const F8 (&b)[3], F8 (&w)[3]) {
-  w[0] = a[1] * b[2] - a[2] * b[1];
-  w[1] = a[2] * b[0] - a[0] * b[2];
-  w[2] = a[0] * b[1] - a[1] * b[0];
-}
-inline F8 dot8(const F8 (&a)[3], const F8 (&b)[3]) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-inline F8 sqrt8(F8 a) {
-  return (F8)_mm256_sqrt_ps((__m256)a);
-}
-inline F8 abs8(F8 a) {
-  return (F8)_mm256_andnot_ps(_mm256_set1_ps(-0.0f), (__m256)a);
-}
+using detail::lanes::abs8;
+using detail::lanes::cross8;
+using detail::lanes::dot8;
+using detail::lanes::F8;
+using detail::lanes::lanes_to_rows;
+using detail::lanes::max8;
+using detail::lanes::min8;
+using detail::lanes::rows_to_lanes;
+using detail::lanes::sqrt8;
 
 // record_f32 for the eight records r[0..8) (record i0 onwards), lane-wise; with Stiff, svv gathers the
 // largest s_t lane by lane.
@@ -315,12 +290,8 @@ template <bool Comp, bool Diff, bool Stiff = false>
     }
   }
   for (int k = 0; k < 4; ++k) {
-    const __m256 t0 = _mm256_unpacklo_ps((__m256)Fk[k][0], (__m256)Fk[k][1]);
-    const __m256 t1 = _mm256_unpackhi_ps((__m256)Fk[k][0], (__m256)Fk[k][1]);
-    const __m256 t2 = _mm256_unpacklo_ps((__m256)Fk[k][2], (__m256)Fk[k][3]);
-    const __m256 t3 = _mm256_unpackhi_ps((__m256)Fk[k][2], (__m256)Fk[k][3]);
-    const __m256 q[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
-                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+    __m256 q[4];
+    lanes_to_rows(Fk[k], q);
     for (int j = 0; j < 4; ++j) {  // records j and j + 4, in the records' order
       float* o = g + n[k][j];
       _mm_storeu_ps(o, _mm_add_ps(_mm_loadu_ps(o), _mm256_castps256_ps128(q[j])));
@@ -451,6 +422,7 @@ void set_volume_single_precision(Model& m, bool on) {
           ")");
   auto F = std::make_shared<VolumeTermsF32>();
   build_volume_f32(m.volume, m.x0, *F);
+  detail::build_springs_f32(m, F->springs);  // the gather pass's float slots (spring_f32.hpp)
   m.volume_f32 = std::move(F);
 }
 

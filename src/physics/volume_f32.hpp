@@ -14,6 +14,7 @@
 // edges, so the rest state is exactly force-free.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -21,6 +22,19 @@
 #include "medspring/physics/volume_terms.hpp"
 
 namespace medspring {
+
+/// The model's springs in single precision, in its spring order (structure of arrays: eight springs load
+/// with one vector load per field), for the gather pass's float slots (spring_f32.hpp). As the volume
+/// records, each spring is written relative to its rest edge: e = E + (u_j - u_i), so that L - L0 comes
+/// from the displacements without cancellation (spring_f32.cpp).
+struct SpringsF32 {
+  std::vector<std::int32_t> i, j;  // the ends
+  std::vector<float> ex, ey, ez;   // the rest edge E = x0_j - x0_i rounded to float (mm)
+  std::vector<float> le;           // |E| of the rounded edge, in float (mm)
+  std::vector<float> c;          // |x0_j - x0_i| - L0 in double, rounded (mm; 0 for a spring at rest length)
+  std::vector<float> k, kp, ik;  // k (N/mm), k' (N/mm^3) and 1/k (0 for k = 0)
+  std::size_t size() const { return i.size(); }
+};
 
 /// Single-precision rest data of a model's volume terms (and its fused compression terms), built from the
 /// finalized VolumeTerms (its `packed` order) and the rest positions.
@@ -36,7 +50,8 @@ struct VolumeTermsF32 {
   std::vector<float> iG0;  // per record: 1 / G0, the rest curvature's inverse (VolumeTerms::Packed::iG0)
   std::vector<double> x0;  // (3 #N) rest positions, mm: the pass's float mirror holds x - x0
   Index nodes = 0;
-  bool comp = false;  // fused compression terms (VolumeTerms::kc not empty)
+  bool comp = false;   // fused compression terms (VolumeTerms::kc not empty)
+  SpringsF32 springs;  // the model's springs (set_volume_single_precision; empty from build_volume_f32 alone)
 };
 
 /// Builds F from T (finalized; fused compression terms taken when T.kc is set) and the rest positions x0.

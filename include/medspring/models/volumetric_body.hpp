@@ -66,8 +66,9 @@ inline ThinTetMode parse_enum(const std::string& text, ThinTetMode*) {
 /// Precision of the volume passes of the symplectic sub-steps (issue 23, docs/volumetric-speed.md "A
 /// single-precision volume pass"; physics/model.hpp set_volume_single_precision): float (the default since
 /// issue 23, h23b: the volume and compression terms' forces in single precision, and since the session of
-/// 2026-11-27 evening also the frame's last sub-step with the stable step's bound; the inversion count,
-/// energies, Hessians and static solves stay double) or double.
+/// 2026-11-27 evening also the frame's last sub-step with the stable step's bound; since the session of
+/// 2026-11-27 night the springs of every sub-step too, docs/volumetric-speed.md "Float springs"; the
+/// inversion count, energies, Hessians and static solves stay double) or double.
 /// Model packages store it from version 10 (earlier packages read double, what they were run with).
 enum class VolumePrecision { Double, Float };
 const char* to_string(VolumePrecision p);
@@ -120,7 +121,7 @@ struct VolumetricSettings {
   MeshSizing mesh_sizing = MeshSizing::Volume;  // how that build sizes the interior
   ThinTetMode thin_tet = ThinTetMode::Off;      // correction term on thin tetrahedra (opt-in)
   double thin_tet_q_max = kDefaultThinTetQMax;  // ... on those with h_min / L_max below this, (0, 1]
-  VolumePrecision volume_precision = VolumePrecision::Float;  // the sub-steps' volume pass (double: opt-in)
+  VolumePrecision volume_precision = VolumePrecision::Float;  // the sub-steps' volume and spring passes
 };
 
 /// The declaration of VolumetricSettings (core/params.hpp): the "parameters" of a volumetric model in a
@@ -180,8 +181,8 @@ void for_each_field(S& s, V&& v) {
         .at_most(1),
     s.thin_tet_q_max);
   v(ParamSpec{"volume_precision", "",
-              "volume passes of the sub-steps, the stable step's bound included: float, or double (the "
-              "former default; docs/volumetric-speed.md)"},
+              "volume and spring passes of the sub-steps, the stable step's bound included: float, or "
+              "double (the former default; docs/volumetric-speed.md)"},
     s.volume_precision);
   v(ParamSpec{"fixed", "", "pinned surface nodes"}, s.fixed);
   v(ParamSpec{"E_kPa", "kPa", "Young's modulus, from model.material"}.positive().set_by_program(), s.E_kPa);
