@@ -351,7 +351,8 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   // not eight records per 256-bit vector); 23 / 24: phase 9 in single precision (the default's last sub-step
   // since 2026-11-27, add_volume_and_compression_forces_inc_f32), eight records per vector / one at a time;
   // 25 / 26: the float springs' slots (spring_slots_f32, without the stiffening: the default's sub-steps
-  // since 2026-11-27 night), eight springs per vector / one at a time; 27: phase 25 with the stiffening
+  // since 2026-11-27 night), eight springs per vector / one at a time; 27: phase 25 with the stiffening; 28:
+  // phase 4 with the float volume pass (count_inverted_f32, the step's count since 2026-11-27 night)
   const int phase = st.range(0) >= 20 ? static_cast<int>(st.range(0)) : static_cast<int>(st.range(0)) % 10;
   const bool simd_was = detail::set_volume_simd(st.range(0) < 10 || st.range(0) >= 20);
   VolumeTermsF32 vf;
@@ -363,7 +364,7 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
     fscratch.resize(static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()));
   }
   std::vector<float> slots(phase >= 25 ? static_cast<std::size_t>(4 * (2 * m.num_springs() + 1)) : 0);
-  if (phase >= 25) detail::fill_displacements_f32(vf, x.data(), fscratch.data());
+  if (phase >= 25 && phase <= 27) detail::fill_displacements_f32(vf, x.data(), fscratch.data());
   double row_max = 0;
   for (auto _ : st) {
     if (phase == 0) detail::internal_forces(springs_only, x, fe, f, false);
@@ -387,7 +388,9 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
                                                                      crows.data(), m.num_nodes()));
     if (phase >= 20 && phase <= 22)
       add_volume_and_compression_forces_f32(vf, x.data(), f.data(), fscratch.data(), phase != 21);
-    if (phase >= 25)
+    if (phase == 28)
+      benchmark::DoNotOptimize(count_inverted_f32(vf, m.volume, x.data(), fscratch.data()));
+    if (phase >= 25 && phase <= 27)
       benchmark::DoNotOptimize(
           detail::spring_slots_f32(vf.springs, fscratch.data(), slots.data(), phase == 27, phase != 26));
     if (phase == 23 || phase == 24)
@@ -413,6 +416,7 @@ BENCHMARK(BM_VolumetricKidneyPhases)
     ->Arg(25)
     ->Arg(26)
     ->Arg(27)
+    ->Arg(28)
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

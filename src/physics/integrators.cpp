@@ -517,7 +517,11 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   if (s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh && local_rule &&
       !par && st.threaded.p && s.substep)
     refine_stiffening(m, st, T, s.safety, rollbacks > 0);  // the stable step's tangent refresh (opt-in)
-  if (m.volume.size() > 0)
+  if (m.volume.size() > 0 && m.volume_f32 &&
+      st.volume_f32.size() == static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()))
+    st.warnings.inverted_elements +=
+        count_inverted_f32(*m.volume_f32, m.volume, st.x.data(), st.volume_f32.data());
+  else if (m.volume.size() > 0)
     st.warnings.inverted_elements += count_inverted(m.volume, st.x);
   else if (m.compression.size() > 0)  // the same tetrahedra: counted once
     st.warnings.inverted_elements += count_inverted(m.compression, st.x);

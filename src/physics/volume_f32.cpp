@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstring>
+#include <limits>
 #include <memory>
 #if defined(__SSE2__)
 #include <immintrin.h>
@@ -306,6 +307,51 @@ template <bool Comp, bool Diff, bool Stiff = false>
 
 std::atomic<bool> g_f32_x8{true};
 
+#if defined(MEDSPRING_VOLUME_F32_X8)
+// count_inverted_f32 for the eight records r[0..8): bit j of `inv` set when record j is inverted for sure,
+// of `amb` when the float 6V cannot decide (within the band, or not finite).
+[[gnu::always_inline]] inline void inverted8(const VolumeTermsF32::Record* r, const float* u, unsigned& inv,
+                                             unsigned& amb) {
+  F8 U[4][4], E[3][4];
+  for (int k = 0; k < 4; ++k) {
+    const float* const p[8] = {
+        u + 4 * static_cast<std::ptrdiff_t>(r[0].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[1].n[k]),
+        u + 4 * static_cast<std::ptrdiff_t>(r[2].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[3].n[k]),
+        u + 4 * static_cast<std::ptrdiff_t>(r[4].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[5].n[k]),
+        u + 4 * static_cast<std::ptrdiff_t>(r[6].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[7].n[k])};
+    rows_to_lanes(p, U[k]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const float* const p[8] = {r[0].E[k], r[1].E[k], r[2].E[k], r[3].E[k],
+                               r[4].E[k], r[5].E[k], r[6].E[k], r[7].E[k]};
+    rows_to_lanes(p, E[k]);
+  }
+  F8 D[3][3], e[3][3], Ek[3][3], a[3];
+  F8 s[4];  // |u_k|_1
+  for (int k = 0; k < 4; ++k) s[k] = abs8(U[k][0]) + abs8(U[k][1]) + abs8(U[k][2]);
+  for (int k = 0; k < 3; ++k) {
+    a[k] = s[k + 1] + s[0];
+    for (int d = 0; d < 3; ++d) {
+      D[k][d] = U[k + 1][d] - U[0][d];
+      Ek[k][d] = E[k][d];
+      e[k][d] = E[k][d] + D[k][d];
+      a[k] += abs8(E[k][d]) + abs8(D[k][d]);  // a_k >= |E_k| + |D_k| + |u_k+1| + |u_0| >= |e_k|
+    }
+  }
+  F8 c0[3], p1[3], p2[3], ab[3];
+  cross8(e[1], e[2], c0);
+  cross8(D[1], e[2], p1);
+  cross8(Ek[1], D[2], p2);
+  for (int d = 0; d < 3; ++d) ab[d] = p1[d] + p2[d];
+  const F8 v6 = E[1][3] + (dot8(D[0], c0) + dot8(Ek[0], ab));  // 6 V0 + (6V - 6V0), record_f32's Diff form
+  // The float 6V is within a few tens of eps_f a0 a1 a2 of the exact 6V of the positions (the roundings of
+  // the displacements, the rest edges and 6 V0, and those of the products): 64 eps_f of it is certain.
+  const F8 band = (64.0f * std::numeric_limits<float>::epsilon()) * (a[0] * a[1] * a[2]);
+  inv = static_cast<unsigned>(_mm256_movemask_ps((__m256)(v6 < -band)));
+  amb = static_cast<unsigned>(_mm256_movemask_ps((__m256)((v6 < -band) | (v6 > band)))) ^ 0xFFu;
+}
+#endif
+
 template <bool Comp, bool Diff, bool Stiff = false>
 void records_f32(const VolumeTermsF32& F, const float* u, float* g, StiffOut* so = nullptr) {
   const VolumeTermsF32::Record* r = F.rec.data();
@@ -410,6 +456,31 @@ double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const 
   if (F.comp)
     for (Index i = 0; i < F.nodes; ++i) trows[i] = static_cast<double>(g[4 * i + 3]);
   return static_cast<double>(so.sv);
+}
+
+std::uint64_t count_inverted_f32(const VolumeTermsF32& F, const VolumeTerms& T, const double* x,
+                                 float* scratch) {
+  require(T.packed.size() == F.rec.size(), "volume terms (single precision): ", F.rec.size(), " records for ",
+          T.packed.size(), " terms");
+  const std::size_t nr = F.rec.size();
+  std::uint64_t n = 0;
+  std::size_t i = 0;
+#if defined(MEDSPRING_VOLUME_F32_X8)
+  if (g_f32_x8.load(std::memory_order_relaxed)) {
+    detail::fill_displacements_f32(F, x, scratch);
+    for (; i + 8 <= nr; i += 8) {
+      unsigned inv = 0, amb = 0;
+      inverted8(F.rec.data() + i, scratch, inv, amb);
+      n += static_cast<std::uint64_t>(__builtin_popcount(inv));
+      for (; amb != 0; amb &= amb - 1)  // the records the float 6V cannot decide: the double test
+        n += detail::packed_record_inverted(T, x, i + static_cast<std::size_t>(__builtin_ctz(amb)));
+    }
+  }
+#else
+  (void)scratch;
+#endif
+  for (; i < nr; ++i) n += detail::packed_record_inverted(T, x, i);
+  return n;
 }
 
 void set_volume_single_precision(Model& m, bool on) {

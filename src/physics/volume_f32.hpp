@@ -79,7 +79,18 @@ void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double
 double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const double* x, double* f,
                                                  float* scratch, double* inc, const double* s, double* trows);
 
+/// count_inverted (volume_terms.hpp) of T at x (flat 3 #N), F built from T: the same count, eight records a
+/// vector in float where compiled (GCC, AVX) from the displacement mirror (`scratch`: 4 #N floats at least,
+/// overwritten). A record whose float 6V is within a rounding band of 0 (64 eps_f times the product of its
+/// edges' bounds, far above the float error), or not finite, is decided by count_inverted's own double test;
+/// the others' signs are certain. Elsewhere, and for the tail, the double test. For the step's count at the
+/// end of each frame (integrators.cpp) with the float volume pass.
+std::uint64_t count_inverted_f32(const VolumeTermsF32& F, const VolumeTerms& T, const double* x,
+                                 float* scratch);
+
 namespace detail {
+/// count_inverted's test of packed record i of T at X (flat 3 #N): 6V <= 0 or not finite (volume_terms.cpp).
+bool packed_record_inverted(const VolumeTerms& T, const double* X, std::size_t i);
 /// Whether the pass uses GCC's vector extensions (else the same arithmetic on 4-float structs).
 bool volume_f32_vector_compiled();
 /// Eight records at a time in 256-bit vectors (GCC, AVX targets; on by default) or one at a time: for the

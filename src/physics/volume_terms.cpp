@@ -9,6 +9,7 @@
 #include "medspring/core/check.hpp"
 #include "medspring/physics/compression_terms.hpp"
 #include "tet_kernel.hpp"
+#include "volume_f32.hpp"  // detail::packed_record_inverted
 
 namespace medspring {
 
@@ -315,6 +316,25 @@ double volume_energy(const VolumeTerms& T, const MatX3& x) {
   return e;
 }
 
+namespace detail {
+// Whether packed record i of T is inverted or flat (6V <= 0, or not finite) at X (flat 3 #N):
+// count_inverted's test, one record (the float count's fallback, count_inverted_f32, calls it for the records
+// it cannot decide).
+bool packed_record_inverted(const VolumeTerms& T, const double* X, std::size_t i) {
+  const auto& r = T.packed[i];
+  const double* a = X + 3 * static_cast<std::ptrdiff_t>(r.n[0]);
+  double e[3][3];
+  for (int k = 0; k < 3; ++k) {
+    const double* p = X + 3 * static_cast<std::ptrdiff_t>(r.n[k + 1]);
+    for (int d = 0; d < 3; ++d) e[k][d] = p[d] - a[d];
+  }
+  const double v6 = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) +
+                    e[0][1] * (e[1][2] * e[2][0] - e[1][0] * e[2][2]) +
+                    e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+  return !(v6 > 0);
+}
+}  // namespace detail
+
 // Scalar loads: GCC's vectorisation of this loop emulates the corner gathers with inserts and extracts and
 // was 3-4x slower (56 against ~15 us at 2,000 nodes, BM_VolumetricKidneyPhases/4).
 #if defined(__GNUC__) && !defined(__clang__)
@@ -325,18 +345,7 @@ count_inverted(const VolumeTerms& T, const MatX3& x) {
   const double* X = x.data();
   std::uint64_t n = 0;
   if (T.packed.size() == static_cast<std::size_t>(T.size())) {  // the packed corners (32-bit, one record)
-    for (const auto& r : T.packed) {
-      const double* a = X + 3 * static_cast<std::ptrdiff_t>(r.n[0]);
-      double e[3][3];
-      for (int k = 0; k < 3; ++k) {
-        const double* p = X + 3 * static_cast<std::ptrdiff_t>(r.n[k + 1]);
-        for (int d = 0; d < 3; ++d) e[k][d] = p[d] - a[d];
-      }
-      const double v6 = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) +
-                        e[0][1] * (e[1][2] * e[2][0] - e[1][0] * e[2][2]) +
-                        e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
-      n += !(v6 > 0);
-    }
+    for (std::size_t i = 0; i < T.packed.size(); ++i) n += detail::packed_record_inverted(T, X, i);
     return n;
   }
   for (Index t = 0; t < T.size(); ++t) {
