@@ -28,6 +28,7 @@
 #include "volumetric_fixtures.hpp"
 
 using namespace medspring;
+using medspring::testing::squeezed;
 
 namespace {
 
@@ -89,13 +90,6 @@ SlotCheck check_slots(const Model& m, const MatX3& x, const std::string& label) 
   std::cout << label << ": max |df| / max |f| " << out.rel_inf << ", worst spring's |df| / bound "
             << out.worst << ", stiffening " << out.stiff32 << " (double " << out.stiff64 << ")\n";
   return out;
-}
-
-MatX3 squeezed(const MatX3& x0, double strain) {
-  MatX3 x = x0;
-  const double cz = x0.col(2).mean();
-  x.col(2) = (x0.col(2).array() - cz) * (1.0 - strain) + cz;
-  return x;
 }
 
 }  // namespace

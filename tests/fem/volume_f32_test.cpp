@@ -32,6 +32,7 @@
 #endif
 
 using namespace medspring;
+using medspring::testing::squeezed;
 
 namespace {
 
@@ -107,14 +108,6 @@ Compared compare(const Model& m, const MatX3& x, bool diff, const std::string& l
   std::cout << label << (diff ? ", displacement form" : ", two volumes") << ": max |df| / max |f| "
             << out.rel_inf << ", worst node's |df| / bound " << out.worst << "\n";
   return out;
-}
-
-// x0 squeezed along z by `strain` about the centroid (the supports keep the organ in place: no rigid shift).
-MatX3 squeezed(const MatX3& x0, double strain) {
-  MatX3 x = x0;
-  const double cz = x0.col(2).mean();
-  x.col(2) = (x0.col(2).array() - cz) * (1.0 - strain) + cz;
-  return x;
 }
 
 }  // namespace

@@ -73,4 +73,12 @@ inline SurfaceMesh box_surface(int n, double L) {
     for (int k = 0; k < 3; ++k) m.F(static_cast<Index>(f), k) = T[f][static_cast<std::size_t>(k)];
   return m;
 }
+
+// x0 squeezed along z by `strain` about the centroid (the supports keep the organ in place: no rigid shift).
+inline MatX3 squeezed(const MatX3& x0, double strain) {
+  MatX3 x = x0;
+  const double cz = x0.col(2).mean();
+  x.col(2) = (x0.col(2).array() - cz) * (1.0 - strain) + cz;
+  return x;
+}
 }  // namespace medspring::testing
