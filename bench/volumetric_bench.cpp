@@ -388,8 +388,7 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
                                                                      crows.data(), m.num_nodes()));
     if (phase >= 20 && phase <= 22)
       add_volume_and_compression_forces_f32(vf, x.data(), f.data(), fscratch.data(), phase != 21);
-    if (phase == 28)
-      benchmark::DoNotOptimize(count_inverted_f32(vf, m.volume, x.data(), fscratch.data()));
+    if (phase == 28) benchmark::DoNotOptimize(count_inverted_f32(vf, m.volume, x.data(), fscratch.data()));
     if (phase >= 25 && phase <= 27)
       benchmark::DoNotOptimize(
           detail::spring_slots_f32(vf.springs, fscratch.data(), slots.data(), phase == 27, phase != 26));
