@@ -134,14 +134,14 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
       for (Index i = 0; i < n; ++i)
         s[i] = m.fixed[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
       sv = f32 ? add_volume_and_compression_forces_inc_f32(*m.volume_f32, X, Fo, local->f32,
-                                                           local->scratch + n, s, trows)
+                                                           local->scratch + n, s, trows, local->par)
                : add_volume_and_compression_forces_inc(m.volume, X, Fo, local->scratch + n, s, trows, n);
       double tm = 0.0;
       for (Index i = 0; i < n; ++i) tm = trows[i] > tm ? trows[i] : tm;
       ct = tm / w2;
     } else if (f32) {
       sv = add_volume_and_compression_forces_inc_f32(*m.volume_f32, X, Fo, local->f32, local->scratch + n,
-                                                     nullptr, nullptr);
+                                                     nullptr, nullptr, local->par);
     } else {
       sv = add_volume_forces_inc(m.volume, X, Fo, local->scratch + n);
       if (comp)
@@ -163,7 +163,7 @@ double volume_and_compression(const Model& m, const double* X, double* Fo, bool 
   }
   if (!stiffening && volume_f32_substep(m, local)) {
     // opt-in single precision (set_volume_single_precision; volume_f32.hpp): the sub-steps without the bound
-    add_volume_and_compression_forces_f32(*m.volume_f32, X, Fo, local->f32);
+    add_volume_and_compression_forces_f32(*m.volume_f32, X, Fo, local->f32, true, local->par);
     return stiff;
   }
   if (!stiffening && compression_fused(m)) {

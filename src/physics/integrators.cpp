@@ -276,12 +276,23 @@ Substep implicit_substep(const Model& m, State& st, const StepSettings& s, doubl
 
 }  // namespace
 
-int effective_threads(const Model& m, const StepSettings& s) {
+namespace {
+
+// Threads of the fused node-range step (threaded_step.hpp): models without bending, volume, compression or
+// thin-tetrahedron terms.
+int fused_threads(const Model& m, const StepSettings& s) {
   if (!threads_supported() || s.threads <= 1 || s.integrator != Integrator::SymplecticEuler ||
       m.bending.size() > 0 || m.volume.size() > 0 || m.compression.size() > 0 || m.thin.size() > 0)
     return 1;
   const Index by_size = m.num_springs() / kMinSpringsPerThread;
   return static_cast<int>(std::max<Index>(1, std::min<Index>(std::min(s.threads, kMaxThreads), by_size)));
+}
+
+}  // namespace
+
+int effective_threads(const Model& m, const StepSettings& s) {
+  const int fused = fused_threads(m, s);
+  return fused > 1 ? fused : volume_threads(m, s);  // the threaded float sub-step (threaded_volume.hpp)
 }
 
 namespace {
@@ -389,7 +400,13 @@ void prepare_step(const Model& m, State& st, const StepSettings& s) {
   if (m.volume_f32 &&
       st.volume_f32.size() != static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()))
     st.volume_f32.assign(static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()), 0.0f);
-  const int T = effective_threads(m, s);
+  const int T = fused_threads(m, s);
+  // the threaded float sub-step of volumetric models (threaded_volume.hpp): its pool and partition
+  if (const int TV = volume_threads(m, s); TV > 1) {
+    if (!st.threaded.p || st.threaded.p->pool.size() != TV)
+      st.threaded.p = std::make_shared<ThreadedStep>(TV);
+    if (!st.threaded.p->volume.matches(m, TV)) st.threaded.p->volume.partition(m, st.threaded.p->pool);
+  }
   if (tangent_refresh_on(m, s) &&
       T <= 1) {  // the stable step's tangent refresh (refine_stiffening): its scratch, sized now
     if (!st.threaded.p) st.threaded.p = std::make_shared<ThreadedStep>(1);
@@ -420,7 +437,7 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st))
     prepare_step(m, st, s);  // a state from make_state(model, symplectic settings): allocates once
   ThreadedStep* par = nullptr;
-  if (s.integrator == Integrator::SymplecticEuler && (effective_threads(m, s) > 1 || fused_serial(m, s))) {
+  if (s.integrator == Integrator::SymplecticEuler && (fused_threads(m, s) > 1 || fused_serial(m, s))) {
     prepare_step(m, st, s);  // allocates only on the first fused step of this state
     par = st.threaded.p.get();
   }
@@ -429,6 +446,10 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
     prepare_step(m, st, s);
   // the gather pass (spring_gather.hpp) for the serial symplectic step of a model that has one
   const bool gather = !par && s.integrator == Integrator::SymplecticEuler && detail::gather_ready(m, st);
+  // the float volume passes on threads (threaded_volume.hpp): a state not prepared for them is, once
+  const int TV = !par && s.integrator == Integrator::SymplecticEuler ? volume_threads(m, s) : 1;
+  if (TV > 1 && (!st.threaded.p || st.threaded.p->pool.size() != TV || !st.threaded.p->volume.matches(m, TV)))
+    prepare_step(m, st, s);
   const double T = s.dt;
   const double vmax2 = s.v_max * s.v_max;
   long subs = 1;
@@ -447,12 +468,14 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   }
   // volume terms: the local stiffening (scratch sized by prepare_step; a state without it gets the global
   // rule)
-  const detail::LocalStiffening local{
-      st.stiff_rows.data(), T, s.safety,
+  const bool f32_scratch =
       m.volume_f32 &&
-              st.volume_f32.size() == static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes())
-          ? st.volume_f32.data()
-          : nullptr};
+      st.volume_f32.size() == static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes());
+  // the threaded step's shares of the float passes (threaded_volume.hpp)
+  const ParallelRecords* par_records =
+      TV > 1 && f32_scratch ? st.threaded.p->volume.records_for(st) : nullptr;
+  const detail::LocalStiffening local{st.stiff_rows.data(), T, s.safety,
+                                      f32_scratch ? st.volume_f32.data() : nullptr, par_records};
   const detail::LocalStiffening* local_rule =
       (m.volume.size() > 0 || m.compression.size() > 0) &&
               st.stiff_rows.size() == stiff_rows_size(m.num_nodes(), m.volume.size(), m.compression.size())
@@ -477,7 +500,10 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
         r = static_cast<Substep>(detail::threaded_substep(m, st, *par, h, vmax2, s.guard, stiffening));
       } else if (gather) {
         refresh_step_coefficients(m, st, h);
-        r = static_cast<Substep>(detail::gather_substep(m, st, h, vmax2, s.guard, stiffening, local_rule));
+        if (par_records && !stiffening && detail::float_substep_applies(m, local_rule))
+          r = static_cast<Substep>(detail::threaded_volume_substep(m, st, *st.threaded.p, h, vmax2, s.guard));
+        else
+          r = static_cast<Substep>(detail::gather_substep(m, st, h, vmax2, s.guard, stiffening, local_rule));
       } else {
         const double stiff = detail::internal_forces(m, st.x, st.f_ext, st.f, stiffening, local_rule);
         if (stiffening) st.stiffening = stiff;
@@ -517,10 +543,9 @@ StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vec
   if (s.integrator == Integrator::SymplecticEuler && s.stable_step == StableStep::Refresh && local_rule &&
       !par && st.threaded.p && s.substep)
     refine_stiffening(m, st, T, s.safety, rollbacks > 0);  // the stable step's tangent refresh (opt-in)
-  if (m.volume.size() > 0 && m.volume_f32 &&
-      st.volume_f32.size() == static_cast<std::size_t>(kVolumeF32ScratchPerNode * m.num_nodes()))
+  if (m.volume.size() > 0 && f32_scratch)
     st.warnings.inverted_elements +=
-        count_inverted_f32(*m.volume_f32, m.volume, st.x.data(), st.volume_f32.data());
+        count_inverted_f32(*m.volume_f32, m.volume, st.x.data(), st.volume_f32.data(), par_records);
   else if (m.volume.size() > 0)
     st.warnings.inverted_elements += count_inverted(m.volume, st.x);
   else if (m.compression.size() > 0)  // the same tetrahedra: counted once

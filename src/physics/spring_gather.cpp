@@ -257,8 +257,11 @@ double slot_forces(const Model& m, const double* __restrict x, double* __restric
 // in place: the spring pass has read every position already. With F32 the slots are floats
 // (spring_slots_f32), summed in float and added to the rest once. Returns 0, or 1 / 2 after restoring the
 // free nodes already advanced.
-template <int W, bool Guard, bool Vol, bool F32 = false>
-int node_pass(const Model& m, State& st, double h, double vmax2) {
+// With VM, the volume terms' force comes from the nvm float force mirrors vm[0 .. nvm) (4 floats a node, in
+// that order; the threaded sub-step, threaded_volume.hpp), not from st.f.
+template <int W, bool Guard, bool Vol, bool F32 = false, bool VM = false>
+int node_pass(const Model& m, State& st, double h, double vmax2, const float* const* vm = nullptr,
+              int nvm = 0) {
   const SpringGather& Gt = m.gather;
   const Index n = m.num_nodes();
   const char* __restrict F4 = reinterpret_cast<const char*>(st.spring_force.data());
@@ -281,13 +284,19 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
     // load and return spring (§1.4) lane-wise from masked loads: hd::return_force's arithmetic
     const v4r xa = _mm256_maskz_loadu_pd(0x7, X + q);
     v4d acc = _mm256_maskz_loadu_pd(0x7, FE + q) - KR[a] * (xa - v4r(_mm256_maskz_loadu_pd(0x7, X0 + q)));
-    if constexpr (Vol) acc += _mm256_maskz_loadu_pd(0x7, G + q);
+    if constexpr (Vol && !VM) acc += _mm256_maskz_loadu_pd(0x7, G + q);
 #else
     double g[3];
     hd::return_force(FE + q, X + q, X0 + q, KR[a], g);  // load and return spring (§1.4)
     v4d acc = {g[0], g[1], g[2], 0.0};                  // lane-wise adds: the same sums as three scalar ones
-    if constexpr (Vol) acc += v4d{G[q], G[q + 1], G[q + 2], 0.0};
+    if constexpr (Vol && !VM) acc += v4d{G[q], G[q + 1], G[q + 2], 0.0};
 #endif
+    if constexpr (VM) {
+      v4d vol{};
+      for (int j = 0; j < nvm; ++j)
+        vol += __builtin_convertvector(*reinterpret_cast<const v4f*>(vm[j] + 4 * a), v4d);
+      acc += vol;
+    }
     const Index* r = row + static_cast<std::size_t>(a) * W;
     if constexpr (F32) {
       // four partial sums: a chain of W / 4 dependent adds instead of W (the chain of one sum bounded the
@@ -355,21 +364,22 @@ int node_pass(const Model& m, State& st, double h, double vmax2) {
   return 0;
 }
 
-template <bool Guard, bool Vol, bool F32 = false>
-int node_pass_any(const Model& m, State& st, double h, double vmax2) {
+template <bool Guard, bool Vol, bool F32 = false, bool VM = false>
+int node_pass_any(const Model& m, State& st, double h, double vmax2, const float* const* vm = nullptr,
+                  int nvm = 0) {
   switch (m.gather.width) {
     case 4:
-      return node_pass<4, Guard, Vol, F32>(m, st, h, vmax2);
+      return node_pass<4, Guard, Vol, F32, VM>(m, st, h, vmax2, vm, nvm);
     case 6:
-      return node_pass<6, Guard, Vol, F32>(m, st, h, vmax2);
+      return node_pass<6, Guard, Vol, F32, VM>(m, st, h, vmax2, vm, nvm);
     case 8:
-      return node_pass<8, Guard, Vol, F32>(m, st, h, vmax2);
+      return node_pass<8, Guard, Vol, F32, VM>(m, st, h, vmax2, vm, nvm);
     case 10:
-      return node_pass<10, Guard, Vol, F32>(m, st, h, vmax2);
+      return node_pass<10, Guard, Vol, F32, VM>(m, st, h, vmax2, vm, nvm);
     case 12:
-      return node_pass<12, Guard, Vol, F32>(m, st, h, vmax2);
+      return node_pass<12, Guard, Vol, F32, VM>(m, st, h, vmax2, vm, nvm);
     default:
-      return node_pass<16, Guard, Vol, F32>(m, st, h, vmax2);
+      return node_pass<16, Guard, Vol, F32, VM>(m, st, h, vmax2, vm, nvm);
   }
 }
 
@@ -400,9 +410,7 @@ int gather_substep_f32(const Model& m, State& st, double h, double vmax2, bool g
 
 int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard, bool stiffening,
                    const LocalStiffening* local) {
-  if (volume_f32_substep(m, local) && g_springs_f32.load(std::memory_order_relaxed) &&
-      m.volume_f32->springs.size() == static_cast<std::size_t>(m.num_springs()))
-    return gather_substep_f32(m, st, h, vmax2, guard, stiffening, local);
+  if (float_substep_applies(m, local)) return gather_substep_f32(m, st, h, vmax2, guard, stiffening, local);
   double* F = st.spring_force.data();
   const double ss = stiffening ? slot_forces<true>(m, st.x.data(), F) : slot_forces<false>(m, st.x.data(), F);
   if (m.volume.size() > 0 || m.compression.size() > 0) {  // the volume (and compression) terms' forces
@@ -418,6 +426,17 @@ int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard
 
 bool set_gather_springs_f32(bool on) {
   return g_springs_f32.exchange(on);
+}
+
+bool float_substep_applies(const Model& m, const LocalStiffening* local) {
+  return volume_f32_substep(m, local) && g_springs_f32.load(std::memory_order_relaxed) &&
+         m.volume_f32->springs.size() == static_cast<std::size_t>(m.num_springs());
+}
+
+int node_pass_f32(const Model& m, State& st, double h, double vmax2, bool guard, const float* const* mirrors,
+                  int count) {
+  return guard ? node_pass_any<true, true, true, true>(m, st, h, vmax2, mirrors, count)
+               : node_pass_any<false, true, true, true>(m, st, h, vmax2, mirrors, count);
 }
 
 }  // namespace medspring::detail

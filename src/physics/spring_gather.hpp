@@ -45,4 +45,14 @@ void spring_chunk_forces(const Model& m, Index s0, Index nb, const double* x, do
 /// Returns the former setting.
 bool set_gather_springs_f32(bool on);
 
+/// gather_substep takes the float sub-step (the float volume pass and float springs) for m with `local`.
+bool float_substep_applies(const Model& m, const LocalStiffening* local);
+
+/// The float sub-step's node pass (threaded_volume.hpp): each node's force (the volume terms' part, the sum
+/// in double of its rows of the float force mirrors mirrors[0 .. count), in that order; its load, return
+/// spring and float slots) into st.f, and the symplectic update of a free node. Returns 0, or 1 / 2 after
+/// restoring the nodes it advanced.
+int node_pass_f32(const Model& m, State& st, double h, double vmax2, bool guard, const float* const* mirrors,
+                  int count);
+
 }  // namespace medspring::detail

@@ -8,6 +8,10 @@
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/state.hpp"
 
+namespace medspring {
+struct ParallelRecords;  // volume_f32.hpp
+}
+
 namespace medspring::detail {
 
 inline constexpr double kMinSpringLength =
@@ -123,6 +127,8 @@ struct LocalStiffening {
   double frame_dt;
   double safety;
   float* f32 = nullptr;  // State::volume_f32 (the single-precision volume pass, Model::volume_f32), or null
+  const ParallelRecords* par =
+      nullptr;  // the threaded step's (threaded_volume.hpp): the float pass's threads
 };
 /// The same, and with `local` (and stiffening) the local stiffening of the volume terms: the returned
 /// stiffening is min(max(s_springs, s_terms), s_springs + row_max / omega_rest^2) (add_volume_forces_local)

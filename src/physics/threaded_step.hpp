@@ -18,6 +18,7 @@
 #include "medspring/physics/parallel.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/state.hpp"
+#include "threaded_volume.hpp"
 
 namespace medspring {
 
@@ -42,6 +43,8 @@ struct ThreadedStep {
     int code = 0, code2 = 0;      // outcome of its interior (phase 1) and boundary (phase 2) nodes
   };
   std::vector<Part> part;
+  /// The threaded float sub-step's partition (threaded_volume.hpp) of volumetric models, on this pool.
+  VolumeSplit volume;
   /// Per node: 0 free interior node, 1 fixed, 2 free boundary node.
   std::vector<std::uint8_t> kind;
   bool has_boundary = false;

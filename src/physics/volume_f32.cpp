@@ -352,11 +352,11 @@ std::atomic<bool> g_f32_x8{true};
 }
 #endif
 
+// Records [r0, r1) (default: all) into the force mirror g.
 template <bool Comp, bool Diff, bool Stiff = false>
-void records_f32(const VolumeTermsF32& F, const float* u, float* g, StiffOut* so = nullptr) {
-  const VolumeTermsF32::Record* r = F.rec.data();
-  const std::size_t nr = F.rec.size();
-  std::size_t i = 0;
+void records_f32(const VolumeTermsF32::Record* r, const float* u, float* g, StiffOut* so, std::size_t r0,
+                 std::size_t nr) {
+  std::size_t i = r0;
 #if defined(MEDSPRING_VOLUME_F32_X8)
   if (g_f32_x8.load(std::memory_order_relaxed)) {
     F8 svv = F8{} + 1.0f;
@@ -366,6 +366,11 @@ void records_f32(const VolumeTermsF32& F, const float* u, float* g, StiffOut* so
   }
 #endif
   for (; i < nr; ++i) record_f32<Comp, Diff, Stiff>(r[i], u, g, so, i);
+}
+
+template <bool Comp, bool Diff, bool Stiff = false>
+void records_f32(const VolumeTermsF32& F, const float* u, float* g, StiffOut* so = nullptr) {
+  records_f32<Comp, Diff, Stiff>(F.rec.data(), u, g, so, 0, F.rec.size());
 }
 
 }  // namespace
@@ -429,10 +434,31 @@ void add_forces(const VolumeTermsF32& F, const float* g, double* f) {
 }  // namespace
 
 void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
-                                           float* scratch, bool diff) {
+                                           float* scratch, bool diff, const ParallelRecords* par) {
   float* u = scratch;
   float* g = scratch + 4 * F.nodes;
   fill_mirrors(F, x, u, g, nullptr);
+  if (par && par->threads > 1 && diff) {  // each thread its share into its mirror, summed in thread order
+    const auto mf = 4 * static_cast<std::size_t>(F.nodes);
+    auto run = [&](int t) {
+      const auto ut = static_cast<std::size_t>(t);
+      float* gt = t == 0 ? g : par->mirrors[ut];
+      if (t > 0) std::memset(gt, 0, sizeof(float) * mf);
+      if (F.comp)
+        records_f32<true, true>(F.rec.data(), u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
+      else
+        records_f32<false, true>(F.rec.data(), u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
+    };
+    par->pool->run(run);
+    for (Index i = 0; i < F.nodes; ++i)
+      for (int d = 0; d < 3; ++d) {
+        double v = 0.0;
+        for (int t = 0; t < par->threads; ++t)
+          v += static_cast<double>((t == 0 ? g : par->mirrors[static_cast<std::size_t>(t)])[4 * i + d]);
+        f[3 * i + d] += v;
+      }
+    return;
+  }
   if (F.comp)
     diff ? records_f32<true, true>(F, u, g) : records_f32<true, false>(F, u, g);
   else
@@ -441,45 +467,92 @@ void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double
 }
 
 double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const double* x, double* f,
-                                                 float* scratch, double* inc, const double* s,
-                                                 double* trows) {
+                                                 float* scratch, double* inc, const double* s, double* trows,
+                                                 const ParallelRecords* par) {
   require(F.iG0.size() == F.rec.size(), "volume terms (single precision): no rest curvatures");
   float* u = scratch;
   float* g = scratch + 4 * F.nodes;
   fill_mirrors(F, x, u, g, F.comp ? s : nullptr);  // m_i^-1/2 in u's fourth floats, for the traces
-  StiffOut so{F.iG0.data(), inc, 1.0f};
-  if (F.comp)
-    records_f32<true, true, true>(F, u, g, &so);
-  else
-    records_f32<false, true, true>(F, u, g, &so);
-  add_forces(F, g, f);
-  if (F.comp)
-    for (Index i = 0; i < F.nodes; ++i) trows[i] = static_cast<double>(g[4 * i + 3]);
-  return static_cast<double>(so.sv);
+  if (!par || par->threads <= 1) {
+    StiffOut so{F.iG0.data(), inc, 1.0f};
+    if (F.comp)
+      records_f32<true, true, true>(F, u, g, &so);
+    else
+      records_f32<false, true, true>(F, u, g, &so);
+    add_forces(F, g, f);
+    if (F.comp)
+      for (Index i = 0; i < F.nodes; ++i) trows[i] = static_cast<double>(g[4 * i + 3]);
+    return static_cast<double>(so.sv);
+  }
+  // the threads' shares: each its own mirror (thread 0 the one filled above) and largest s_t
+  const int T = par->threads;
+  const auto mf = 4 * static_cast<std::size_t>(F.nodes);
+  float sv[kMaxThreads];
+  auto run = [&](int t) {
+    const auto ut = static_cast<std::size_t>(t);
+    float* gt = t == 0 ? g : par->mirrors[ut];
+    if (t > 0) std::memset(gt, 0, sizeof(float) * mf);
+    StiffOut so{F.iG0.data(), inc, 1.0f};
+    if (F.comp)
+      records_f32<true, true, true>(F.rec.data(), u, gt, &so, par->begin[ut], par->begin[ut + 1]);
+    else
+      records_f32<false, true, true>(F.rec.data(), u, gt, &so, par->begin[ut], par->begin[ut + 1]);
+    sv[ut] = so.sv;
+  };
+  par->pool->run(run);
+  float svm = 1.0f;
+  for (int t = 0; t < T; ++t) svm = max_f(sv[static_cast<std::size_t>(t)], svm);
+  for (Index i = 0; i < F.nodes; ++i) {
+    double v[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int t = 0; t < T; ++t) {
+      const float* gt = (t == 0 ? g : par->mirrors[static_cast<std::size_t>(t)]) + 4 * i;
+      for (int d = 0; d < 4; ++d) v[d] += static_cast<double>(gt[d]);
+    }
+    for (int d = 0; d < 3; ++d) f[3 * i + d] += v[d];
+    if (F.comp) trows[i] = v[3];
+  }
+  return static_cast<double>(svm);
 }
 
-std::uint64_t count_inverted_f32(const VolumeTermsF32& F, const VolumeTerms& T, const double* x,
-                                 float* scratch) {
-  require(T.packed.size() == F.rec.size(), "volume terms (single precision): ", F.rec.size(), " records for ",
-          T.packed.size(), " terms");
-  const std::size_t nr = F.rec.size();
+namespace {
+
+// count_inverted_f32 of records [i, nr), the displacement mirror u filled
+std::uint64_t count_range(const VolumeTermsF32& F, const VolumeTerms& T, const double* x, const float* u,
+                          std::size_t i, std::size_t nr) {
   std::uint64_t n = 0;
-  std::size_t i = 0;
 #if defined(MEDSPRING_VOLUME_F32_X8)
   if (g_f32_x8.load(std::memory_order_relaxed)) {
-    detail::fill_displacements_f32(F, x, scratch);
     for (; i + 8 <= nr; i += 8) {
       unsigned inv = 0, amb = 0;
-      inverted8(F.rec.data() + i, scratch, inv, amb);
+      inverted8(F.rec.data() + i, u, inv, amb);
       n += static_cast<std::uint64_t>(__builtin_popcount(inv));
       for (; amb != 0; amb &= amb - 1)  // the records the float 6V cannot decide: the double test
         n += detail::packed_record_inverted(T, x, i + static_cast<std::size_t>(__builtin_ctz(amb)));
     }
   }
 #else
-  (void)scratch;
+  (void)u;
 #endif
   for (; i < nr; ++i) n += detail::packed_record_inverted(T, x, i);
+  return n;
+}
+
+}  // namespace
+
+std::uint64_t count_inverted_f32(const VolumeTermsF32& F, const VolumeTerms& T, const double* x,
+                                 float* scratch, const ParallelRecords* par) {
+  require(T.packed.size() == F.rec.size(), "volume terms (single precision): ", F.rec.size(), " records for ",
+          T.packed.size(), " terms");
+  detail::fill_displacements_f32(F, x, scratch);
+  if (!par || par->threads <= 1) return count_range(F, T, x, scratch, 0, F.rec.size());
+  std::uint64_t counts[kMaxThreads];
+  auto run = [&](int t) {
+    const auto ut = static_cast<std::size_t>(t);
+    counts[ut] = count_range(F, T, x, scratch, par->begin[ut], par->begin[ut + 1]);
+  };
+  par->pool->run(run);
+  std::uint64_t n = 0;
+  for (int t = 0; t < par->threads; ++t) n += counts[static_cast<std::size_t>(t)];
   return n;
 }
 
@@ -498,6 +571,14 @@ void set_volume_single_precision(Model& m, bool on) {
 }
 
 namespace detail {
+
+void add_records_f32(const VolumeTermsF32& F, const float* u, float* g, std::size_t r0, std::size_t r1) {
+  r1 = r1 < F.rec.size() ? r1 : F.rec.size();
+  if (F.comp)
+    records_f32<true, true>(F.rec.data(), u, g, nullptr, r0, r1);
+  else
+    records_f32<false, true>(F.rec.data(), u, g, nullptr, r0, r1);
+}
 
 bool set_volume_f32_x8(bool on) {
   return g_f32_x8.exchange(on);

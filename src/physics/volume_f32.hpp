@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "medspring/core/types.hpp"
+#include "medspring/physics/parallel.hpp"
 #include "medspring/physics/volume_terms.hpp"
 
 namespace medspring {
@@ -54,6 +55,16 @@ struct VolumeTermsF32 {
   SpringsF32 springs;  // the model's springs (set_volume_single_precision; empty from build_volume_f32 alone)
 };
 
+/// The records of a pass shared among the threads of a pool (the threaded step, threaded_volume.hpp): thread
+/// t takes records [begin[t], begin[t + 1]) into the force mirror mirrors[t] (4 floats a node; mirrors[0] is
+/// the pass's own, in its scratch), and the pass sums the mirrors in thread order.
+struct ParallelRecords {
+  WorkerPool* pool = nullptr;
+  const std::size_t* begin = nullptr;  // threads + 1 record bounds, multiples of eight but the last
+  float* const* mirrors = nullptr;     // threads mirrors of 4 #N floats
+  int threads = 1;
+};
+
 /// Builds F from T (finalized; fused compression terms taken when T.kc is set) and the rest positions x0.
 void build_volume_f32(const VolumeTerms& T, const MatX3& x0, VolumeTermsF32& F);
 
@@ -65,8 +76,10 @@ inline constexpr Index kVolumeF32ScratchPerNode = 8;
 /// node and added to f once. `scratch`: kVolumeF32ScratchPerNode #N floats (overwritten). With `diff` (the
 /// default) 6V - 6V0 from the displacement differences (no cancellation, volume_f32.hpp); without, as the
 /// double pass computes it (for the benchmark's A/B and the precision test).
+/// With `par` (and diff), its threads share the records, the forces summed in thread order.
 void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
-                                           float* scratch, bool diff = true);
+                                           float* scratch, bool diff = true,
+                                           const ParallelRecords* par = nullptr);
 
 /// add_volume_and_compression_forces_inc (compression_rows.hpp; add_volume_forces_inc where F has no fused
 /// compression terms) in single precision: the pass of a frame's last sub-step, with the stable step's bound.
@@ -76,8 +89,11 @@ void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double
 /// traces of their bound's blocks to trows (#N doubles, overwritten), `s`: m_i^-1/2 per node (0 on a fixed
 /// node); without, `s` and `trows` are not used. The forces, increments and traces are those of the double
 /// pass to float rounding (about 1e-6 relative): far inside the stable step's safety factor (0.8).
+/// With `par`, its threads share the records (each thread's largest s_t, the forces and the traces summed
+/// in thread order: another thread count rounds the sums differently, float rounding).
 double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const double* x, double* f,
-                                                 float* scratch, double* inc, const double* s, double* trows);
+                                                 float* scratch, double* inc, const double* s, double* trows,
+                                                 const ParallelRecords* par = nullptr);
 
 /// count_inverted (volume_terms.hpp) of T at x (flat 3 #N), F built from T: the same count, eight records a
 /// vector in float where compiled (GCC, AVX) from the displacement mirror (`scratch`: 4 #N floats at least,
@@ -85,10 +101,15 @@ double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const 
 /// edges' bounds, far above the float error), or not finite, is decided by count_inverted's own double test;
 /// the others' signs are certain. Elsewhere, and for the tail, the double test. For the step's count at the
 /// end of each frame (integrators.cpp) with the float volume pass.
+/// With `par`, its threads count their records (the same count).
 std::uint64_t count_inverted_f32(const VolumeTermsF32& F, const VolumeTerms& T, const double* x,
-                                 float* scratch);
+                                 float* scratch, const ParallelRecords* par = nullptr);
 
 namespace detail {
+/// The forces of records [r0, r1) of F (add_volume_and_compression_forces_f32's kernel, displacement
+/// differences) added to the force mirror g (4 floats a node), from the displacement mirror u: the threaded
+/// sub-step's share of one thread (threaded_volume.hpp).
+void add_records_f32(const VolumeTermsF32& F, const float* u, float* g, std::size_t r0, std::size_t r1);
 /// count_inverted's test of packed record i of T at X (flat 3 #N): 6V <= 0 or not finite (volume_terms.cpp).
 bool packed_record_inverted(const VolumeTerms& T, const double* X, std::size_t i);
 /// Whether the pass uses GCC's vector extensions (else the same arithmetic on 4-float structs).

@@ -24,6 +24,8 @@
 #include "medspring/fem/organ.hpp"
 #include "medspring/fem/volumetric.hpp"
 #include "medspring/models/volumetric_body.hpp"
+#include "medspring/physics/integrators.hpp"
+#include "medspring/physics/parallel.hpp"
 #endif
 
 namespace medspring {
@@ -49,9 +51,10 @@ struct Result {
 /// ring_spokes > 0: a structured tube of rings of that many nodes, pressed along the direction from its
 /// ring's centre (the vertex normals of an open tube may point into the lumen).
 Result run(const BodyPtr& body, const std::vector<Index>& sites, Index ring_spokes,
-           StableStep rule = StableStep::Bound, int updates = kUpdates) {
+           StableStep rule = StableStep::Bound, int updates = kUpdates, int threads = 1) {
   SimulationSettings settings;
   settings.step.stable_step = rule;
+  settings.step.threads = threads;
   settings.local.enabled = true;
   Simulation sim(body, settings);
   ToolSimulation tools(sim, {.friction = 0.2});
@@ -97,10 +100,10 @@ Result run(const BodyPtr& body, const std::vector<Index>& sites, Index ring_spok
 }
 
 void expect_no_allocation(const char* kind, const BodyPtr& body, const std::vector<Index>& sites,
-                          Index ring_spokes = 0, StableStep rule = StableStep::Bound,
-                          int updates = kUpdates) {
+                          Index ring_spokes = 0, StableStep rule = StableStep::Bound, int updates = kUpdates,
+                          int threads = 1) {
   SCOPED_TRACE(kind);
-  const Result r = run(body, sites, ring_spokes, rule, updates);
+  const Result r = run(body, sites, ring_spokes, rule, updates, threads);
   std::cout << "[ " << kind << " ] " << r.allocations << " allocations in " << updates << " updates; "
             << r.distinct_patches << " local patches (the largest " << r.largest_patch << " nodes), max |U| "
             << r.max_local << " mm, " << r.tool_contacts << " tool contacts at the end\n";
@@ -204,6 +207,12 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
       std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney (float)");
   ASSERT_TRUE(body32->model().volume_f32 != nullptr);
   expect_no_allocation("volumetric, volume_precision float", body32, sites);
+  // the threaded float passes (StepSettings::threads; threaded_volume.hpp): a finer interior, two threads'
+  // worth of tetrahedra; the pool and its shares are made before the counted updates
+  auto body_t = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 1000}), st,
+                                                 "kidney (threads)");
+  ASSERT_EQ(effective_threads(body_t->model(), {.threads = 2}), threads_supported() ? 2 : 1);
+  expect_no_allocation("volumetric, two threads", body_t, sites, 0, StableStep::Bound, kUpdates, 2);
 #else
   GTEST_SKIP() << "built without the fem layer (TetGen)";
 #endif

@@ -87,7 +87,10 @@ void validate_step_settings(const Model& model, const StepSettings& s);
 
 /// Threads the step really uses: settings.threads, reduced so that every thread gets at least
 /// kMinSpringsPerThread springs (1 for smaller models), 1 for the implicit integrator, bending terms or a
-/// build without threads (WebAssembly). Deterministic: the same model and settings give the same count.
+/// build without threads (WebAssembly). A volumetric model with the float volume pass (volume_precision
+/// float, the default) runs the sub-steps without the stable step's bound on settings.threads threads,
+/// reduced so that every thread gets at least 2,000 tetrahedra (docs/threads.md, "Volumetric models").
+/// Deterministic: the same model and settings give the same count.
 int effective_threads(const Model& model, const StepSettings& settings);
 
 /// Readies a state for steps with these settings: allocates the implicit integrator's scratch when it
