@@ -7,6 +7,8 @@
 // case without a suffix runs the default volume pass, single precision (VolumetricSettings::volume_precision
 // = float, the default since h23b); the _f64 cases are the plain, mass-scaled and refresh cases with the
 // volume pass in double (the default before h23b, which measured the _f32 cases of then against them).
+// kidney_volumetric_2000_explicit_linear_threads2: the default case with StepSettings::threads = 2 (the
+// threaded float passes, threaded_volume.hpp; docs/threads.md "Volumetric models").
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,16 +30,17 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
   std::vector<bench::BenchCase> cases;
 #ifdef MEDSPRING_HAVE_FEM
   for (const Index target : {500, 1000, 2000})
-    for (const int variant : {0, 1, 2, 3, 4, 5}) {  // the default; opt-in selective mass scaling; the tangent
-                                                    // refresh; 3, 4: 0, 1 with the volume pass in double;
-                                                    // 5: 2 with it
-      // StepSettings::stable_step = refresh: 2,000 nodes only
-      if ((variant == 2 || variant == 5) && target != 2000) continue;
+    for (const int variant : {0, 1, 2, 3, 4, 5, 6}) {  // the default; opt-in selective mass scaling; the
+                                                       // tangent refresh; 3, 4: 0, 1 with the volume pass in
+                                                       // double; 5: 2 with it; 6: 0 on two threads
+      // StepSettings::stable_step = refresh, and two threads: 2,000 nodes only
+      if ((variant == 2 || variant == 5 || variant == 6) && target != 2000) continue;
       const double mass_scaling_dt = variant == 1 || variant == 4 ? 0.25 : 0.0;
-      const bool refresh = variant == 2 || variant == 5, f64 = variant >= 3;
-      const std::string name =
-          cat("kidney_volumetric_", target, "_explicit_linear",
-              mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""), f64 ? "_f64" : "");
+      const bool refresh = variant == 2 || variant == 5, f64 = variant >= 3 && variant <= 5;
+      const int threads = variant == 6 ? 2 : 1;
+      const std::string name = cat("kidney_volumetric_", target, "_explicit_linear",
+                                   mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""),
+                                   f64 ? "_f64" : "", threads > 1 ? "_threads2" : "");
       if (!filter.empty() && name.find(filter) == std::string::npos) continue;
       const SurfaceMesh s = kidney_phantom();
       const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
@@ -52,10 +55,11 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
       b.group = "kidney";
       b.nodes = body->model().num_nodes();
       b.springs = body->model().num_springs();
-      b.setup = [body, refresh] {
+      b.setup = [body, refresh, threads] {
         SimulationSettings ss;
         ss.normals = false;
         ss.local.enabled = false;
+        ss.step.threads = threads;
         if (refresh) ss.step.stable_step = StableStep::Refresh;
         auto sim = std::make_shared<Simulation>(body, ss);
         Index top = 0;

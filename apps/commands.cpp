@@ -40,7 +40,9 @@ const std::vector<CommandSpec>& commands() {
        .about =
            "Times one update of every benchmark case (ALGORITHMS.md D-18): 200 warm-up updates, then N "
            "timed\n"
-           "updates, single thread. Prints median, p99 and mean in microseconds, and ns per spring; --json:\n"
+           "updates, single thread (the _threads2 case: two). Prints median, p99 and mean in microseconds, "
+           "and\n"
+           "ns per spring; --json:\n"
            "{\"results\": [{\"name\", \"median_us\", \"p99_us\", \"mean_us\", \"nodes\", \"springs\", "
            "...}]}.\n"
            "--compare: MedSpring (1 and N threads), the plain reference loop and Bullet btSoftBody on the "

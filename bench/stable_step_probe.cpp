@@ -19,6 +19,9 @@
 //     time per frame. Without --frame-times the model has the default settings (float since h23b).
 //     --springs both: each float simulation also with the gather pass's springs in double (the float
 //     springs' A/B, spring_f32.hpp; the float springs are the default since the session of 2026-11-27 night).
+//     --threads N: each float simulation also with StepSettings::threads = N (the threaded float sub-step,
+//     threaded_volume.hpp; "tN" in its name); compare wall times (the CPU time is the calling thread's).
+//     --block K: K consecutive frames of each simulation before the next (default 1: frame by frame).
 #include <time.h>  // clock_gettime(CLOCK_THREAD_CPUTIME_ID): the frame's CPU time, robust to a loaded machine
 
 #include <algorithm>
@@ -86,6 +89,8 @@ int main(int argc, char** argv) {
   int lanczos = 300, bisect = 7;
   std::string precision = "double";
   bool springs_both = false;
+  int threads = 1;
+  long block = 1;
   for (int a = 1; a + 1 < argc; a += 2) {
     if (!std::strcmp(argv[a], "--nodes"))
       nodes = static_cast<Index>(std::atol(argv[a + 1]));
@@ -107,6 +112,10 @@ int main(int argc, char** argv) {
       precision = argv[a + 1];
     else if (!std::strcmp(argv[a], "--springs") && !std::strcmp(argv[a + 1], "both"))
       springs_both = true;
+    else if (!std::strcmp(argv[a], "--threads"))
+      threads = std::atoi(argv[a + 1]);
+    else if (!std::strcmp(argv[a], "--block"))
+      block = std::max(1L, std::atol(argv[a + 1]));
     else {
       std::fprintf(stderr, "stable_step_probe: unknown option %s\n", argv[a]);
       return 2;
@@ -124,9 +133,6 @@ int main(int argc, char** argv) {
       if (precision != "both" && precision != to_string(p)) continue;
       vs.volume_precision = p;
       bodies.push_back(std::make_shared<const VolumetricBody>(vm, vs, "volumetric kidney"));
-      for (const char* rule : {"bound", "refresh"})
-        names.push_back(std::string(rule) +
-                        (precision == "both" && p == VolumePrecision::Float ? " f32" : ""));
     }
     const auto& body = bodies.front();
     Index top = 0;
@@ -135,21 +141,27 @@ int main(int argc, char** argv) {
     const double load = loads.empty() ? 0.5 : loads.front();
     std::vector<std::unique_ptr<Simulation>> sims;
     std::vector<bool> fsprings;  // per simulation: the gather pass's springs in float (the default)
+    std::vector<int> thread_counts{1};
+    if (threads > 1) thread_counts.push_back(threads);
     for (const auto& b : bodies)
-      for (const bool fs : {true, false}) {
-        if (!fs && !(springs_both && b->model().volume_f32)) continue;
-        for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
-          SimulationSettings ss;
-          ss.normals = false;
-          ss.local.enabled = false;
-          ss.step.stable_step = rule;
-          sims.push_back(std::make_unique<Simulation>(b, ss));
-          sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
-          fsprings.push_back(fs);
-          // double springs: the float body is the last, so its names are the last two
-          if (!fs) names.push_back(names[names.size() - 2] + " ds");
+      for (const int th : thread_counts)
+        for (const bool fs : {true, false}) {
+          const bool f32 = b->model().volume_f32 != nullptr;
+          if ((!fs && !(springs_both && f32)) || (th > 1 && (!f32 || !fs))) continue;
+          for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
+            SimulationSettings ss;
+            ss.normals = false;
+            ss.local.enabled = false;
+            ss.step.stable_step = rule;
+            ss.step.threads = th;
+            sims.push_back(std::make_unique<Simulation>(b, ss));
+            sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
+            fsprings.push_back(fs);
+            names.push_back(std::string(rule == StableStep::Bound ? "bound" : "refresh") +
+                            (precision == "both" && f32 ? " f32" : "") + (fs ? "" : " ds") +
+                            (th > 1 ? " t" + std::to_string(th) : ""));
+          }
         }
-      }
     const int ns = static_cast<int>(sims.size());
     std::vector<std::vector<double>> us(static_cast<std::size_t>(2 * ns));  // wall, then CPU time, of each
     const auto cpu_us = [] {
@@ -157,15 +169,17 @@ int main(int argc, char** argv) {
       clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
       return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
     };
-    for (long f = 0; f < frame_times; ++f)
+    for (long f = 0; f < frame_times; f += block)
       for (int k = 0; k < ns; ++k) {
         medspring::detail::set_gather_springs_f32(fsprings[static_cast<std::size_t>(k)]);
-        const double c0 = cpu_us();
-        const auto t0 = std::chrono::steady_clock::now();
-        sims[static_cast<std::size_t>(k)]->update();
-        us[static_cast<std::size_t>(k)].push_back(
-            std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-        us[static_cast<std::size_t>(k + ns)].push_back(cpu_us() - c0);
+        for (long b = 0; b < block && f + b < frame_times; ++b) {
+          const double c0 = cpu_us();
+          const auto t0 = std::chrono::steady_clock::now();
+          sims[static_cast<std::size_t>(k)]->update();
+          us[static_cast<std::size_t>(k)].push_back(
+              std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+          us[static_cast<std::size_t>(k + ns)].push_back(cpu_us() - c0);
+        }
       }
     std::printf("nodes %ld, load %g N, %ld frames from rest, frame wall time (us), then CPU time (us):\n",
                 static_cast<long>(body->model().num_nodes()), load, frame_times);

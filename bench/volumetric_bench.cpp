@@ -88,12 +88,14 @@ double former_compression_bound(const CompressionTerms& T, const MatX3& x, const
 // One update of the kidney of `nodes` nodes with mass scaling for `mass_scaling_dt` (ms, 0: off) under a
 // point load of `load` N on its top node, with the counters of its stable step.
 void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, double load,
-                   VolumePrecision precision = VolumePrecision::Double, StableStep rule = StableStep::Bound) {
+                   VolumePrecision precision = VolumePrecision::Double, StableStep rule = StableStep::Bound,
+                   int threads = 1) {
   const auto body = kidney(nodes, mass_scaling_dt, precision);
   SimulationSettings ss;
   ss.normals = false;
   ss.local.enabled = false;
   ss.step.stable_step = rule;
+  ss.step.threads = threads;
   Simulation sim(body, ss);
   Index top = 0;
   for (Index i = 0; i < body->num_surface_nodes(); ++i)
@@ -104,6 +106,7 @@ void kidney_update(benchmark::State& st, Index nodes, double mass_scaling_dt, do
   const auto f0 = sim.state().frames;
   for (auto _ : st) sim.update();
   st.counters["nodes"] = static_cast<double>(body->model().num_nodes());
+  st.counters["threads_used"] = effective_threads(body->model(), ss.step);
   st.counters["springs"] = static_cast<double>(body->model().num_springs());
   st.counters["tets"] = static_cast<double>(body->model().volume.size());
   st.counters["substeps_per_update"] =
@@ -210,6 +213,19 @@ BENCHMARK(BM_VolumetricKidneyUpdateF32Springs)
     ->Args({500, 1})
     ->Args({2000, 0})
     ->Args({2000, 1})
+    ->Unit(benchmark::kMicrosecond);
+// The default update (float passes, mass scaling off) on Arg 1 threads (StepSettings::threads; the threaded
+// float passes, threaded_volume.hpp): the A/B of the second core. Wall time is the figure (UseRealTime).
+void BM_VolumetricKidneyUpdateThreads(benchmark::State& st) {
+  kidney_update(st, static_cast<Index>(st.range(0)), 0.0, 0.5, VolumePrecision::Float, StableStep::Bound,
+                static_cast<int>(st.range(1)));
+}
+BENCHMARK(BM_VolumetricKidneyUpdateThreads)
+    ->Args({2000, 1})
+    ->Args({2000, 2})
+    ->Args({4000, 1})
+    ->Args({4000, 2})
+    ->UseRealTime()
     ->Unit(benchmark::kMicrosecond);
 // The opt-in tangent refresh (StepSettings::stable_step = refresh), with the volume pass in double and with
 // the single-precision pass (the default since h23b); mass scaling off. The mean includes the frames
