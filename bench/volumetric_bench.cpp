@@ -214,6 +214,17 @@ BENCHMARK(BM_VolumetricKidneyUpdateF32Springs)
     ->Args({2000, 0})
     ->Args({2000, 1})
     ->Unit(benchmark::kMicrosecond);
+// The default update (mass scaling off) with the float passes reading the records' blocks of eight (second
+// Arg 1, the default since 2026-11-28) or transposing their rows (0, as before): the A/B in one process.
+void BM_VolumetricKidneyUpdateF32Blocks(benchmark::State& st) {
+  const bool was = detail::set_volume_f32_blocks(st.range(1) != 0);
+  kidney_update(st, static_cast<Index>(st.range(0)), 0.0, 0.5, VolumePrecision::Float);
+  detail::set_volume_f32_blocks(was);
+}
+BENCHMARK(BM_VolumetricKidneyUpdateF32Blocks)
+    ->Args({2000, 0})
+    ->Args({2000, 1})
+    ->Unit(benchmark::kMicrosecond);
 // The default update (float passes, mass scaling off) on Arg 1 threads (StepSettings::threads; the threaded
 // float passes, threaded_volume.hpp): the A/B of the second core. Wall time is the figure (UseRealTime).
 void BM_VolumetricKidneyUpdateThreads(benchmark::State& st) {
@@ -368,8 +379,15 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   // since 2026-11-27, add_volume_and_compression_forces_inc_f32), eight records per vector / one at a time;
   // 25 / 26: the float springs' slots (spring_slots_f32, without the stiffening: the default's sub-steps
   // since 2026-11-27 night), eight springs per vector / one at a time; 27: phase 25 with the stiffening; 28:
-  // phase 4 with the float volume pass (count_inverted_f32, the step's count since 2026-11-27 night)
-  const int phase = st.range(0) >= 20 ? static_cast<int>(st.range(0)) : static_cast<int>(st.range(0)) % 10;
+  // phase 4 with the float volume pass (count_inverted_f32, the step's count since 2026-11-27 night); 29, 30,
+  // 31: phases 20, 28, 23 with the records' rows transposed (the layout before the blocks of 2026-11-28)
+  const bool row_layout = st.range(0) >= 29;
+  const int phase = row_layout          ? (st.range(0) == 29   ? 20
+                                           : st.range(0) == 30 ? 28
+                                                               : 23)
+                    : st.range(0) >= 20 ? static_cast<int>(st.range(0))
+                                        : static_cast<int>(st.range(0)) % 10;
+  const bool blocks_was = detail::set_volume_f32_blocks(!row_layout);
   const bool simd_was = detail::set_volume_simd(st.range(0) < 10 || st.range(0) >= 20);
   VolumeTermsF32 vf;
   std::vector<float> fscratch;
@@ -415,6 +433,7 @@ void BM_VolumetricKidneyPhases(benchmark::State& st) {
   }
   detail::set_volume_simd(simd_was);
   detail::set_volume_f32_x8(x8_was);
+  detail::set_volume_f32_blocks(blocks_was);
   st.counters["tets"] = static_cast<double>(m.volume.size());
   st.counters["springs"] = static_cast<double>(m.num_springs());
 }
@@ -432,6 +451,9 @@ BENCHMARK(BM_VolumetricKidneyPhases)
     ->Arg(26)
     ->Arg(27)
     ->Arg(28)
+    ->Arg(29)
+    ->Arg(30)
+    ->Arg(31)
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -197,26 +197,48 @@ using detail::lanes::min8;
 using detail::lanes::rows_to_lanes;
 using detail::lanes::sqrt8;
 
-// record_f32 for the eight records r[0..8) (record i0 onwards), lane-wise; with Stiff, svv gathers the
-// largest s_t lane by lane.
-template <bool Comp, bool Diff, bool Stiff = false>
-[[gnu::always_inline]] inline void records8_f32(const VolumeTermsF32::Record* r, const float* u, float* g,
-                                                StiffOut* so = nullptr, std::size_t i0 = 0,
-                                                F8* svv = nullptr) {
-  std::ptrdiff_t n[4][8];
-  for (int k = 0; k < 4; ++k)
-    for (int j = 0; j < 8; ++j) n[k][j] = 4 * static_cast<std::ptrdiff_t>(r[j].n[k]);
-  F8 U[4][4], E[3][4];
+// The corners of records [i, i + 8) (their rows' float offsets in the mirrors, 4 n) and the lanes of their
+// rest edges: from the blocks (Blk), or transposed from the records' rows (the former layout, for the A/B).
+template <bool Blk>
+[[gnu::always_inline]] inline void load_records8(const VolumeTermsF32& F, std::size_t i,
+                                                 std::ptrdiff_t (&n)[4][8], F8 (&E)[3][4]) {
+  if constexpr (Blk) {
+    const VolumeTermsF32::Block& b = F.blk[i / 8];
+    for (int k = 0; k < 4; ++k)
+      for (int j = 0; j < 8; ++j) n[k][j] = 4 * static_cast<std::ptrdiff_t>(b.n[k][j]);
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 4; ++d) E[k][d] = (F8)_mm256_load_ps(b.E[k][d]);
+  } else {
+    const VolumeTermsF32::Record* r = F.rec.data() + i;
+    for (int k = 0; k < 4; ++k)
+      for (int j = 0; j < 8; ++j) n[k][j] = 4 * static_cast<std::ptrdiff_t>(r[j].n[k]);
+    for (int k = 0; k < 3; ++k) {
+      const float* const p[8] = {r[0].E[k], r[1].E[k], r[2].E[k], r[3].E[k],
+                                 r[4].E[k], r[5].E[k], r[6].E[k], r[7].E[k]};
+      rows_to_lanes(p, E[k]);
+    }
+  }
+}
+
+// The rows of the mirror u at the corners n[k][0..8) as x, y, z and w lanes.
+[[gnu::always_inline]] inline void corner_lanes(const float* u, const std::ptrdiff_t (&n)[4][8],
+                                                F8 (&U)[4][4]) {
   for (int k = 0; k < 4; ++k) {
     const float* const p[8] = {u + n[k][0], u + n[k][1], u + n[k][2], u + n[k][3],
                                u + n[k][4], u + n[k][5], u + n[k][6], u + n[k][7]};
     rows_to_lanes(p, U[k]);
   }
-  for (int k = 0; k < 3; ++k) {
-    const float* const p[8] = {r[0].E[k], r[1].E[k], r[2].E[k], r[3].E[k],
-                               r[4].E[k], r[5].E[k], r[6].E[k], r[7].E[k]};
-    rows_to_lanes(p, E[k]);
-  }
+}
+
+// record_f32 for the eight records [i0, i0 + 8), lane-wise; with Stiff, svv gathers the largest s_t lane by
+// lane.
+template <bool Comp, bool Diff, bool Stiff, bool Blk>
+[[gnu::always_inline]] inline void records8_f32(const VolumeTermsF32& F, std::size_t i0, const float* u,
+                                                float* g, StiffOut* so, F8* svv) {
+  std::ptrdiff_t n[4][8];
+  F8 U[4][4], E[3][4];
+  load_records8<Blk>(F, i0, n, E);
+  corner_lanes(u, n, U);
   const F8 alpha = E[0][3], V06 = E[1][3];
   F8 D[3][3], e[3][3], Ek[3][3];
   for (int k = 0; k < 3; ++k)
@@ -306,26 +328,25 @@ template <bool Comp, bool Diff, bool Stiff = false>
 #endif
 
 std::atomic<bool> g_f32_x8{true};
+std::atomic<bool> g_f32_blocks{true};
 
 #if defined(MEDSPRING_VOLUME_F32_X8)
-// count_inverted_f32 for the eight records r[0..8): bit j of `inv` set when record j is inverted for sure,
+// The blocks of F are the layout of the eight-a-vector passes (and are on).
+bool use_blocks(const VolumeTermsF32& F) {
+  return g_f32_blocks.load(std::memory_order_relaxed) && F.blk.size() == F.rec.size() / 8;
+}
+#endif
+
+#if defined(MEDSPRING_VOLUME_F32_X8)
+// count_inverted_f32 for the eight records [i, i + 8): bit j of `inv` set when record j is inverted for sure,
 // of `amb` when the float 6V cannot decide (within the band, or not finite).
-[[gnu::always_inline]] inline void inverted8(const VolumeTermsF32::Record* r, const float* u, unsigned& inv,
-                                             unsigned& amb) {
+template <bool Blk>
+[[gnu::always_inline]] inline void inverted8(const VolumeTermsF32& F, std::size_t i, const float* u,
+                                             unsigned& inv, unsigned& amb) {
+  std::ptrdiff_t n[4][8];
   F8 U[4][4], E[3][4];
-  for (int k = 0; k < 4; ++k) {
-    const float* const p[8] = {
-        u + 4 * static_cast<std::ptrdiff_t>(r[0].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[1].n[k]),
-        u + 4 * static_cast<std::ptrdiff_t>(r[2].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[3].n[k]),
-        u + 4 * static_cast<std::ptrdiff_t>(r[4].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[5].n[k]),
-        u + 4 * static_cast<std::ptrdiff_t>(r[6].n[k]), u + 4 * static_cast<std::ptrdiff_t>(r[7].n[k])};
-    rows_to_lanes(p, U[k]);
-  }
-  for (int k = 0; k < 3; ++k) {
-    const float* const p[8] = {r[0].E[k], r[1].E[k], r[2].E[k], r[3].E[k],
-                               r[4].E[k], r[5].E[k], r[6].E[k], r[7].E[k]};
-    rows_to_lanes(p, E[k]);
-  }
+  load_records8<Blk>(F, i, n, E);
+  corner_lanes(u, n, U);
   F8 D[3][3], e[3][3], Ek[3][3], a[3];
   F8 s[4];  // |u_k|_1
   for (int k = 0; k < 4; ++k) s[k] = abs8(U[k][0]) + abs8(U[k][1]) + abs8(U[k][2]);
@@ -352,25 +373,26 @@ std::atomic<bool> g_f32_x8{true};
 }
 #endif
 
-// Records [r0, r1) (default: all) into the force mirror g.
+// Records [r0, nr) (default: all) into the force mirror g.
 template <bool Comp, bool Diff, bool Stiff = false>
-void records_f32(const VolumeTermsF32::Record* r, const float* u, float* g, StiffOut* so, std::size_t r0,
-                 std::size_t nr) {
+void records_f32(const VolumeTermsF32& F, const float* u, float* g, StiffOut* so = nullptr,
+                 std::size_t r0 = 0, std::size_t nr = std::numeric_limits<std::size_t>::max()) {
+  const VolumeTermsF32::Record* r = F.rec.data();
+  nr = nr < F.rec.size() ? nr : F.rec.size();
   std::size_t i = r0;
 #if defined(MEDSPRING_VOLUME_F32_X8)
   if (g_f32_x8.load(std::memory_order_relaxed)) {
+    for (; i < nr && i % 8 != 0; ++i) record_f32<Comp, Diff, Stiff>(r[i], u, g, so, i);  // to a block's start
     F8 svv = F8{} + 1.0f;
-    for (; i + 8 <= nr; i += 8) records8_f32<Comp, Diff, Stiff>(r + i, u, g, so, i, &svv);
+    if (use_blocks(F))
+      for (; i + 8 <= nr; i += 8) records8_f32<Comp, Diff, Stiff, true>(F, i, u, g, so, &svv);
+    else
+      for (; i + 8 <= nr; i += 8) records8_f32<Comp, Diff, Stiff, false>(F, i, u, g, so, &svv);
     if constexpr (Stiff)
       for (int l = 0; l < 8; ++l) so->sv = max_f(svv[l], so->sv);
   }
 #endif
   for (; i < nr; ++i) record_f32<Comp, Diff, Stiff>(r[i], u, g, so, i);
-}
-
-template <bool Comp, bool Diff, bool Stiff = false>
-void records_f32(const VolumeTermsF32& F, const float* u, float* g, StiffOut* so = nullptr) {
-  records_f32<Comp, Diff, Stiff>(F.rec.data(), u, g, so, 0, F.rec.size());
 }
 
 }  // namespace
@@ -408,6 +430,14 @@ void build_volume_f32(const VolumeTerms& T, const MatX3& x0, VolumeTermsF32& F) 
     r.E[2][3] = comp ? static_cast<float>(p.kc6) : 0.0f;
     F.iG0[t] = static_cast<float>(p.iG0);
   }
+  F.blk.resize(F.rec.size() / 8);
+  for (std::size_t b = 0; b < F.blk.size(); ++b)
+    for (int j = 0; j < 8; ++j) {
+      const VolumeTermsF32::Record& r = F.rec[8 * b + static_cast<std::size_t>(j)];
+      for (int k = 0; k < 4; ++k) F.blk[b].n[k][j] = r.n[k];
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 4; ++d) F.blk[b].E[k][d][j] = r.E[k][d];
+    }
 }
 
 namespace {
@@ -445,9 +475,9 @@ void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double
       float* gt = t == 0 ? g : par->mirrors[ut];
       if (t > 0) std::memset(gt, 0, sizeof(float) * mf);
       if (F.comp)
-        records_f32<true, true>(F.rec.data(), u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
+        records_f32<true, true>(F, u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
       else
-        records_f32<false, true>(F.rec.data(), u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
+        records_f32<false, true>(F, u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
     };
     par->pool->run(run);
     for (Index i = 0; i < F.nodes; ++i)
@@ -494,9 +524,9 @@ double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const 
     if (t > 0) std::memset(gt, 0, sizeof(float) * mf);
     StiffOut so{F.iG0.data(), inc, 1.0f};
     if (F.comp)
-      records_f32<true, true, true>(F.rec.data(), u, gt, &so, par->begin[ut], par->begin[ut + 1]);
+      records_f32<true, true, true>(F, u, gt, &so, par->begin[ut], par->begin[ut + 1]);
     else
-      records_f32<false, true, true>(F.rec.data(), u, gt, &so, par->begin[ut], par->begin[ut + 1]);
+      records_f32<false, true, true>(F, u, gt, &so, par->begin[ut], par->begin[ut + 1]);
     sv[ut] = so.sv;
   };
   par->pool->run(run);
@@ -522,9 +552,14 @@ std::uint64_t count_range(const VolumeTermsF32& F, const VolumeTerms& T, const d
   std::uint64_t n = 0;
 #if defined(MEDSPRING_VOLUME_F32_X8)
   if (g_f32_x8.load(std::memory_order_relaxed)) {
+    for (; i < nr && i % 8 != 0; ++i) n += detail::packed_record_inverted(T, x, i);  // to a block's start
+    const bool blocks = use_blocks(F);
     for (; i + 8 <= nr; i += 8) {
       unsigned inv = 0, amb = 0;
-      inverted8(F.rec.data() + i, u, inv, amb);
+      if (blocks)
+        inverted8<true>(F, i, u, inv, amb);
+      else
+        inverted8<false>(F, i, u, inv, amb);
       n += static_cast<std::uint64_t>(__builtin_popcount(inv));
       for (; amb != 0; amb &= amb - 1)  // the records the float 6V cannot decide: the double test
         n += detail::packed_record_inverted(T, x, i + static_cast<std::size_t>(__builtin_ctz(amb)));
@@ -575,13 +610,17 @@ namespace detail {
 void add_records_f32(const VolumeTermsF32& F, const float* u, float* g, std::size_t r0, std::size_t r1) {
   r1 = r1 < F.rec.size() ? r1 : F.rec.size();
   if (F.comp)
-    records_f32<true, true>(F.rec.data(), u, g, nullptr, r0, r1);
+    records_f32<true, true>(F, u, g, nullptr, r0, r1);
   else
-    records_f32<false, true>(F.rec.data(), u, g, nullptr, r0, r1);
+    records_f32<false, true>(F, u, g, nullptr, r0, r1);
 }
 
 bool set_volume_f32_x8(bool on) {
   return g_f32_x8.exchange(on);
+}
+
+bool set_volume_f32_blocks(bool on) {
+  return g_f32_blocks.exchange(on);
 }
 
 bool volume_f32_vector_compiled() {

@@ -48,6 +48,15 @@ struct VolumeTermsF32 {
     float E[3][4];
   };
   std::vector<Record> rec;
+  /// The same records in blocks of eight, lane by lane (the eight-a-vector passes' layout, 64 bytes a record
+  /// as `rec`): their corners, and lane d of rest edge k of record j at E[k][d][j], so that those passes load
+  /// the edges of eight records with twelve vector loads instead of transposing their rows. rec.size() / 8
+  /// blocks: the last records of a partial block are read from `rec`.
+  struct alignas(32) Block {
+    std::int32_t n[4][8];
+    float E[3][4][8];
+  };
+  std::vector<Block> blk;
   std::vector<float> iG0;  // per record: 1 / G0, the rest curvature's inverse (VolumeTerms::Packed::iG0)
   std::vector<double> x0;  // (3 #N) rest positions, mm: the pass's float mirror holds x - x0
   Index nodes = 0;
@@ -117,6 +126,10 @@ bool volume_f32_vector_compiled();
 /// Eight records at a time in 256-bit vectors (GCC, AVX targets; on by default) or one at a time: for the
 /// benchmark's A/B. Returns the former setting.
 bool set_volume_f32_x8(bool on);
+/// The eight-a-vector passes read VolumeTermsF32::blk (on by default) or transpose the rows of `rec` (the
+/// layout before the session of 2026-11-28): for the benchmark's A/B and the tests. Returns the former
+/// setting.
+bool set_volume_f32_blocks(bool on);
 }  // namespace detail
 
 }  // namespace medspring

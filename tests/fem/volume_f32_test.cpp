@@ -370,3 +370,68 @@ TEST(VolumeF32, InvertedCountInFloatIsTheDoubleCount) {
     }
   }
 }
+
+// The eight-a-vector passes read the records in blocks of eight lanes (VolumeTermsF32::blk, since 2026-11-28)
+// instead of transposing their rows: the same loads in another layout, so the same numbers bit for bit. The
+// float pass, the pass with the bound (forces, increments, growth, traces) and the count, on the cube and the
+// kidney phantom (neither a multiple of eight records: the tail comes from the rows either way), with and
+// without compression terms, and a share of records that starts inside a block (the threaded step's).
+TEST(VolumeF32, BlocksOfEightGiveTheRowsResultsBitForBit) {
+  if (!detail::volume_f32_vector_compiled()) GTEST_SKIP() << "one record at a time in this build";
+  std::mt19937 rng(29);
+  const VolumetricMesh cube =
+      fem::volumetric_mesh(medspring::testing::box_surface(4, 20), {.target_nodes = 300});
+  const VolumetricMesh kidney = fem::volumetric_mesh(kidney_phantom(), {.target_nodes = 800});
+  for (const auto* vm : {&cube, &kidney})
+    for (const double c : {32.0, 0.0}) {
+      VolumetricSettings st;
+      st.fixed = {0, 1, 2, 3};
+      st.compression = c;
+      const VolumetricBody body(*vm, st, "body");
+      const Model& m = body.model();
+      ASSERT_TRUE(m.volume_f32 != nullptr);
+      const VolumeTermsF32& F = *m.volume_f32;
+      ASSERT_EQ(F.blk.size(), F.rec.size() / 8);
+      const Index n = m.num_nodes(), nt = m.volume.size();
+      VecX s(n);
+      for (Index i = 0; i < n; ++i)
+        s[i] = m.fixed[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / std::sqrt(m.mass[i]);
+      std::normal_distribution<double> N(0.0, 0.3);
+      const MatX3 x = squeezed(m.x0, 0.4) + MatX3::NullaryExpr(n, 3, [&] { return N(rng); });
+      struct Out {
+        VecX f, f_inc, inc, tr;
+        double sv = 0;
+        std::uint64_t inverted = 0;
+        std::vector<float> share;
+      };
+      auto run = [&](bool blocks) {
+        const bool was = detail::set_volume_f32_blocks(blocks);
+        std::vector<float> scratch(static_cast<std::size_t>(kVolumeF32ScratchPerNode * n));
+        Out o;
+        o.f = o.f_inc = VecX::Zero(3 * n);
+        o.inc = VecX::Zero(nt);
+        o.tr = VecX::Zero(n);
+        add_volume_and_compression_forces_f32(F, x.data(), o.f.data(), scratch.data());
+        o.sv = add_volume_and_compression_forces_inc_f32(F, x.data(), o.f_inc.data(), scratch.data(),
+                                                         o.inc.data(), s.data(), o.tr.data());
+        o.inverted = count_inverted_f32(F, m.volume, x.data(), scratch.data());
+        o.share.assign(static_cast<std::size_t>(4 * n), 0.0f);  // records [3, nt - 5): a share inside blocks
+        detail::add_records_f32(F, scratch.data(), o.share.data(), 3, F.rec.size() - 5);
+        detail::set_volume_f32_blocks(was);
+        return o;
+      };
+      const Out a = run(true), b = run(false);
+      const std::string l =
+          std::string(vm == &cube ? "cube" : "kidney") + ", compression " + std::to_string(c);
+      EXPECT_NE(F.rec.size() % 8, 0u) << l << ": no tail to check";
+      EXPECT_TRUE(a.f == b.f) << l;
+      EXPECT_TRUE(a.f_inc == b.f_inc) << l;
+      EXPECT_TRUE(a.inc == b.inc) << l;
+      EXPECT_TRUE(a.tr == b.tr) << l;
+      EXPECT_EQ(a.sv, b.sv) << l;
+      EXPECT_EQ(a.inverted, b.inverted) << l;
+      EXPECT_TRUE(a.share == b.share) << l;
+      EXPECT_GT(a.f.cwiseAbs().maxCoeff(), 0.0) << l;
+      EXPECT_GT(a.inverted, 0u) << l;  // the noise inverts some: the count's vector path decided some
+    }
+}
