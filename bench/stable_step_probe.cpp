@@ -22,6 +22,10 @@
 //     --threads N: each float simulation also with StepSettings::threads = N (the threaded float sub-step,
 //     threaded_volume.hpp; "tN" in its name); compare wall times (the CPU time is the calling thread's).
 //     --block K: K consecutive frames of each simulation before the next (default 1: frame by frame).
+//     --blocks both: each float simulation also with the float records' rows transposed (the layout before
+//     VolumeTermsF32::blk; "rows" in its name).
+//     --gather both: the float body also built with the double slots' gather limit (kSpringGatherMaxSprings:
+//     "nogather" where its springs are more, the scatter pass then; spring_gather.hpp).
 #include <time.h>  // clock_gettime(CLOCK_THREAD_CPUTIME_ID): the frame's CPU time, robust to a loaded machine
 
 #include <algorithm>
@@ -44,8 +48,10 @@
 #include "medspring/sim/simulation.hpp"
 
 namespace medspring::detail {  // the float springs of the gather pass on or off
-                               // (src/physics/spring_gather.hpp)
+                               // (src/physics/spring_gather.hpp), the float records' blocks (volume_f32.hpp)
 bool set_gather_springs_f32(bool on);
+bool set_volume_f32_blocks(bool on);
+Index set_spring_gather_max_f32(Index springs);
 }  // namespace medspring::detail
 
 namespace {
@@ -88,7 +94,7 @@ int main(int argc, char** argv) {
   long steps = 10000, frame_times = 0;
   int lanczos = 300, bisect = 7;
   std::string precision = "double";
-  bool springs_both = false;
+  bool springs_both = false, blocks_both = false, gather_both = false;
   int threads = 1;
   long block = 1;
   for (int a = 1; a + 1 < argc; a += 2) {
@@ -112,6 +118,10 @@ int main(int argc, char** argv) {
       precision = argv[a + 1];
     else if (!std::strcmp(argv[a], "--springs") && !std::strcmp(argv[a + 1], "both"))
       springs_both = true;
+    else if (!std::strcmp(argv[a], "--blocks") && !std::strcmp(argv[a + 1], "both"))
+      blocks_both = true;
+    else if (!std::strcmp(argv[a], "--gather") && !std::strcmp(argv[a + 1], "both"))
+      gather_both = true;
     else if (!std::strcmp(argv[a], "--threads"))
       threads = std::atoi(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--block"))
@@ -128,11 +138,18 @@ int main(int argc, char** argv) {
     VolumetricSettings vs;  // 10 kPa, nu = 0.45, the bench's kidney (apps/cmd_bench_volumetric.cpp)
     vs.fixed = fem::support_nodes(surf.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
     std::vector<std::shared_ptr<const VolumetricBody>> bodies;  // the precisions asked for
-    std::vector<std::string> names;
+    std::vector<std::string> names, labels;                     // labels: per body
     for (const VolumePrecision p : {VolumePrecision::Double, VolumePrecision::Float}) {
       if (precision != "both" && precision != to_string(p)) continue;
       vs.volume_precision = p;
       bodies.push_back(std::make_shared<const VolumetricBody>(vm, vs, "volumetric kidney"));
+      labels.emplace_back(precision == "both" && p == VolumePrecision::Float ? " f32" : "");
+      if (gather_both && p == VolumePrecision::Float) {  // the float body with the double slots' gather limit
+        const Index was = medspring::detail::set_spring_gather_max_f32(kSpringGatherMaxSprings);
+        bodies.push_back(std::make_shared<const VolumetricBody>(vm, vs, "volumetric kidney"));
+        medspring::detail::set_spring_gather_max_f32(was);
+        labels.push_back(labels.back() + (bodies.back()->model().gather.empty() ? " nogather" : " gather"));
+      }
     }
     const auto& body = bodies.front();
     Index top = 0;
@@ -140,14 +157,19 @@ int main(int argc, char** argv) {
       if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
     const double load = loads.empty() ? 0.5 : loads.front();
     std::vector<std::unique_ptr<Simulation>> sims;
-    std::vector<bool> fsprings;  // per simulation: the gather pass's springs in float (the default)
+    // per simulation: the gather pass's springs in float, the float records' blocks (the defaults)
+    std::vector<bool> fsprings, fblocks;
     std::vector<int> thread_counts{1};
     if (threads > 1) thread_counts.push_back(threads);
-    for (const auto& b : bodies)
+    for (std::size_t bi = 0; bi < bodies.size(); ++bi)
       for (const int th : thread_counts)
-        for (const bool fs : {true, false}) {
-          const bool f32 = b->model().volume_f32 != nullptr;
-          if ((!fs && !(springs_both && f32)) || (th > 1 && (!f32 || !fs))) continue;
+        for (const int variant : {0, 1, 2}) {  // the default; double springs; the records' rows
+          const auto& b = bodies[bi];
+          const bool f32 = b->model().volume_f32 != nullptr, fs = variant != 1, blk = variant != 2;
+          if ((variant > 0 && (!f32 || th > 1)) || (variant == 1 && !springs_both) ||
+              (variant == 2 && !blocks_both))
+            continue;
+          if (th > 1 && !f32) continue;
           for (const StableStep rule : {StableStep::Bound, StableStep::Refresh}) {
             SimulationSettings ss;
             ss.normals = false;
@@ -157,8 +179,9 @@ int main(int argc, char** argv) {
             sims.push_back(std::make_unique<Simulation>(b, ss));
             sims.back()->set_loads({{.node = top, .force = Vec3(0, 0, -load), .t_ramp = 0}});
             fsprings.push_back(fs);
-            names.push_back(std::string(rule == StableStep::Bound ? "bound" : "refresh") +
-                            (precision == "both" && f32 ? " f32" : "") + (fs ? "" : " ds") +
+            fblocks.push_back(blk);
+            names.push_back(std::string(rule == StableStep::Bound ? "bound" : "refresh") + labels[bi] +
+                            (fs ? "" : " ds") + (blk ? "" : " rows") +
                             (th > 1 ? " t" + std::to_string(th) : ""));
           }
         }
@@ -172,6 +195,7 @@ int main(int argc, char** argv) {
     for (long f = 0; f < frame_times; f += block)
       for (int k = 0; k < ns; ++k) {
         medspring::detail::set_gather_springs_f32(fsprings[static_cast<std::size_t>(k)]);
+        medspring::detail::set_volume_f32_blocks(fblocks[static_cast<std::size_t>(k)]);
         for (long b = 0; b < block && f + b < frame_times; ++b) {
           const double c0 = cpu_us();
           const auto t0 = std::chrono::steady_clock::now();

@@ -26,12 +26,18 @@ constexpr int kWidths[] = {4, 6, 8, 10, 12, 16};
 
 }  // namespace
 
+std::atomic<Index> g_gather_max_f32{kSpringGatherMaxSpringsF32};
+
 void build_spring_gather(Model& m) {
   m.gather = SpringGather{};
   const Index n = m.num_nodes(), ns = m.num_springs();
   // volume terms: their pass adds into st.f, which the node pass reads (issue 23); not with the fused pass
   // of terms that own springs (plan_owned_springs)
-  if (ns == 0 || ns > kSpringGatherMaxSprings || m.has_soft_springs || m.bending.size() > 0 ||
+  // a model with the float volume pass has float slots (16 bytes, half the double ones): twice the springs
+  const Index most = m.volume_f32 && m.volume_f32->springs.size() == static_cast<std::size_t>(ns)
+                         ? g_gather_max_f32.load(std::memory_order_relaxed)
+                         : kSpringGatherMaxSprings;
+  if (ns == 0 || ns > most || m.has_soft_springs || m.bending.size() > 0 ||
       (m.volume.size() > 0 && m.volume.planned_springs >= 0) || m.thin.size() > 0)  // thin: internal_forces
     return;
   const auto un = static_cast<std::size_t>(n);
@@ -426,6 +432,10 @@ int gather_substep(const Model& m, State& st, double h, double vmax2, bool guard
 
 bool set_gather_springs_f32(bool on) {
   return g_springs_f32.exchange(on);
+}
+
+Index set_spring_gather_max_f32(Index springs) {
+  return g_gather_max_f32.exchange(springs);
 }
 
 bool float_substep_applies(const Model& m, const LocalStiffening* local) {

@@ -16,8 +16,17 @@
 
 namespace medspring::detail {
 
-/// Fills model.gather (finalize calls it last); leaves it empty where the pass does not apply.
+/// Largest model (springs) with the float volume pass and float springs (Model::volume_f32) that gets a
+/// SpringGather: its float slots take 32 bytes a spring, half the double ones, so twice
+/// kSpringGatherMaxSprings (docs/volumetric-speed.md "Float slots for larger models").
+inline constexpr Index kSpringGatherMaxSpringsF32 = 2 * kSpringGatherMaxSprings;
+
+/// Fills model.gather (finalize calls it last, set_volume_single_precision again); leaves it empty where the
+/// pass does not apply.
 void build_spring_gather(Model& m);
+
+/// The float limit above (for the benchmark's A/B: models built after the call). Returns the former one.
+Index set_spring_gather_max_f32(Index springs);
 
 /// The gather pass applies to m (and st's buffer is sized for it, or is sized now: once per state).
 bool gather_ready(const Model& m, State& st);

@@ -18,6 +18,7 @@
 #include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/model.hpp"
 #include "spring_f32.hpp"
+#include "spring_gather.hpp"
 
 namespace medspring {
 
@@ -594,6 +595,7 @@ std::uint64_t count_inverted_f32(const VolumeTermsF32& F, const VolumeTerms& T, 
 void set_volume_single_precision(Model& m, bool on) {
   if (!on) {
     m.volume_f32.reset();
+    if (m.finalized) detail::build_spring_gather(m);  // the double slots' limit
     return;
   }
   require(m.volume.size() > 0 && static_cast<Index>(m.volume.packed.size()) == m.volume.size(), m.name,
@@ -603,6 +605,7 @@ void set_volume_single_precision(Model& m, bool on) {
   build_volume_f32(m.volume, m.x0, *F);
   detail::build_springs_f32(m, F->springs);  // the gather pass's float slots (spring_f32.hpp)
   m.volume_f32 = std::move(F);
+  if (m.finalized) detail::build_spring_gather(m);  // float slots: the gather pass up to twice the springs
 }
 
 namespace detail {

@@ -176,3 +176,51 @@ TEST(SpringF32, StepWithFloatSpringsStaysWithinToleranceOfDoubleSprings) {
   EXPECT_EQ(a.warnings.total(), b.warnings.total());
   EXPECT_EQ(a.warnings.inverted_elements, b.warnings.inverted_elements);
 }
+
+// Float slots take half the bytes of double ones, so a model with the float volume pass and float springs
+// gets the gather pass up to twice the springs (kSpringGatherMaxSpringsF32, spring_gather.hpp): the kidney
+// phantom at 3,807 nodes (about 26k springs) has one with float, none with double, and set_volume_single_
+// precision rebuilds it either way. Its step with the gather pass (float springs) against the same body
+// built without (the scatter pass, double springs): the same sub-steps, positions within 1e-5 of the peak.
+TEST(SpringF32, FloatSlotsTakeTheGatherPassToTwiceTheSprings) {
+  const SurfaceMesh s = kidney_phantom();
+  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+  VolumetricSettings vs;
+  vs.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = 4000});
+  const VolumetricBody body(vm, vs, "kidney");
+  const Model& m = body.model();
+  ASSERT_GT(m.num_springs(), kSpringGatherMaxSprings);
+  ASSERT_LE(m.num_springs(), detail::kSpringGatherMaxSpringsF32);
+  ASSERT_TRUE(m.volume_f32 != nullptr);
+  EXPECT_FALSE(m.gather.empty());
+  Model dbl = m;
+  set_volume_single_precision(dbl, false);
+  EXPECT_TRUE(dbl.gather.empty());
+  set_volume_single_precision(dbl, true);
+  EXPECT_FALSE(dbl.gather.empty());
+  EXPECT_EQ(dbl.gather.row, m.gather.row);
+  const Index was = detail::set_spring_gather_max_f32(kSpringGatherMaxSprings);
+  const VolumetricBody scatter(vm, vs, "kidney, scatter pass");
+  detail::set_spring_gather_max_f32(was);
+  ASSERT_TRUE(scatter.model().gather.empty());
+  Index top = 0;
+  for (Index i = 0; i < body.num_surface_nodes(); ++i)
+    if (s.V(i, 2) > s.V(top, 2)) top = i;
+  State a = make_state(m), b = make_state(scatter.model());
+  body.transfer_force(top, Vec3(0, 0, -0.5), a.f_ext);
+  b.f_ext = a.f_ext;
+  double disp = 0, dev = 0;
+  for (int i = 0; i < 60; ++i) {
+    step(m, a, {.dt = 0.5});
+    step(scatter.model(), b, {.dt = 0.5});
+    ASSERT_EQ(a.substeps, b.substeps) << "frame " << i;
+    disp = std::max(disp, (a.x - m.x0).cwiseAbs().maxCoeff());
+    dev = std::max(dev, (a.x - b.x).cwiseAbs().maxCoeff());
+  }
+  std::cout << m.num_nodes() << " nodes, " << m.num_springs() << " springs, 60 frames: peak " << disp
+            << " mm, gather - scatter at most " << dev << " mm\n";
+  EXPECT_GT(disp, 0.5);
+  EXPECT_GT(dev, 0.0);
+  EXPECT_LE(dev, 1e-5 * disp);
+}
