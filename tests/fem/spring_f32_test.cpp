@@ -141,17 +141,14 @@ TEST(SpringF32, SlotsWithinTheRoundingBoundOfTheDoubleSlots) {
 // warnings.
 TEST(SpringF32, StepWithFloatSpringsStaysWithinToleranceOfDoubleSprings) {
   const SurfaceMesh s = kidney_phantom();
-  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
   VolumetricSettings vs;
-  vs.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  vs.fixed = medspring::testing::bottom_supports(s);
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = 800});
   const VolumetricBody body(vm, vs, "kidney");
   const Model& m = body.model();
   ASSERT_TRUE(m.volume_f32 != nullptr);
   ASSERT_FALSE(m.gather.empty());  // the gather pass, whose springs are float
-  Index top = 0;
-  for (Index i = 0; i < body.num_surface_nodes(); ++i)
-    if (s.V(i, 2) > s.V(top, 2)) top = i;
+  const Index top = medspring::testing::top_node(s);
   State a = make_state(m), b = make_state(m);
   body.transfer_force(top, Vec3(0, 0, -0.5), a.f_ext);
   b.f_ext = a.f_ext;
@@ -184,9 +181,8 @@ TEST(SpringF32, StepWithFloatSpringsStaysWithinToleranceOfDoubleSprings) {
 // built without (the scatter pass, double springs): the same sub-steps, positions within 1e-5 of the peak.
 TEST(SpringF32, FloatSlotsTakeTheGatherPassToTwiceTheSprings) {
   const SurfaceMesh s = kidney_phantom();
-  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
   VolumetricSettings vs;
-  vs.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  vs.fixed = medspring::testing::bottom_supports(s);
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = 4000});
   const VolumetricBody body(vm, vs, "kidney");
   const Model& m = body.model();
@@ -204,9 +200,7 @@ TEST(SpringF32, FloatSlotsTakeTheGatherPassToTwiceTheSprings) {
   const VolumetricBody scatter(vm, vs, "kidney, scatter pass");
   detail::set_spring_gather_max_f32(was);
   ASSERT_TRUE(scatter.model().gather.empty());
-  Index top = 0;
-  for (Index i = 0; i < body.num_surface_nodes(); ++i)
-    if (s.V(i, 2) > s.V(top, 2)) top = i;
+  const Index top = medspring::testing::top_node(s);
   State a = make_state(m), b = make_state(scatter.model());
   body.transfer_force(top, Vec3(0, 0, -0.5), a.f_ext);
   b.f_ext = a.f_ext;

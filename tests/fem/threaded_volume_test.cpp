@@ -33,12 +33,10 @@ struct Kidney {
   Index top = 0;
   explicit Kidney(Index nodes = 1000) {
     const SurfaceMesh s = kidney_phantom();
-    const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
     VolumetricSettings vs;
-    vs.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+    vs.fixed = medspring::testing::bottom_supports(s);
     body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = nodes}), vs, "kidney");
-    for (Index i = 0; i < body->num_surface_nodes(); ++i)
-      if (s.V(i, 2) > s.V(top, 2)) top = i;
+    top = medspring::testing::top_node(s);
   }
 };
 

@@ -142,9 +142,8 @@ TEST(VolumeF32, CubeFromTensionToPushedThroughWithinTheRoundingBound) {
 // same sub-steps, no NaN, the same warnings (inverted elements are counted in double once per frame).
 TEST(VolumeF32, StepWithTheFloatPassStaysWithinToleranceOfTheDoubleStep) {
   const SurfaceMesh s = kidney_phantom();
-  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
   VolumetricSettings vs;
-  vs.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  vs.fixed = medspring::testing::bottom_supports(s);
   const VolumetricMesh vm = fem::volumetric_mesh(s, {.target_nodes = 800});
   vs.volume_precision = VolumePrecision::Double;  // both set: the test compares the two
   const VolumetricBody b64(vm, vs, "kidney");
@@ -153,9 +152,7 @@ TEST(VolumeF32, StepWithTheFloatPassStaysWithinToleranceOfTheDoubleStep) {
   const Model &m64 = b64.model(), &m32 = b32.model();
   ASSERT_TRUE(m64.volume_f32 == nullptr);
   ASSERT_TRUE(m32.volume_f32 != nullptr);
-  Index top = 0;
-  for (Index i = 0; i < b64.num_surface_nodes(); ++i)
-    if (s.V(i, 2) > s.V(top, 2)) top = i;
+  const Index top = medspring::testing::top_node(s);
   State a = make_state(m64), b = make_state(m32);
   ASSERT_EQ(b.volume_f32.size(), static_cast<std::size_t>(kVolumeF32ScratchPerNode * m32.num_nodes()));
   b64.transfer_force(top, Vec3(0, 0, -0.5), a.f_ext);

@@ -6,6 +6,7 @@
 #include <map>
 #include <vector>
 
+#include "medspring/fem/organ.hpp"
 #include "medspring/geometry/surface_mesh.hpp"
 #include "medspring/models/volumetric_body.hpp"
 
@@ -80,5 +81,19 @@ inline MatX3 squeezed(const MatX3& x0, double strain) {
   const double cz = x0.col(2).mean();
   x.col(2) = (x0.col(2).array() - cz) * (1.0 - strain) + cz;
   return x;
+}
+
+// The supports of the benchmark's kidney (bench/volumetric_bench.cpp): the surface nodes of its bottom 20 %.
+inline std::vector<Index> bottom_supports(const SurfaceMesh& s) {
+  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+  return fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+}
+
+// The surface node with the largest z (where the benchmark presses).
+inline Index top_node(const SurfaceMesh& s) {
+  Index top = 0;
+  for (Index i = 0; i < s.V.rows(); ++i)
+    if (s.V(i, 2) > s.V(top, 2)) top = i;
+  return top;
 }
 }  // namespace medspring::testing
