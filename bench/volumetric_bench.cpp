@@ -16,6 +16,7 @@
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/compression_terms.hpp"
 #include "medspring/physics/forces.hpp"
+#include "medspring/physics/linear_response.hpp"
 #include "medspring/physics/stability.hpp"
 #include "medspring/physics/volume_terms.hpp"
 #include "medspring/sim/simulation.hpp"
@@ -237,6 +238,45 @@ BENCHMARK(BM_VolumetricKidneyUpdateThreads)
     ->Args({4000, 1})
     ->Args({4000, 2})
     ->UseRealTime()
+    ->Unit(benchmark::kMicrosecond);
+// The quasi-static linear response (Integrator::LinearStatic, physics/linear_response.hpp; issue 23, item 5):
+// Args: nodes, disk radius in mm (0: the 0.5 N on the top node alone; r: 0.5 N spread equally over the surface
+// nodes within r of it). One update of the Simulation (the step, the surface map) with the loaded nodes'
+// response cached by the warm-up; the default (dynamic) update is BM_VolumetricKidneyUpdateF32/2000/0.
+void BM_VolumetricKidneyLinearStatic(benchmark::State& st) {
+  const auto body = kidney(static_cast<Index>(st.range(0)), 0.0, VolumePrecision::Float);
+  SimulationSettings ss;
+  ss.normals = false;
+  ss.local.enabled = false;
+  ss.step.integrator = Integrator::LinearStatic;
+  Simulation sim(body, ss);
+  const MatX3& S = body->rest_surface();
+  Index top = 0;
+  for (Index i = 0; i < S.rows(); ++i)
+    if (S(i, 2) > S(top, 2)) top = i;
+  std::vector<Index> disk;
+  for (Index i = 0; i < S.rows(); ++i)
+    if ((S.row(i) - S.row(top)).norm() <= static_cast<double>(st.range(1))) disk.push_back(i);
+  std::vector<PointLoad> loads;
+  for (Index i : disk)
+    loads.push_back({.node = i, .force = Vec3(0, 0, -0.5 / static_cast<double>(disk.size())), .t_ramp = 0});
+  sim.set_loads(loads);
+  sim.advance(5);  // factors K0 (first frame) and caches the loaded nodes' columns
+  for (auto _ : st) sim.update();
+  const LinearResponse& R = *sim.state().linear;
+  st.counters["nodes"] = static_cast<double>(body->model().num_nodes());
+  st.counters["loaded_nodes"] = static_cast<double>(disk.size());
+  st.counters["direct_threshold"] = R.direct_threshold();
+  st.counters["factor_ms"] = R.factor_ms();
+  st.counters["factor_nnz"] = static_cast<double>(R.factor_nonzeros());
+  st.counters["cached_MB"] = static_cast<double>(R.cached_bytes()) / (1 << 20);
+  st.counters["peak_mm"] = (sim.state().x - body->model().x0).rowwise().norm().maxCoeff();
+}
+BENCHMARK(BM_VolumetricKidneyLinearStatic)
+    ->Args({2000, 0})
+    ->Args({2000, 12})
+    ->Args({4000, 0})
+    ->Args({4000, 12})
     ->Unit(benchmark::kMicrosecond);
 // The opt-in tangent refresh (StepSettings::stable_step = refresh), with the volume pass in double and with
 // the single-precision pass (the default since h23b); mass scaling off. The mean includes the frames

@@ -353,7 +353,9 @@ void bind_physics(py::module_& m) {
   // ---- Integrators ----
   py::enum_<Integrator> integrator(m, "Integrator", "Time integrator (§2). Strings accepted.");
   integrator.value("SymplecticEuler", Integrator::SymplecticEuler, "default, §2.1")
-      .value("ImplicitEuler", Integrator::ImplicitEuler, "§2.3, unconditionally stable, dissipative");
+      .value("ImplicitEuler", Integrator::ImplicitEuler, "§2.3, unconditionally stable, dissipative")
+      .value("LinearStatic", Integrator::LinearStatic,
+             "quasi-static linear response x0 + K0^-1 f, precomputed (docs/linear-response.md)");
   enum_accepts_strings(integrator, &parse_integrator);
   py::enum_<StableStep> stable_step(m, "StableStep",
                                     "The symplectic step's stable-step rule (StepSettings.stable_step). "

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "compression_rows.hpp"
+#include "linear_static_step.hpp"
 #include "medspring/core/check.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/parallel.hpp"
@@ -22,12 +23,20 @@ Integrator parse_integrator(const std::string& text) {
     return Integrator::SymplecticEuler;
   if (text == "implicit_euler" || text == "implicit" || text == "ImplicitEuler")
     return Integrator::ImplicitEuler;
-  throw InvalidInput(
-      cat("integrator: unknown value '", text, "' (expected symplectic_euler or implicit_euler)"));
+  if (text == "linear_static" || text == "LinearStatic") return Integrator::LinearStatic;
+  throw InvalidInput(cat("integrator: unknown value '", text,
+                         "' (expected symplectic_euler, implicit_euler or linear_static)"));
 }
 
 std::string to_string(Integrator integrator) {
-  return integrator == Integrator::ImplicitEuler ? "implicit_euler" : "symplectic_euler";
+  switch (integrator) {
+    case Integrator::ImplicitEuler:
+      return "implicit_euler";
+    case Integrator::LinearStatic:
+      return "linear_static";
+    default:
+      return "symplectic_euler";
+  }
 }
 
 StableStep parse_stable_step(const std::string& text) {
@@ -383,6 +392,10 @@ bool tangent_refresh_on(const Model& m, const StepSettings& s) {
 }  // namespace
 
 void prepare_step(const Model& m, State& st, const StepSettings& s) {
+  if (s.integrator == Integrator::LinearStatic) {
+    detail::prepare_linear_static(m, st);
+    return;
+  }
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st)) {
     const Index n = m.num_nodes(), ns = m.num_springs();
     st.x_save.setZero(n, 3);
@@ -433,6 +446,7 @@ State make_state(const Model& m, const StepSettings& s) {
 
 StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vector<PointLoad>* loads,
                 const SubstepForce* per_substep) {
+  if (s.integrator == Integrator::LinearStatic) return detail::linear_static_step(m, st, s, loads, per_substep);
   StepStatus status;
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st))
     prepare_step(m, st, s);  // a state from make_state(model, symplectic settings): allocates once

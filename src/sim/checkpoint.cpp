@@ -32,6 +32,9 @@ Checkpoint make_checkpoint(const Simulation& sim) {
   return c;
 }
 
+static_assert(static_cast<int>(Integrator::SymplecticEuler) == 0 && static_cast<int>(Integrator::ImplicitEuler) == 1 &&
+              static_cast<int>(Integrator::LinearStatic) == 2);  // the step's integrator byte
+
 std::string encode_checkpoint(const Checkpoint& c) {
   ByteWriter p;  // payload
   p.u64(c.fingerprint);
@@ -39,7 +42,7 @@ std::string encode_checkpoint(const Checkpoint& c) {
   p.str(c.body_kind, kMaxName);
   const StepSettings& s = c.step;
   p.f64(s.dt);
-  p.u8(s.integrator == Integrator::ImplicitEuler ? 1 : 0);
+  p.u8(static_cast<std::uint8_t>(s.integrator));  // 0 symplectic, 1 implicit, 2 linear static
   p.u8(s.substep ? 1 : 0);
   p.f64(s.safety);
   p.i32(s.max_substeps);
@@ -93,8 +96,8 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& what) {
   StepSettings& s = c.step;
   s.dt = r.f64();
   const std::uint8_t integ = r.u8();
-  if (integ > 1) r.fail(cat("step.integrator: unknown value ", int{integ}));
-  s.integrator = integ == 1 ? Integrator::ImplicitEuler : Integrator::SymplecticEuler;
+  if (integ > 2) r.fail(cat("step.integrator: unknown value ", int{integ}));
+  s.integrator = static_cast<Integrator>(integ);
   s.substep = r.flag("step.substep");
   s.safety = r.f64();
   s.max_substeps = r.i32();

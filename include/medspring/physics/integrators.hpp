@@ -14,6 +14,9 @@ namespace medspring {
 enum class Integrator {
   SymplecticEuler,  // default, §2.1
   ImplicitEuler,    // §2.3 (Baraff & Witkin), unconditionally stable, dissipative
+  // Quasi-static and linear (issue 23, physics/linear_response.hpp): x = x0 + K0^-1 f_ext at every frame,
+  // the tangent at rest factored once and each loaded node's response cached; no inertia, no stiffening
+  LinearStatic,
 };
 Integrator parse_integrator(const std::string& text);
 std::string to_string(Integrator integrator);
@@ -55,7 +58,10 @@ struct StepSettings {
 /// properties and keywords of StepSettings, the table in docs/parameters.md.
 template <ParamOf<StepSettings> S, class V>
 void for_each_field(S& s, V&& v) {
-  v(ParamSpec{"integrator", "", "symplectic_euler (§2.1) or implicit_euler (§2.3)"}.json_key("method"),
+  v(ParamSpec{"integrator", "",
+              "symplectic_euler (§2.1), implicit_euler (§2.3) or linear_static (quasi-static linear response "
+              "x0 + K0^-1 f, precomputed: docs/linear-response.md)"}
+        .json_key("method"),
     s.integrator);
   v(ParamSpec{"dt", "ms", "frame duration"}.positive(), s.dt);
   v(ParamSpec{"substep", "", "split a frame above dt_safe into equal substeps (§2.2); false: refuse it"},
@@ -121,7 +127,10 @@ struct SubstepForce {
   void* ctx = nullptr;
 };
 
-/// Advances the state by one frame of duration settings.dt. External force: `loads` evaluated at the
+/// Advances the state by one frame of duration settings.dt. LinearStatic: x = x0 + K0^-1 f_ext with the force
+/// at the frame's start (loads, then per_substep, called once), v = the frame's mean velocity, one "substep";
+/// the first frame factors K0 unless prepare_step did, and a node's first load solves its response (allocates)
+/// unless LinearResponse::precompute did. External force: `loads` evaluated at the
 /// start of every substep if given, else state.f_ext held constant; then `per_substep` if given. No heap
 /// allocation.
 StepStatus step(const Model& model, State& state, const StepSettings& settings,

@@ -26,6 +26,7 @@ struct Warnings {
   }
 };
 
+class LinearResponse;  // physics/linear_response.hpp
 struct ThreadedStep;  // worker pool + static partition of the threaded step (integrators.cpp)
 
 /// A State's worker pool for StepSettings::threads > 1. A copied State starts without one (it is made
@@ -64,6 +65,10 @@ struct State {
   VecX spring_a, spring_b;                       // implicit: per-spring stiffness coefficients (#S)
   MatX3 spring_n;                                // implicit: per-spring unit directions (#S x 3)
   ThreadedStepHandle threaded;                   // symplectic, StepSettings::threads > 1
+  // Integrator::LinearStatic: the factored response at rest (a function of the model: copies share it; its
+  // cache is thread-safe) and its direct solve's scratch (#free DOFs)
+  std::shared_ptr<LinearResponse> linear;
+  VecX linear_b, linear_u;
 };
 
 /// A state at rest (x = x0, v = 0, t = 0) with all scratch allocated.
