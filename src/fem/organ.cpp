@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numbers>
 
 #include "medspring/core/check.hpp"
@@ -14,6 +15,7 @@
 #include "medspring/local/deformer.hpp"
 #include "medspring/local/overlay.hpp"
 #include "medspring/physics/forces.hpp"
+#include "medspring/physics/linear_response.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/physics/static_solve.hpp"
 
@@ -303,29 +305,23 @@ Eigen::SparseMatrix<double> restrict_to_free(const Eigen::SparseMatrix<double>& 
 
 std::vector<MatX3> spring_displacement_linear(const Body& body, const std::vector<ContactLoad>& loads) {
   const Model& m = body.model();
-  const Index n = m.num_nodes();
-  Index nf = 0;
-  const std::vector<Index> map = free_dof_map(m, nf);
   std::vector<MatX3> out;
-  if (nf == 0) {
+  if (m.free_nodes.empty()) {
     for (std::size_t i = 0; i < loads.size(); ++i) out.push_back(MatX3::Zero(body.num_surface_nodes(), 3));
     return out;
   }
-  const Eigen::SparseMatrix<double> K =
-      tangent_stiffness(m, m.x0, {.clamp_transverse = false, .include_return = true});
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(restrict_to_free(K, map, nf));
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0).all())
-    throw SolverError(cat(m.name, ": linear response: the stiffness at rest is not positive definite"));
+  // the quasi-static linear response of the simulator (Integrator::LinearStatic), without its column cache
+  std::unique_ptr<LinearResponse> R;
+  try {
+    R = std::make_unique<LinearResponse>(m, 0);
+  } catch (const InvalidInput& e) {
+    throw SolverError(e.what());
+  }
+  MatX3 x(m.num_nodes(), 3);
+  VecX b, u;
   for (const auto& load : loads) {
-    const MatX3 f = model_load(body, load);
-    VecX r(nf);
-    for (Index i = 0; i < 3 * n; ++i)
-      if (map[static_cast<std::size_t>(i)] >= 0) r[map[static_cast<std::size_t>(i)]] = f.data()[i];
-    const VecX u = ldlt.solve(r);
-    if (!u.allFinite()) throw SolverError(cat(m.name, ": linear response: the solve is not finite"));
-    MatX3 x = m.x0;
-    for (Index i = 0; i < 3 * n; ++i)
-      if (map[static_cast<std::size_t>(i)] >= 0) x.data()[i] += u[map[static_cast<std::size_t>(i)]];
+    if (R->positions(model_load(body, load), x, b, u) < 0 || !x.allFinite())
+      throw SolverError(cat(m.name, ": linear response: the solve is not finite"));
     out.push_back(surface_of(body, x));
   }
   return out;

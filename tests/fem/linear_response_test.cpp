@@ -248,25 +248,28 @@ TEST(LinearResponse, RefusesFreeRigidMotionAndBadIndices) {
   EXPECT_THROW(R.block(-1, 0), InvalidInput);
 }
 
-TEST(LinearResponse, DISABLED_ProbeDiskLoads) {
-  for (Index nodes : {600, 2000}) {
-    const SurfaceMesh s = kidney_phantom();
-    for (double c : {-1.0, 0.0}) {
-      VolumetricSettings vs;
-      vs.fixed = medspring::testing::bottom_supports(s);
-      if (c >= 0) vs.compression = c;
-      auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = nodes}), vs, "kidney");
-      const Index top = medspring::testing::top_node(s);
-      for (double F : {0.2, 0.5, 1.0}) {
-        fem::ContactLoad L{.centre = s.V.row(top).transpose(), .force = Vec3(0, 0, -F), .radius = 6.0};
-        const MatX3 un = fem::spring_displacement(*body, L);
-        const MatX3 ul = fem::spring_displacement_linear(*body, {L})[0];
-        const double pk = un.rowwise().norm().maxCoeff();
-        const double rms = std::sqrt((ul - un).rowwise().squaredNorm().mean());
-        std::cout << nodes << " nodes c=" << (c < 0 ? std::string("default") : std::to_string(c)) << " " << F
-                  << " N: peak " << pk << " mm, linear peak " << ul.rowwise().norm().maxCoeff() << ", RMS "
-                  << rms / pk << ", max " << (ul - un).rowwise().norm().maxCoeff() / pk << "\n";
-      }
-    }
+TEST(LinearResponse, StaysNearTheNonlinearStaticsUnderDiskLoads) {
+  // The accuracy tables' load (a 6 mm disk over the top, docs/accuracy-volumetric.md) on the 600-node body
+  // with its default compression term: the linear response against fem::spring_displacement (the nonlinear
+  // static solve), RMS and max over the surface, in units of the nonlinear peak. Measured: 0.35 / 5.6 % at
+  // 0.2 N, 1.8 / 28 % at 1 N (2,012 nodes: 0.17 / 1.2 % and 1.1 / 5.9 %; docs/linear-response.md).
+  const SurfaceMesh s = kidney_phantom();
+  const Index top = kidney().top;
+  double rms[2], max[2];
+  int k = 0;
+  for (double F : {0.2, 1.0}) {
+    const fem::ContactLoad L{.centre = s.V.row(top).transpose(), .force = Vec3(0, 0, -F), .radius = 6.0};
+    const MatX3 un = fem::spring_displacement(*kidney().body, L);
+    const MatX3 ul = fem::spring_displacement_linear(*kidney().body, {L})[0];
+    const double pk = un.rowwise().norm().maxCoeff();
+    rms[k] = std::sqrt((ul - un).rowwise().squaredNorm().mean()) / pk;
+    max[k] = (ul - un).rowwise().norm().maxCoeff() / pk;
+    std::cout << "[ disk load ] " << F << " N: peak " << pk << " mm; linear against nonlinear: RMS " << rms[k]
+              << ", max " << max[k] << " of it\n";
+    ++k;
   }
+  EXPECT_LT(rms[0], 0.01);
+  EXPECT_LT(rms[1], 0.03);
+  EXPECT_GT(rms[1], 2.0 * rms[0]) << "the difference grows with the load";
+  EXPECT_LT(max[0], 0.1);
 }
