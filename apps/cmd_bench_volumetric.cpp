@@ -9,6 +9,9 @@
 // volume pass in double (the default before h23b, which measured the _f32 cases of then against them).
 // kidney_volumetric_2000_explicit_linear_threads2: the default case with StepSettings::threads = 2 (the
 // threaded float passes, threaded_volume.hpp; docs/threads.md "Volumetric models").
+// kidney_volumetric_2000_linear_static(_disk): the quasi-static linear response (Integrator::LinearStatic,
+// docs/linear-response.md) under the 0.5 N on the top node, and spread over the surface nodes within 12 mm of
+// it; the warm-up caches the loaded nodes' response.
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,17 +33,23 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
   std::vector<bench::BenchCase> cases;
 #ifdef MEDSPRING_HAVE_FEM
   for (const Index target : {500, 1000, 2000})
-    for (const int variant : {0, 1, 2, 3, 4, 5, 6}) {  // the default; opt-in selective mass scaling; the
-                                                       // tangent refresh; 3, 4: 0, 1 with the volume pass in
-                                                       // double; 5: 2 with it; 6: 0 on two threads
-      // StepSettings::stable_step = refresh, and two threads: 2,000 nodes only
-      if ((variant == 2 || variant == 5 || variant == 6) && target != 2000) continue;
+    for (const int variant : {0, 1, 2, 3, 4, 5, 6, 7, 8}) {  // the default; opt-in selective mass scaling;
+                                                             // the tangent refresh; 3, 4: 0, 1 with the volume
+                                                             // pass in double; 5: 2 with it; 6: 0 on two
+                                                             // threads; 7, 8: linear static, point and disk
+      // StepSettings::stable_step = refresh, two threads and linear static: 2,000 nodes only
+      if (variant >= 5 && target != 2000) continue;
+      if (variant == 2 && target != 2000) continue;
       const double mass_scaling_dt = variant == 1 || variant == 4 ? 0.25 : 0.0;
       const bool refresh = variant == 2 || variant == 5, f64 = variant >= 3 && variant <= 5;
       const int threads = variant == 6 ? 2 : 1;
-      const std::string name = cat("kidney_volumetric_", target, "_explicit_linear",
-                                   mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""),
-                                   f64 ? "_f64" : "", threads > 1 ? "_threads2" : "");
+      const bool linear_static = variant >= 7;
+      const double disk = variant == 8 ? 12.0 : 0.0;  // mm
+      const std::string name =
+          linear_static ? cat("kidney_volumetric_", target, "_linear_static", disk > 0 ? "_disk" : "")
+                        : cat("kidney_volumetric_", target, "_explicit_linear",
+                              mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""), f64 ? "_f64" : "",
+                              threads > 1 ? "_threads2" : "");
       if (!filter.empty() && name.find(filter) == std::string::npos) continue;
       const SurfaceMesh s = kidney_phantom();
       const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
@@ -55,17 +64,28 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
       b.group = "kidney";
       b.nodes = body->model().num_nodes();
       b.springs = body->model().num_springs();
-      b.setup = [body, refresh, threads] {
+      b.setup = [body, refresh, threads, linear_static, disk] {
         SimulationSettings ss;
         ss.normals = false;
         ss.local.enabled = false;
         ss.step.threads = threads;
         if (refresh) ss.step.stable_step = StableStep::Refresh;
+        if (linear_static) ss.step.integrator = Integrator::LinearStatic;
         auto sim = std::make_shared<Simulation>(body, ss);
+        const MatX3& S = body->rest_surface();
         Index top = 0;
-        for (Index i = 0; i < body->num_surface_nodes(); ++i)
-          if (body->rest_surface()(i, 2) > body->rest_surface()(top, 2)) top = i;
-        sim->set_loads({{.node = top, .force = Vec3(0, 0, -0.5), .t_ramp = 0}});
+        for (Index i = 0; i < S.rows(); ++i)
+          if (S(i, 2) > S(top, 2)) top = i;
+        std::vector<Index> loaded{top};
+        if (disk > 0) {
+          loaded.clear();
+          for (Index i = 0; i < S.rows(); ++i)
+            if ((S.row(i) - S.row(top)).norm() <= disk) loaded.push_back(i);
+        }
+        std::vector<PointLoad> loads;
+        for (Index i : loaded)
+          loads.push_back({.node = i, .force = Vec3(0, 0, -0.5 / static_cast<double>(loaded.size())), .t_ramp = 0});
+        sim->set_loads(loads);
         return std::function<void()>([sim] { sim->update(); });
       };
       cases.push_back(std::move(b));

@@ -450,6 +450,10 @@ struct Builder {
     const Model& model = out.body->model();
     const StepSettings& st = scene.step;
     out.dt_safe_rest = model.dt_safe_rest(st.safety);
+    if (st.integrator == Integrator::LinearStatic && !scene.tools.empty())
+      fail("integrator.method",
+           "linear_static takes point loads, not tools: the penalty contact needs a dynamic integrator "
+           "(symplectic_euler or implicit_euler)");
     if (!st.substep && st.integrator == Integrator::SymplecticEuler && st.dt > out.dt_safe_rest)
       fail("integrator.dt",
            cat(st.dt, " ms is above the stable step ", out.dt_safe_rest,

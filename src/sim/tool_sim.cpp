@@ -110,6 +110,9 @@ ToolKeyframe tool_path_at(const ToolPath& path, double t) {
 }
 
 ContactSettings contact_settings_for(const Simulation& sim, ContactSettings base) {
+  require(sim.settings().step.integrator != Integrator::LinearStatic, sim.model().name,
+          ": tools: the linear_static integrator has no inertia for the penalty contact to act on (it would "
+          "oscillate from update to update); use symplectic_euler or implicit_euler with tools");
   base.dt = sim.settings().step.dt;
   base.min_mass = sim.model().mass.minCoeff();
   return base;
