@@ -25,6 +25,7 @@
 #include "medspring/fem/volumetric.hpp"
 #include "medspring/models/volumetric_body.hpp"
 #include "medspring/physics/integrators.hpp"
+#include "medspring/physics/linear_response.hpp"
 #include "medspring/physics/parallel.hpp"
 #endif
 
@@ -213,6 +214,55 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
                                                  "kidney (threads)");
   ASSERT_EQ(effective_threads(body_t->model(), {.threads = 2}), threads_supported() ? 2 : 1);
   expect_no_allocation("volumetric, two threads", body_t, sites, 0, StableStep::Bound, kUpdates, 2);
+#else
+  GTEST_SKIP() << "built without the fem layer (TetGen)";
+#endif
+}
+
+// issue 23: the quasi-static linear response (Integrator::LinearStatic, docs/linear-response.md): no tool (it
+// refuses them); a tool force (Simulation::set_tool_force, the haptic coupling's path) that moves between four
+// sites every 100 updates, on nodes whose response columns were cached beforehand (LinearResponse::precompute),
+// with the local overlay on.
+TEST(UpdateNoAllocation, VolumetricKidneyLinearStatic) {
+  if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
+#ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
+  const SurfaceMesh s = kidney_phantom();
+  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+  VolumetricSettings st;
+  st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  st.overlay_compliance = 1.0;
+  auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
+  std::vector<Index> sites;
+  const Index ns = body->num_surface_nodes();
+  for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
+    if (body->rest_surface()(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
+  ASSERT_EQ(sites.size(), 4u);
+  SimulationSettings ss;
+  ss.step.integrator = Integrator::LinearStatic;
+  Simulation sim(body, ss);
+  ASSERT_TRUE(sim.state().linear != nullptr);
+  sim.state().linear->precompute(sites);  // volumetric bodies: surface node i is model node i
+  auto run = [&](int updates) {
+    int failed = 0;
+    double peak = 0;
+    for (int u = 0; u < updates; ++u) {
+      if (u % kHold == 0)
+        sim.set_tool_force(sites[static_cast<std::size_t>((u / kHold) % 4)], Vec3(0.01 * (u % 3), 0.0, -0.1));
+      failed += sim.update().ok() ? 0 : 1;
+      peak = std::max(peak, (sim.state().x - body->model().x0).cwiseAbs().maxCoeff());
+    }
+    return std::pair{failed, peak};
+  };
+  run(2 * 4 * kHold);  // the warm-up: every site, the overlay's patches
+  const long before = testing::heap_allocations();
+  const auto [failed, peak] = run(kUpdates);
+  const long allocations = testing::heap_allocations() - before;
+  std::cout << "[ volumetric, linear_static ] " << allocations << " allocations in " << kUpdates
+            << " updates; peak " << peak << " mm\n";
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(failed, 0);
+  EXPECT_GT(peak, 0.1);
+  EXPECT_EQ(sim.state().linear->cached_nodes(), 4u);
 #else
   GTEST_SKIP() << "built without the fem layer (TetGen)";
 #endif
