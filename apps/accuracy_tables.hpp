@@ -56,7 +56,10 @@ struct Kind {
   bool nonlinear = false;
   bool local = false;
   bool corrected = false;  // volumetric: the opt-in moduli correction (VolumetricSettings::moduli_correction)
+  // volumetric: the quasi-static linear response (Integrator::LinearStatic, docs/linear-response.md)
+  bool linear_static = false;
   std::string label() const {
+    if (linear_static) return base + " (linear static)";
     return base + (local ? " + local" : "") + (nonlinear ? " (Duffing" : " (linear") +
            (corrected ? ", moduli-corrected)" : ")");
   }

@@ -55,10 +55,10 @@ void read_kind_options(const Args& args, Settings& st, const std::string& cmd) {
     std::string item;
     while (std::getline(ss, item, ',')) {
       require(item == "surface" || item == "hybrid" || item == "volumetric" || item == "volumetric-duffing" ||
-                  item == "volumetric-corrected" || item == "volumetric-local",
+                  item == "volumetric-corrected" || item == "volumetric-local" || item == "volumetric-static",
               cmd, ": --kinds: unknown kind '", item,
               "' (expected surface, hybrid, volumetric, volumetric-duffing, volumetric-corrected, "
-              "volumetric-local)");
+              "volumetric-local, volumetric-static)");
       st.kinds.push_back(item);
     }
     require(!st.kinds.empty(), cmd, ": --kinds must name at least one kind");

@@ -110,6 +110,7 @@ double median_update_us(const BodyPtr& body, const Kind& k, Index contact, const
   SimulationSettings ss;
   ss.local.enabled = k.local;
   ss.normals = false;
+  if (k.linear_static) ss.step.integrator = Integrator::LinearStatic;
   Simulation sim(body, ss);
   sim.set_loads({{.node = contact, .force = F, .t_ramp = 0}});
   sim.advance(50);
@@ -293,6 +294,8 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     kinds.push_back({"volumetric", false, false, true});  // opt-in, linear: the moduli correction
   if (std::find(st.kinds.begin(), st.kinds.end(), "volumetric-local") != st.kinds.end())
     kinds.push_back({"volumetric", false, true});  // opt-in, linear: the disk overlay as a site family
+  if (std::find(st.kinds.begin(), st.kinds.end(), "volumetric-static") != st.kinds.end())
+    kinds.push_back({"volumetric", false, false, false, true});  // opt-in: the quasi-static linear response
   if (o.atoms.rows() == 0 &&
       std::erase_if(kinds, [](const Kind& k) { return k.base == "hybrid"; }) > 0)  // no medial skeleton
     out["notes"].push_back(
@@ -301,6 +304,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
     std::erase_if(kinds,
                   [&](const Kind& k) {  // "volumetric" is the linear kind, "volumetric-duffing" the other
                     const std::string token = k.base + (k.base == "volumetric" && k.nonlinear ? "-duffing"
+                                                        : k.linear_static                     ? "-static"
                                                         : k.corrected                         ? "-corrected"
                                                         : k.base == "volumetric" && k.local   ? "-local"
                                                                                               : "");
@@ -453,6 +457,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
           : 0.0;
   auto response = [&](const Kind& k, const VecX& m, const fem::ContactLoad& load) {
     const BodyPtr body = make_body(o, k, support, m);
+    if (k.linear_static) return fem::spring_displacement_linear(*body, {load})[0];
     if (k.base == "volumetric" && k.local)
       return MatX3(fem::spring_displacement(*body, load) +
                    m(k.local_index()) * fem::disk_local_overlay(*body, load, k_ref));
@@ -488,7 +493,7 @@ json run_organ(const Organ& o, const Settings& st, json& maps, std::vector<Kind>
           // then on the full response of the same training loads: the compression coefficient c, which the
           // small-strain response cannot see, and the two scales (docs/accuracy-nonlinear.md, "Calibration of
           // the nonlinear response")
-          if (st.fit_nonlinear && o.compression > 0) {
+          if (st.fit_nonlinear && o.compression > 0 && !k.linear_static) {  // K0 does not see c
             note(st, cat(o.name, ": small-strain fit springs x ", m(0), ", volume x ", m(1),
                          "; refining with c on the full response"));
             const fem::VolumetricFit vf = fem::calibrate_volumetric_nonlinear(
