@@ -462,6 +462,30 @@ void add_forces(const VolumeTermsF32& F, const float* g, double* f) {
     for (int d = 0; d < 3; ++d) f[3 * i + d] += static_cast<double>(g[4 * i + d]);
 }
 
+// The threaded pass: share(t, g_t) on every thread of par, g_t the mirror g on the calling thread and the
+// thread's own mirror, zeroed, on the others; then f += the mirrors' forces summed in thread order in double,
+// and trows (unless null) gets their fourth floats summed the same way.
+template <class Share>
+void run_shares(const VolumeTermsF32& F, const ParallelRecords& par, float* g, double* f, double* trows,
+                Share&& share) {
+  const auto mf = 4 * static_cast<std::size_t>(F.nodes);
+  auto run = [&](int t) {
+    float* gt = t == 0 ? g : par.mirrors[static_cast<std::size_t>(t)];
+    if (t > 0) std::memset(gt, 0, sizeof(float) * mf);
+    share(t, gt);
+  };
+  par.pool->run(run);
+  for (Index i = 0; i < F.nodes; ++i) {
+    double v[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int t = 0; t < par.threads; ++t) {
+      const float* gt = (t == 0 ? g : par.mirrors[static_cast<std::size_t>(t)]) + 4 * i;
+      for (int d = 0; d < 4; ++d) v[d] += static_cast<double>(gt[d]);
+    }
+    for (int d = 0; d < 3; ++d) f[3 * i + d] += v[d];
+    if (trows) trows[i] = v[3];
+  }
+}
+
 }  // namespace
 
 void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double* x, double* f,
@@ -470,24 +494,13 @@ void add_volume_and_compression_forces_f32(const VolumeTermsF32& F, const double
   float* g = scratch + 4 * F.nodes;
   fill_mirrors(F, x, u, g, nullptr);
   if (par && par->threads > 1 && diff) {  // each thread its share into its mirror, summed in thread order
-    const auto mf = 4 * static_cast<std::size_t>(F.nodes);
-    auto run = [&](int t) {
+    run_shares(F, *par, g, f, nullptr, [&](int t, float* gt) {
       const auto ut = static_cast<std::size_t>(t);
-      float* gt = t == 0 ? g : par->mirrors[ut];
-      if (t > 0) std::memset(gt, 0, sizeof(float) * mf);
       if (F.comp)
         records_f32<true, true>(F, u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
       else
         records_f32<false, true>(F, u, gt, nullptr, par->begin[ut], par->begin[ut + 1]);
-    };
-    par->pool->run(run);
-    for (Index i = 0; i < F.nodes; ++i)
-      for (int d = 0; d < 3; ++d) {
-        double v = 0.0;
-        for (int t = 0; t < par->threads; ++t)
-          v += static_cast<double>((t == 0 ? g : par->mirrors[static_cast<std::size_t>(t)])[4 * i + d]);
-        f[3 * i + d] += v;
-      }
+    });
     return;
   }
   if (F.comp)
@@ -516,32 +529,18 @@ double add_volume_and_compression_forces_inc_f32(const VolumeTermsF32& F, const 
     return static_cast<double>(so.sv);
   }
   // the threads' shares: each its own mirror (thread 0 the one filled above) and largest s_t
-  const int T = par->threads;
-  const auto mf = 4 * static_cast<std::size_t>(F.nodes);
   float sv[kMaxThreads];
-  auto run = [&](int t) {
+  run_shares(F, *par, g, f, F.comp ? trows : nullptr, [&](int t, float* gt) {
     const auto ut = static_cast<std::size_t>(t);
-    float* gt = t == 0 ? g : par->mirrors[ut];
-    if (t > 0) std::memset(gt, 0, sizeof(float) * mf);
     StiffOut so{F.iG0.data(), inc, 1.0f};
     if (F.comp)
       records_f32<true, true, true>(F, u, gt, &so, par->begin[ut], par->begin[ut + 1]);
     else
       records_f32<false, true, true>(F, u, gt, &so, par->begin[ut], par->begin[ut + 1]);
     sv[ut] = so.sv;
-  };
-  par->pool->run(run);
+  });
   float svm = 1.0f;
-  for (int t = 0; t < T; ++t) svm = max_f(sv[static_cast<std::size_t>(t)], svm);
-  for (Index i = 0; i < F.nodes; ++i) {
-    double v[4] = {0.0, 0.0, 0.0, 0.0};
-    for (int t = 0; t < T; ++t) {
-      const float* gt = (t == 0 ? g : par->mirrors[static_cast<std::size_t>(t)]) + 4 * i;
-      for (int d = 0; d < 4; ++d) v[d] += static_cast<double>(gt[d]);
-    }
-    for (int d = 0; d < 3; ++d) f[3 * i + d] += v[d];
-    if (F.comp) trows[i] = v[3];
-  }
+  for (int t = 0; t < par->threads; ++t) svm = max_f(sv[static_cast<std::size_t>(t)], svm);
   return static_cast<double>(svm);
 }
 
