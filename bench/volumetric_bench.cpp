@@ -241,7 +241,7 @@ BENCHMARK(BM_VolumetricKidneyUpdateThreads)
     ->Unit(benchmark::kMicrosecond);
 // The quasi-static linear response (Integrator::LinearStatic, physics/linear_response.hpp; issue 23, item 5):
 // Args: nodes, disk radius in mm (0: the 0.5 N on the top node alone; r: 0.5 N spread equally over the surface
-// nodes within r of it). One update of the Simulation (the step, the surface map) with the loaded nodes'
+// nodes within r of it), the columns' precision (0: float, the default; 1: double). One update of the Simulation (the step, the surface map) with the loaded nodes'
 // response cached by the warm-up; the default (dynamic) update is BM_VolumetricKidneyUpdateF32/2000/0.
 void BM_VolumetricKidneyLinearStatic(benchmark::State& st) {
   const auto body = kidney(static_cast<Index>(st.range(0)), 0.0, VolumePrecision::Float);
@@ -250,6 +250,9 @@ void BM_VolumetricKidneyLinearStatic(benchmark::State& st) {
   ss.local.enabled = false;
   ss.step.integrator = Integrator::LinearStatic;
   Simulation sim(body, ss);
+  if (st.range(2) != 0)
+    sim.state().linear = std::make_shared<LinearResponse>(body->model(), LinearResponse::kDefaultCacheBytes,
+                                                          LinearResponse::Precision::Double);
   const MatX3& S = body->rest_surface();
   Index top = 0;
   for (Index i = 0; i < S.rows(); ++i)
@@ -273,10 +276,14 @@ void BM_VolumetricKidneyLinearStatic(benchmark::State& st) {
   st.counters["peak_mm"] = (sim.state().x - body->model().x0).rowwise().norm().maxCoeff();
 }
 BENCHMARK(BM_VolumetricKidneyLinearStatic)
-    ->Args({2000, 0})
-    ->Args({2000, 12})
-    ->Args({4000, 0})
-    ->Args({4000, 12})
+    ->Args({2000, 0, 0})
+    ->Args({2000, 0, 1})
+    ->Args({2000, 12, 0})
+    ->Args({2000, 12, 1})
+    ->Args({4000, 0, 0})
+    ->Args({4000, 0, 1})
+    ->Args({4000, 12, 0})
+    ->Args({4000, 12, 1})
     ->Unit(benchmark::kMicrosecond);
 // The opt-in tangent refresh (StepSettings::stable_step = refresh), with the volume pass in double and with
 // the single-precision pass (the default since h23b); mass scaling off. The mean includes the frames

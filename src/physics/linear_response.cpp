@@ -28,10 +28,12 @@ struct LinearResponse::Impl {
   double factor_ms = 0;
   int direct_threshold = 1;
   std::size_t cache_bytes = 0, column_bytes = 0;
+  bool single = true;  // the columns in float (Precision::Float)
   // node j's response to unit forces along x, y, z (three flat 3N columns), and for the inversion count the
   // force at which each tetrahedron's displacement gradient could reach norm 1, sorted
   struct Column {
-    std::unique_ptr<double[]> u;   // 9 N
+    std::unique_ptr<double[]> u;   // 9 N (Precision::Double)
+    std::unique_ptr<float[]> uf;   // 9 N (Precision::Float: the default)
     std::vector<float> fstar;      // (#T) 1 / sqrt(sum_d |H_t(e_d)|_F^2), N (infinity where 0)
     std::vector<Index> by_fstar;   // tetrahedra in increasing fstar
   };
@@ -92,6 +94,11 @@ struct LinearResponse::Impl {
     std::sort(col->by_fstar.begin(), col->by_fstar.end(), [&](Index a, Index b) {
       return col->fstar[static_cast<std::size_t>(a)] < col->fstar[static_cast<std::size_t>(b)];
     });
+    if (single) {  // the columns in float: half the bytes an update streams (docs/linear-response.md)
+      col->uf = std::make_unique<float[]>(3 * N3);
+      for (std::size_t q = 0; q < 3 * N3; ++q) col->uf[q] = static_cast<float>(col->u[q]);
+      col->u.reset();
+    }
     c = col.get();
     storage.push_back(std::move(col));
     stored.fetch_add(1, std::memory_order_relaxed);
@@ -100,7 +107,8 @@ struct LinearResponse::Impl {
   }
 };
 
-LinearResponse::LinearResponse(const Model& m, std::size_t cache_bytes) : p_(std::make_unique<Impl>()) {
+LinearResponse::LinearResponse(const Model& m, std::size_t cache_bytes, Precision columns)
+    : p_(std::make_unique<Impl>()) {
   require(m.finalized, m.name, ": model is not finalized (call finalize or ModelBuilder::build)");
   Impl& P = *p_;
   P.model = &m;
@@ -111,6 +119,7 @@ LinearResponse::LinearResponse(const Model& m, std::size_t cache_bytes) : p_(std
   P.x0 = m.x0;
   P.fixed = m.fixed;
   P.cache_bytes = cache_bytes;
+  P.single = columns == Precision::Float;
   const std::size_t N3 = 3 * static_cast<std::size_t>(P.n);
   P.free_of.assign(N3, -1);
   for (Index a : m.free_nodes)
@@ -157,7 +166,7 @@ LinearResponse::LinearResponse(const Model& m, std::size_t cache_bytes) : p_(std
     P.ta = m.compression.a, P.tb = m.compression.b, P.tc = m.compression.c, P.td = m.compression.d;
   }
   const std::size_t nt = P.ta.size();
-  P.column_bytes = 3 * N3 * sizeof(double) + nt * (sizeof(float) + sizeof(Index));
+  P.column_bytes = 3 * N3 * (P.single ? sizeof(float) : sizeof(double)) + nt * (sizeof(float) + sizeof(Index));
   P.e0_inv.resize(9 * nt);
   for (std::size_t t = 0; t < nt; ++t) {
     const Index q[4] = {P.ta[t], P.tb[t], P.tc[t], P.td[t]};
@@ -204,10 +213,12 @@ Mat3 LinearResponse::block(Index i, Index j) {
   if (p_->fixed[static_cast<std::size_t>(i)] || p_->fixed[static_cast<std::size_t>(j)]) return C;
   const Impl::Column* col = p_->column(j);
   if (col) {
-    const double* c = col->u.get();
     const std::size_t N3 = 3 * static_cast<std::size_t>(p_->n);
     for (int e = 0; e < 3; ++e)
-      for (int d = 0; d < 3; ++d) C(e, d) = c[static_cast<std::size_t>(d) * N3 + 3 * static_cast<std::size_t>(i) + e];
+      for (int d = 0; d < 3; ++d) {
+        const std::size_t q = static_cast<std::size_t>(d) * N3 + 3 * static_cast<std::size_t>(i) + static_cast<std::size_t>(e);
+        C(e, d) = col->uf ? static_cast<double>(col->uf[q]) : col->u[q];
+      }
     return C;
   }
   VecX b = VecX::Zero(free_dofs());  // the cache is full: solve j's columns without keeping them
@@ -249,26 +260,31 @@ Index LinearResponse::positions(const MatX3& f, MatX3& x, VecX& b, VecX& u) {
   double* X = x.data();
   // the cached columns where they can take every loaded node (solved now where missing and the cache has room)
   bool columns = k <= P.direct_threshold;
-  const double* c[kMaxColumnLoads];
+  const Impl::Column* c[kMaxColumnLoads];
   for (int a = 0; a < k && columns; ++a) {
-    const Impl::Column* col = P.column(idx[a]);
-    columns = col != nullptr;
-    if (columns) c[a] = col->u.get();
+    c[a] = P.column(idx[a]);
+    columns = c[a] != nullptr;
   }
   if (columns) {
     // in blocks of X that stay in the L1 cache while every loaded node's columns stream through
     constexpr std::size_t kBlock = 768;
-    for (std::size_t k0 = 0; k0 < N3; k0 += kBlock) {
-      const std::size_t k1 = std::min(N3, k0 + kBlock);
-      for (int a = 0; a < k; ++a) {
-        const double* fj = F + 3 * static_cast<std::size_t>(idx[a]);
-        const double fx = fj[0], fy = fj[1], fz = fj[2];
-        const double* cx = c[a];
-        const double* cy = cx + N3;
-        const double* cz = cy + N3;
-        for (std::size_t q = k0; q < k1; ++q) X[q] += fx * cx[q] + fy * cy[q] + fz * cz[q];
+    auto sum = [&](auto column_of) {
+      for (std::size_t k0 = 0; k0 < N3; k0 += kBlock) {
+        const std::size_t k1 = std::min(N3, k0 + kBlock);
+        for (int a = 0; a < k; ++a) {
+          const double* fj = F + 3 * static_cast<std::size_t>(idx[a]);
+          const double fx = fj[0], fy = fj[1], fz = fj[2];
+          const auto* cx = column_of(*c[a]);
+          const auto* cy = cx + N3;
+          const auto* cz = cy + N3;
+          for (std::size_t q = k0; q < k1; ++q) X[q] += fx * cx[q] + fy * cy[q] + fz * cz[q];
+        }
       }
-    }
+    };
+    if (P.single)
+      sum([](const Impl::Column& col) { return static_cast<const float*>(col.uf.get()); });
+    else
+      sum([](const Impl::Column& col) { return static_cast<const double*>(col.u.get()); });
     return k;
   }
   const Index nf = free_dofs();

@@ -24,10 +24,15 @@ class LinearResponse {
   /// Most loaded nodes an update sums from cached columns (more: one direct solve).
   static constexpr int kMaxColumnLoads = 256;
 
+  /// Precision of the cached columns: float (the default) halves what an update streams; the sums, x and the
+  /// direct solve stay double. Float columns are K0^-1's to a relative 6e-8 (docs/linear-response.md).
+  enum class Precision { Float, Double };
+
   /// Factors the model's tangent stiffness at rest over its free nodes (return springs, volume and bending
   /// terms included). Throws InvalidInput naming the model when that tangent is not positive definite (rigid
   /// motion left free: support or pin nodes, or give return springs) and when the model is not finalized.
-  explicit LinearResponse(const Model& model, std::size_t cache_bytes = kDefaultCacheBytes);
+  explicit LinearResponse(const Model& model, std::size_t cache_bytes = kDefaultCacheBytes,
+                          Precision columns = Precision::Float);
   ~LinearResponse();
   LinearResponse(const LinearResponse&) = delete;
   LinearResponse& operator=(const LinearResponse&) = delete;
