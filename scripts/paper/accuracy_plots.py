@@ -46,7 +46,7 @@ def speed_accuracy(acc, out):
                     fontsize=7, ha="right")
     handles = [plt.Line2D([], [], color=colour[k], marker="o", ls="", label=k) for k in kinds]
     handles += [plt.Line2D([], [], color="k", marker=m, ls="", mfc="none", label=o) for o, m in organ_marker.items()]
-    ax.legend(handles=handles, fontsize=7, loc="upper center", ncol=2)
+    ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)  # below the axes
     ax.set_xscale("log")
     ax.set_xlabel("time per update (us, median; dashed: one CalculiX static solve)")
     ax.set_ylabel("RMS surface error, % of FEM contact displacement\n(mean over held-out cases)")
