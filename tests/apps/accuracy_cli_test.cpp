@@ -152,7 +152,8 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   const fs::path out = medspring::testing::temp_dir("accuracy-aorta") / "acc";
   std::string err;
   ASSERT_EQ(
-      run("accuracy --quick --quiet --organs aorta --kinds volumetric,hybrid --nodes 1000 --no-validation "
+      run("accuracy --quick --quiet --organs aorta --kinds volumetric,volumetric-static,hybrid --nodes 1000 "
+          "--no-validation "
           "--no-vessel --volume-term-variants --train-sites 1 --out '" +
               out.string() + "'",
           &err),
@@ -168,7 +169,8 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   EXPECT_GT(o["support_nodes"].get<int>(), 50);
   EXPECT_LT(o["support_nodes"].get<int>(), 800 / 2);  // a bed, not the whole vessel
   EXPECT_NE(o["notes"].dump().find("hybrid kind left out"), std::string::npos) << o["notes"].dump();
-  ASSERT_EQ(o["models"].size(), 2u);  // volumetric (linear), default and calibrated; no hybrid row
+  // volumetric (linear) and (linear static), default and calibrated; no hybrid row
+  ASSERT_EQ(o["models"].size(), 4u);
   // --train-sites 1: the fit trains on the second site alone, the first is held out
   EXPECT_EQ(o["train_sites"], nlohmann::json::array({1}));
   for (const auto& m : o["models"]) {
@@ -186,6 +188,17 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
   // the per-tetrahedron term (beta = 1) and P1 are the small-strain diagnostic's own rows, solved again; the
   // nodal form (beta = 0) stores no more energy than the per-tetrahedron one, so it moves at least as far
   const auto& ss = o["volumetric"]["small_strain"];
+  // the linear static kind (docs/linear-response.md) from E and nu is the small-strain diagnostic's springs
+  int static_rows = 0;
+  for (const auto& m : o["models"])
+    if (m["kind"] == "volumetric (linear static)") {
+      ++static_rows;
+      if (!m["calibrated"].get<bool>()) {
+        EXPECT_NEAR(m["held_out_mean_rms_pct"].get<double>(), ss["held_out_mean_springs_linear_rms_pct"].get<double>(),
+                    1e-6);
+      }
+    }
+  EXPECT_EQ(static_rows, 2);
   const auto& vt = o["volumetric"]["volume_term_variants"]["variants"];
   ASSERT_EQ(vt.size(), 7u) << o["volumetric"].dump();
   EXPECT_EQ(vt[0]["model"], "springs");
