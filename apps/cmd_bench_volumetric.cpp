@@ -33,10 +33,11 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
   std::vector<bench::BenchCase> cases;
 #ifdef MEDSPRING_HAVE_FEM
   for (const Index target : {500, 1000, 2000})
-    for (const int variant : {0, 1, 2, 3, 4, 5, 6, 7, 8}) {  // the default; opt-in selective mass scaling;
-                                                             // the tangent refresh; 3, 4: 0, 1 with the volume
-                                                             // pass in double; 5: 2 with it; 6: 0 on two
-                                                             // threads; 7, 8: linear static, point and disk
+    for (const int variant :
+         {0, 1, 2, 3, 4, 5, 6, 7, 8}) {  // the default; opt-in selective mass scaling;
+                                         // the tangent refresh; 3, 4: 0, 1 with the volume
+                                         // pass in double; 5: 2 with it; 6: 0 on two
+                                         // threads; 7, 8: linear static, point and disk
       // StepSettings::stable_step = refresh, two threads and linear static: 2,000 nodes only
       if (variant >= 5 && target != 2000) continue;
       if (variant == 2 && target != 2000) continue;
@@ -48,8 +49,8 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
       const std::string name =
           linear_static ? cat("kidney_volumetric_", target, "_linear_static", disk > 0 ? "_disk" : "")
                         : cat("kidney_volumetric_", target, "_explicit_linear",
-                              mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""), f64 ? "_f64" : "",
-                              threads > 1 ? "_threads2" : "");
+                              mass_scaling_dt > 0 ? "_mass_scaled" : (refresh ? "_refresh" : ""),
+                              f64 ? "_f64" : "", threads > 1 ? "_threads2" : "");
       if (!filter.empty() && name.find(filter) == std::string::npos) continue;
       const SurfaceMesh s = kidney_phantom();
       const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
@@ -84,7 +85,8 @@ std::vector<bench::BenchCase> volumetric_bench_cases(const std::string& filter) 
         }
         std::vector<PointLoad> loads;
         for (Index i : loaded)
-          loads.push_back({.node = i, .force = Vec3(0, 0, -0.5 / static_cast<double>(loaded.size())), .t_ramp = 0});
+          loads.push_back(
+              {.node = i, .force = Vec3(0, 0, -0.5 / static_cast<double>(loaded.size())), .t_ramp = 0});
         sim->set_loads(loads);
         return std::function<void()>([sim] { sim->update(); });
       };

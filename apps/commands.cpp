@@ -329,7 +329,8 @@ const std::vector<CommandSpec>& commands() {
              .def = "all",
              .help = "model kinds to run: surface,hybrid,volumetric (docs/volumetric.md); opt-in: "
                      "volumetric-duffing, volumetric-corrected, volumetric-local (the disk overlay as a site "
-                     "family, docs/accuracy-calibration.md), volumetric-static (the quasi-static linear response, "
+                     "family, docs/accuracy-calibration.md), volumetric-static (the quasi-static linear "
+                     "response, "
                      "docs/linear-response.md)"},
             kVolumetricNodes,
             kCompression,

@@ -240,9 +240,10 @@ BENCHMARK(BM_VolumetricKidneyUpdateThreads)
     ->UseRealTime()
     ->Unit(benchmark::kMicrosecond);
 // The quasi-static linear response (Integrator::LinearStatic, physics/linear_response.hpp; issue 23, item 5):
-// Args: nodes, disk radius in mm (0: the 0.5 N on the top node alone; r: 0.5 N spread equally over the surface
-// nodes within r of it), the columns' precision (0: float, the default; 1: double). One update of the Simulation (the step, the surface map) with the loaded nodes'
-// response cached by the warm-up; the default (dynamic) update is BM_VolumetricKidneyUpdateF32/2000/0.
+// Args: nodes, disk radius in mm (0: the 0.5 N on the top node alone; r: 0.5 N spread equally over the
+// surface nodes within r of it), the columns' precision (0: float, the default; 1: double). One update of the
+// Simulation (the step, the surface map) with the loaded nodes' response cached by the warm-up; the default
+// (dynamic) update is BM_VolumetricKidneyUpdateF32/2000/0.
 void BM_VolumetricKidneyLinearStatic(benchmark::State& st) {
   const auto body = kidney(static_cast<Index>(st.range(0)), 0.0, VolumePrecision::Float);
   SimulationSettings ss;

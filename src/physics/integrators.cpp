@@ -446,7 +446,8 @@ State make_state(const Model& m, const StepSettings& s) {
 
 StepStatus step(const Model& m, State& st, const StepSettings& s, const std::vector<PointLoad>* loads,
                 const SubstepForce* per_substep) {
-  if (s.integrator == Integrator::LinearStatic) return detail::linear_static_step(m, st, s, loads, per_substep);
+  if (s.integrator == Integrator::LinearStatic)
+    return detail::linear_static_step(m, st, s, loads, per_substep);
   StepStatus status;
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st))
     prepare_step(m, st, s);  // a state from make_state(model, symplectic settings): allocates once

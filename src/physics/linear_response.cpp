@@ -5,13 +5,13 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <vector>
 
-#include "medspring/core/check.hpp"
 #include "linear_static_step.hpp"
+#include "medspring/core/check.hpp"
 #include "medspring/physics/forces.hpp"
 
 namespace medspring {
@@ -21,8 +21,8 @@ struct LinearResponse::Impl {
   Index n = 0;
   MatX3 x0;
   std::vector<std::uint8_t> fixed;
-  std::vector<Index> dof;        // free DOF q -> flat index 3 a + d
-  std::vector<Index> free_of;    // flat index -> free DOF q, -1 when fixed
+  std::vector<Index> dof;      // free DOF q -> flat index 3 a + d
+  std::vector<Index> free_of;  // flat index -> free DOF q, -1 when fixed
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   std::size_t nnz_l = 0;
   double factor_ms = 0;
@@ -32,10 +32,10 @@ struct LinearResponse::Impl {
   // node j's response to unit forces along x, y, z (three flat 3N columns), and for the inversion count the
   // force at which each tetrahedron's displacement gradient could reach norm 1, sorted
   struct Column {
-    std::unique_ptr<double[]> u;   // 9 N (Precision::Double)
-    std::unique_ptr<float[]> uf;   // 9 N (Precision::Float: the default)
-    std::vector<float> fstar;      // (#T) 1 / sqrt(sum_d |H_t(e_d)|_F^2), N (infinity where 0)
-    std::vector<Index> by_fstar;   // tetrahedra in increasing fstar
+    std::unique_ptr<double[]> u;  // 9 N (Precision::Double)
+    std::unique_ptr<float[]> uf;  // 9 N (Precision::Float: the default)
+    std::vector<float> fstar;     // (#T) 1 / sqrt(sum_d |H_t(e_d)|_F^2), N (infinity where 0)
+    std::vector<Index> by_fstar;  // tetrahedra in increasing fstar
   };
   std::unique_ptr<std::atomic<const Column*>[]> columns;
   std::vector<std::unique_ptr<Column>> storage;  // owns the columns (guarded by mutex)
@@ -88,7 +88,8 @@ struct LinearResponse::Impl {
             h2 += h * h;
           }
       }
-      col->fstar[t] = h2 > 0 ? static_cast<float>(1.0 / std::sqrt(h2)) : std::numeric_limits<float>::infinity();
+      col->fstar[t] =
+          h2 > 0 ? static_cast<float>(1.0 / std::sqrt(h2)) : std::numeric_limits<float>::infinity();
       col->by_fstar[t] = static_cast<Index>(t);
     }
     std::sort(col->by_fstar.begin(), col->by_fstar.end(), [&](Index a, Index b) {
@@ -148,16 +149,17 @@ LinearResponse::LinearResponse(const Model& m, std::size_t cache_bytes, Precisio
     P.ldlt.compute(Kff);
     const bool pd = P.ldlt.info() == Eigen::Success && (P.ldlt.vectorD().array() > 0).all();
     if (!pd)
-      throw InvalidInput(cat(m.name, ": linear_static: the tangent stiffness at rest is not positive definite "
-                                     "over the free nodes (rigid motion left free? support or pin nodes, or "
-                                     "give the nodes return springs)"));
-    P.factor_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      throw InvalidInput(cat(m.name,
+                             ": linear_static: the tangent stiffness at rest is not positive definite "
+                             "over the free nodes (rigid motion left free? support or pin nodes, or "
+                             "give the nodes return springs)"));
+    P.factor_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     P.nnz_l = static_cast<std::size_t>(P.ldlt.matrixL().nestedExpression().nonZeros());
     // one solve: a forward and a backward sweep over L (2 flops a nonzero each) and the permutations;
     // one cached node: 3 N x 3 multiply-adds (2 flops each)
     const double solve = 4.0 * static_cast<double>(P.nnz_l) + 8.0 * static_cast<double>(nf);
-    P.direct_threshold = std::clamp(static_cast<int>(solve / (18.0 * static_cast<double>(P.n))), 1, kMaxColumnLoads);
+    P.direct_threshold =
+        std::clamp(static_cast<int>(solve / (18.0 * static_cast<double>(P.n))), 1, kMaxColumnLoads);
   }
   // inversion candidates (volume terms, else compression terms: the same tetrahedra)
   if (m.volume.size() > 0) {
@@ -166,7 +168,8 @@ LinearResponse::LinearResponse(const Model& m, std::size_t cache_bytes, Precisio
     P.ta = m.compression.a, P.tb = m.compression.b, P.tc = m.compression.c, P.td = m.compression.d;
   }
   const std::size_t nt = P.ta.size();
-  P.column_bytes = 3 * N3 * (P.single ? sizeof(float) : sizeof(double)) + nt * (sizeof(float) + sizeof(Index));
+  P.column_bytes =
+      3 * N3 * (P.single ? sizeof(float) : sizeof(double)) + nt * (sizeof(float) + sizeof(Index));
   P.e0_inv.resize(9 * nt);
   for (std::size_t t = 0; t < nt; ++t) {
     const Index q[4] = {P.ta[t], P.tb[t], P.tc[t], P.td[t]};
@@ -184,11 +187,21 @@ bool LinearResponse::built_for(const Model& m) const {
   return p_->model == &m && p_->n == m.num_nodes() && p_->springs == m.num_springs() &&
          p_->terms == m.volume.size() + m.compression.size() && p_->x0_data == m.x0.data();
 }
-Index LinearResponse::num_nodes() const { return p_->n; }
-Index LinearResponse::free_dofs() const { return static_cast<Index>(p_->dof.size()); }
-std::size_t LinearResponse::factor_nonzeros() const { return p_->nnz_l; }
-double LinearResponse::factor_ms() const { return p_->factor_ms; }
-int LinearResponse::direct_threshold() const { return p_->direct_threshold; }
+Index LinearResponse::num_nodes() const {
+  return p_->n;
+}
+Index LinearResponse::free_dofs() const {
+  return static_cast<Index>(p_->dof.size());
+}
+std::size_t LinearResponse::factor_nonzeros() const {
+  return p_->nnz_l;
+}
+double LinearResponse::factor_ms() const {
+  return p_->factor_ms;
+}
+int LinearResponse::direct_threshold() const {
+  return p_->direct_threshold;
+}
 
 void LinearResponse::precompute(std::span<const Index> nodes) {
   for (std::size_t k = 0; k < nodes.size(); ++k) {
@@ -203,8 +216,12 @@ bool LinearResponse::cached(Index node) const {
   return node >= 0 && node < p_->n &&
          p_->columns[static_cast<std::size_t>(node)].load(std::memory_order_acquire) != nullptr;
 }
-std::size_t LinearResponse::cached_nodes() const { return p_->stored.load(); }
-std::size_t LinearResponse::cached_bytes() const { return p_->stored.load() * p_->column_bytes; }
+std::size_t LinearResponse::cached_nodes() const {
+  return p_->stored.load();
+}
+std::size_t LinearResponse::cached_bytes() const {
+  return p_->stored.load() * p_->column_bytes;
+}
 
 Mat3 LinearResponse::block(Index i, Index j) {
   require(i >= 0 && i < p_->n && j >= 0 && j < p_->n, "linear response: block(", i, ", ", j,
@@ -216,7 +233,8 @@ Mat3 LinearResponse::block(Index i, Index j) {
     const std::size_t N3 = 3 * static_cast<std::size_t>(p_->n);
     for (int e = 0; e < 3; ++e)
       for (int d = 0; d < 3; ++d) {
-        const std::size_t q = static_cast<std::size_t>(d) * N3 + 3 * static_cast<std::size_t>(i) + static_cast<std::size_t>(e);
+        const std::size_t q =
+            static_cast<std::size_t>(d) * N3 + 3 * static_cast<std::size_t>(i) + static_cast<std::size_t>(e);
         C(e, d) = col->uf ? static_cast<double>(col->uf[q]) : col->u[q];
       }
     return C;
@@ -258,7 +276,8 @@ Index LinearResponse::positions(const MatX3& f, MatX3& x, VecX& b, VecX& u) {
   x = P.x0;
   if (k == 0) return 0;
   double* X = x.data();
-  // the cached columns where they can take every loaded node (solved now where missing and the cache has room)
+  // the cached columns where they can take every loaded node (solved now where missing and the cache has
+  // room)
   bool columns = k <= P.direct_threshold;
   const Impl::Column* c[kMaxColumnLoads];
   for (int a = 0; a < k && columns; ++a) {
@@ -338,7 +357,8 @@ std::uint64_t LinearResponse::count_inverted(const MatX3& f, const MatX3& x) con
   }
   // |H_t|_F <= sum_j |f_j| / fstar_tj: below 1 (with a margin for rounding) no corner motion along the load
   // path s f, s in [0, 1], makes det(I + s H_t) vanish. Some term of a sum of k terms that reaches it is at
-  // least 1 / k: tetrahedron t is tested where |f_j| k / fstar_tj >= 1 - 1e-3 for some j, from the first such j.
+  // least 1 / k: tetrahedron t is tested where |f_j| k / fstar_tj >= 1 - 1e-3 for some j, from the first such
+  // j.
   const double scale = static_cast<double>(k) / (1.0 - 1e-3);
   for (int a = 0; a < k; ++a) {
     const double* fj = F + 3 * static_cast<std::size_t>(idx[a]);

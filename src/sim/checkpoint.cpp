@@ -32,7 +32,8 @@ Checkpoint make_checkpoint(const Simulation& sim) {
   return c;
 }
 
-static_assert(static_cast<int>(Integrator::SymplecticEuler) == 0 && static_cast<int>(Integrator::ImplicitEuler) == 1 &&
+static_assert(static_cast<int>(Integrator::SymplecticEuler) == 0 &&
+              static_cast<int>(Integrator::ImplicitEuler) == 1 &&
               static_cast<int>(Integrator::LinearStatic) == 2);  // the step's integrator byte
 
 std::string encode_checkpoint(const Checkpoint& c) {

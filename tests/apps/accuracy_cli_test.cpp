@@ -194,8 +194,8 @@ TEST(CliAccuracy, QuickAortaRunScoresTheVolumetricKindUnderItsSupportRule) {
     if (m["kind"] == "volumetric (linear static)") {
       ++static_rows;
       if (!m["calibrated"].get<bool>()) {
-        EXPECT_NEAR(m["held_out_mean_rms_pct"].get<double>(), ss["held_out_mean_springs_linear_rms_pct"].get<double>(),
-                    1e-6);
+        EXPECT_NEAR(m["held_out_mean_rms_pct"].get<double>(),
+                    ss["held_out_mean_springs_linear_rms_pct"].get<double>(), 1e-6);
       }
     }
   EXPECT_EQ(static_rows, 2);

@@ -47,7 +47,9 @@ MatX3 load_on(Index n, Index node, const Vec3& f) {
   return F;
 }
 
-double peak(const MatX3& x, const MatX3& x0) { return (x - x0).rowwise().norm().maxCoeff(); }
+double peak(const MatX3& x, const MatX3& x0) {
+  return (x - x0).rowwise().norm().maxCoeff();
+}
 
 }  // namespace
 
@@ -60,8 +62,7 @@ TEST(LinearResponse, SolvesTheTangentAtRestExactly) {
   std::mt19937 rng(7);
   std::normal_distribution<double> g(0.0, 0.05);
   MatX3 F = MatX3::Zero(m.num_nodes(), 3);
-  for (Index i = 0; i < m.num_nodes(); i += 3)
-    F.row(i) << g(rng), g(rng), g(rng);
+  for (Index i = 0; i < m.num_nodes(); i += 3) F.row(i) << g(rng), g(rng), g(rng);
   MatX3 x(m.num_nodes(), 3);
   VecX b, u;
   R.positions(F, x, b, u);  // many loaded nodes: the direct solve
@@ -97,8 +98,8 @@ TEST(LinearResponse, ApproachesTheNonlinearEquilibriumToSecondOrder) {
     R.positions(F, x, b, u);
     const StaticResult s = static_equilibrium(m, F, {.tolerance = 1e-10});
     rel[k] = (x - s.x).rowwise().norm().maxCoeff() / peak(s.x, m.x0);
-    std::cout << "[ linear vs nonlinear statics ] " << load << " N: peak " << peak(s.x, m.x0) << " mm, max error "
-              << rel[k] << " of it\n";
+    std::cout << "[ linear vs nonlinear statics ] " << load << " N: peak " << peak(s.x, m.x0)
+              << " mm, max error " << rel[k] << " of it\n";
     ++k;
   }
   // a point load: large strain next to it (4 % of the peak at 1 mm, 29 % at 3.5 mm; docs/linear-response.md
@@ -156,7 +157,8 @@ TEST(LinearResponse, CachedColumnsAgreeWithTheDirectSolveAndAreSymmetric) {
     EXPECT_EQ(small.cached_nodes(), 0u);
     EXPECT_LT((x - y).cwiseAbs().maxCoeff(), tol * peak(x, m.x0));
     const Mat3 Cd = small.block(nodes[1], nodes[0]);
-    EXPECT_LT((Cd - R.block(nodes[1], nodes[0])).cwiseAbs().maxCoeff(), tol * R.block(nodes[0], nodes[0]).cwiseAbs().maxCoeff());
+    EXPECT_LT((Cd - R.block(nodes[1], nodes[0])).cwiseAbs().maxCoeff(),
+              tol * R.block(nodes[0], nodes[0]).cwiseAbs().maxCoeff());
   }
 }
 

@@ -220,9 +220,9 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
 }
 
 // issue 23: the quasi-static linear response (Integrator::LinearStatic, docs/linear-response.md): no tool (it
-// refuses them); a tool force (Simulation::set_tool_force, the haptic coupling's path) that moves between four
-// sites every 100 updates, on nodes whose response columns were cached beforehand (LinearResponse::precompute),
-// with the local overlay on.
+// refuses them); a tool force (Simulation::set_tool_force, the haptic coupling's path) that moves between
+// four sites every 100 updates, on nodes whose response columns were cached beforehand
+// (LinearResponse::precompute), with the local overlay on.
 TEST(UpdateNoAllocation, VolumetricKidneyLinearStatic) {
   if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
 #ifdef MEDSPRING_NO_ALLOC_HAVE_FEM

@@ -129,10 +129,9 @@ struct SubstepForce {
 
 /// Advances the state by one frame of duration settings.dt. LinearStatic: x = x0 + K0^-1 f_ext with the force
 /// at the frame's start (loads, then per_substep, called once), v = the frame's mean velocity, one "substep";
-/// the first frame factors K0 unless prepare_step did, and a node's first load solves its response (allocates)
-/// unless LinearResponse::precompute did. External force: `loads` evaluated at the
-/// start of every substep if given, else state.f_ext held constant; then `per_substep` if given. No heap
-/// allocation.
+/// the first frame factors K0 unless prepare_step did, and a node's first load solves its response
+/// (allocates) unless LinearResponse::precompute did. External force: `loads` evaluated at the start of every
+/// substep if given, else state.f_ext held constant; then `per_substep` if given. No heap allocation.
 StepStatus step(const Model& model, State& state, const StepSettings& settings,
                 const std::vector<PointLoad>* loads = nullptr, const SubstepForce* per_substep = nullptr);
 

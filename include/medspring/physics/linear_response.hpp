@@ -1,10 +1,10 @@
-// The linear static response of a model at rest (issue 23, docs/linear-response.md): u = K0^-1 f over the free
-// degrees of freedom, with K0 the tangent stiffness at the rest shape. This is the precomputed-response model
-// of real-time surgery simulators (Bro-Nielsen & Cotin 1996; Cotin, Delingette & Ayache 1999): K0 is factored
-// once; the response to a force on one node (three columns of K0^-1) is solved the first time that node is
-// loaded and kept, so an update that loads k nodes costs 9 k N multiply-adds: no sub-steps, no iteration.
-// It is quasi-static and linear: no inertia, no geometric or Duffing stiffening; step() uses it for
-// Integrator::LinearStatic.
+// The linear static response of a model at rest (issue 23, docs/linear-response.md): u = K0^-1 f over the
+// free degrees of freedom, with K0 the tangent stiffness at the rest shape. This is the precomputed-response
+// model of real-time surgery simulators (Bro-Nielsen & Cotin 1996; Cotin, Delingette & Ayache 1999): K0 is
+// factored once; the response to a force on one node (three columns of K0^-1) is solved the first time that
+// node is loaded and kept, so an update that loads k nodes costs 9 k N multiply-adds: no sub-steps, no
+// iteration. It is quasi-static and linear: no inertia, no geometric or Duffing stiffening; step() uses it
+// for Integrator::LinearStatic.
 #pragma once
 
 #include <cstddef>
@@ -62,16 +62,16 @@ class LinearResponse {
   /// x = x0 + K0^-1 f over the free nodes (fixed ones stay at x0; f's rows on them are ignored). Loaded free
   /// nodes up to direct_threshold() are summed from their columns (solved and cached on first use, unless the
   /// cache is full); more, or uncached ones with a full cache, take one solve with the factor into the
-  /// caller's scratch `b` and `u` (sized free_dofs(); resized if not). Returns the loaded free nodes, or -1 with
-  /// x unchanged where a loaded row of f is not finite. No
-  /// allocation once the loaded nodes are cached and the scratch is sized. Safe to call from several threads
-  /// with distinct scratch.
+  /// caller's scratch `b` and `u` (sized free_dofs(); resized if not). Returns the loaded free nodes, or -1
+  /// with x unchanged where a loaded row of f is not finite. No allocation once the loaded nodes are cached
+  /// and the scratch is sized. Safe to call from several threads with distinct scratch.
   Index positions(const MatX3& f, MatX3& x, VecX& b, VecX& u);
 
-  /// Inverted (or flat) tetrahedra of the model's volume (else compression) terms at x = positions(f): the count
-  /// is count_inverted's exactly. Where every loaded node is cached, only the tetrahedra whose displacement
-  /// gradient H_t could reach norm 1 under f are tested (a bound kept with each node's columns: |H_t|_F <=
-  /// sum_j |f_j| h_tj; below 1, det(I + s H_t) > 0 along the whole load path); otherwise all of them.
+  /// Inverted (or flat) tetrahedra of the model's volume (else compression) terms at x = positions(f): the
+  /// count is count_inverted's exactly. Where every loaded node is cached, only the tetrahedra whose
+  /// displacement gradient H_t could reach norm 1 under f are tested (a bound kept with each node's columns:
+  /// |H_t|_F <= sum_j |f_j| h_tj; below 1, det(I + s H_t) > 0 along the whole load path); otherwise all of
+  /// them.
   std::uint64_t count_inverted(const MatX3& f, const MatX3& x) const;
 
  private:

@@ -27,7 +27,7 @@ struct Warnings {
 };
 
 class LinearResponse;  // physics/linear_response.hpp
-struct ThreadedStep;  // worker pool + static partition of the threaded step (integrators.cpp)
+struct ThreadedStep;   // worker pool + static partition of the threaded step (integrators.cpp)
 
 /// A State's worker pool for StepSettings::threads > 1. A copied State starts without one (it is made
 /// again by prepare_step or at the copy's first threaded step), so copies never share threads.
