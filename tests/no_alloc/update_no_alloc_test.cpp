@@ -181,37 +181,52 @@ TEST(UpdateNoAllocation, TubeHybrid) {  // the paper's "MS" vessel (Tables I and
   expect_no_allocation("tube_hybrid", body, {20 * s + 7, 12 * s + 20, 28 * s + 3, 16 * s + 15}, s);
 }
 
+#ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
+// The volumetric kidney phantom of these tests: 10 kPa, nu = 0.45, supports on the bottom 20 %, the local
+// overlay on (off by default), so that its patches are counted too; `edit` changes the settings.
+template <class Edit>
+std::shared_ptr<VolumetricBody> volumetric_kidney(Index nodes, const char* name, Edit&& edit) {
+  const SurfaceMesh s = kidney_phantom();
+  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
+  VolumetricSettings st;
+  st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
+  st.overlay_compliance = 1.0;
+  edit(st);
+  return std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = nodes}), st, name);
+}
+
+// Four surface sites on the upper 40 % of the body, away from the supports.
+std::vector<Index> upper_sites(const VolumetricBody& body) {
+  const MatX3& S = body.rest_surface();
+  const double zmin = S.col(2).minCoeff(), zmax = S.col(2).maxCoeff();
+  std::vector<Index> sites;
+  const Index ns = body.num_surface_nodes();
+  for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
+    if (S(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
+  return sites;
+}
+#endif
+
 TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron pass, volume terms, supports
   if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
 #ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
-  const SurfaceMesh s = kidney_phantom();
-  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
-  VolumetricSettings st;  // 10 kPa, nu = 0.45, supports on the bottom 20 %, the volume pass in double
-  st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
-  st.volume_precision = VolumePrecision::Double;
-  st.overlay_compliance = 1.0;  // the local overlay on (off by default), so that its patches are counted too
-  auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
+  // the volume pass in double
+  auto body = volumetric_kidney(
+      700, "kidney", [](VolumetricSettings& st) { st.volume_precision = VolumePrecision::Double; });
   ASSERT_GT(body->model().volume.size(), 0);
-  // four sites on the upper half of the surface, away from the supports
-  std::vector<Index> sites;
-  const Index ns = body->num_surface_nodes();
-  for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
-    if (body->rest_surface()(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
+  const std::vector<Index> sites = upper_sites(*body);
   ASSERT_EQ(sites.size(), 4u);
   expect_no_allocation("volumetric", body, sites);
   // the opt-in tangent refresh (StepSettings::stable_step): its scratch is sized before the counted updates
   expect_no_allocation("volumetric, stable_step refresh", body, sites, 0, StableStep::Refresh);
   // the single-precision volume pass (volume_precision float, the default): its float scratch sized with the
   // state
-  st.volume_precision = VolumePrecision::Float;
-  auto body32 =
-      std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney (float)");
+  auto body32 = volumetric_kidney(700, "kidney (float)", [](VolumetricSettings&) {});
   ASSERT_TRUE(body32->model().volume_f32 != nullptr);
   expect_no_allocation("volumetric, volume_precision float", body32, sites);
   // the threaded float passes (StepSettings::threads; threaded_volume.hpp): a finer interior, two threads'
   // worth of tetrahedra; the pool and its shares are made before the counted updates
-  auto body_t = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 1000}), st,
-                                                 "kidney (threads)");
+  auto body_t = volumetric_kidney(1000, "kidney (threads)", [](VolumetricSettings&) {});
   ASSERT_EQ(effective_threads(body_t->model(), {.threads = 2}), threads_supported() ? 2 : 1);
   expect_no_allocation("volumetric, two threads", body_t, sites, 0, StableStep::Bound, kUpdates, 2);
 #else
@@ -226,16 +241,8 @@ TEST(UpdateNoAllocation, VolumetricKidney) {  // issue 23: the fused tetrahedron
 TEST(UpdateNoAllocation, VolumetricKidneyLinearStatic) {
   if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
 #ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
-  const SurfaceMesh s = kidney_phantom();
-  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
-  VolumetricSettings st;
-  st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
-  st.overlay_compliance = 1.0;
-  auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
-  std::vector<Index> sites;
-  const Index ns = body->num_surface_nodes();
-  for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
-    if (body->rest_surface()(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
+  auto body = volumetric_kidney(700, "kidney", [](VolumetricSettings&) {});
+  const std::vector<Index> sites = upper_sites(*body);
   ASSERT_EQ(sites.size(), 4u);
   SimulationSettings ss;
   ss.step.integrator = Integrator::LinearStatic;
@@ -273,19 +280,12 @@ TEST(UpdateNoAllocation, VolumetricKidneyLinearStatic) {
 TEST(UpdateNoAllocation, VolumetricKidneyWithThinTetTerms) {
   if (!testing::counting_allocations()) GTEST_SKIP() << "allocation counting is off (sanitizer or not glibc)";
 #ifdef MEDSPRING_NO_ALLOC_HAVE_FEM
-  const SurfaceMesh s = kidney_phantom();
-  const double zmin = s.V.col(2).minCoeff(), zmax = s.V.col(2).maxCoeff();
-  VolumetricSettings st;
-  st.fixed = fem::support_nodes(s.V, {Vec3(0, 0, -1), 0.2 * (zmax - zmin)});
-  st.thin_tet = ThinTetMode::ScaleSprings;
-  st.thin_tet_q_max = 0.5;
-  st.overlay_compliance = 1.0;  // the local overlay on (off by default), so that its patches are counted too
-  auto body = std::make_shared<VolumetricBody>(fem::volumetric_mesh(s, {.target_nodes = 700}), st, "kidney");
+  auto body = volumetric_kidney(700, "kidney", [](VolumetricSettings& st) {
+    st.thin_tet = ThinTetMode::ScaleSprings;
+    st.thin_tet_q_max = 0.5;
+  });
   ASSERT_GT(body->model().thin.size(), 0);
-  std::vector<Index> sites;
-  const Index ns = body->num_surface_nodes();
-  for (Index i = 0; i < ns && sites.size() < 4; i += ns / 16 + 1)
-    if (body->rest_surface()(i, 2) > zmin + 0.6 * (zmax - zmin)) sites.push_back(i);
+  const std::vector<Index> sites = upper_sites(*body);
   ASSERT_EQ(sites.size(), 4u);
   // 400 counted updates (one round over the four sites after the two-round warm-up): the thin-tetrahedron
   // step is ~25x the plain volumetric one. 10,000 updates took 91 s, 2,000 still 23 s of the CI's two
