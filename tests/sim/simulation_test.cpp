@@ -6,6 +6,7 @@
 #include "medspring/geometry/phantoms.hpp"
 #include "medspring/models/hybrid_kidney.hpp"
 #include "medspring/models/surface_body.hpp"
+#include "medspring/sim/tool_sim.hpp"
 
 namespace medspring {
 namespace {
@@ -51,6 +52,28 @@ TEST(Simulation, SurfaceBodyIsTheIdentityMap) {
   sim.set_loads({{.node = 10, .force = Vec3(1, 0, 0)}});
   sim.advance(10);
   EXPECT_EQ(sim.surface(), sim.state().x);
+}
+
+// The quasi-static linear response (docs/linear-response.md) on the hybrid kidney: a held tool force gives
+// x0 + K0^-1 f at once (the same at every frame), and a ToolSimulation refuses the integrator (its penalty
+// contact needs inertia), naming it.
+TEST(Simulation, LinearStaticHoldsTheResponseAndRefusesTools) {
+  SimulationSettings st;
+  st.step.integrator = Integrator::LinearStatic;
+  Simulation sim(std::make_shared<HybridKidney>(hybrid_kidney_phantom()), st);
+  sim.set_tool_force(223, Vec3(0, 0, -0.5));
+  sim.update();
+  const MatX3 first = sim.state().x;
+  sim.advance(5);
+  EXPECT_EQ(sim.state().x, first);
+  EXPECT_GT((first - sim.model().x0).rowwise().norm().maxCoeff(), 0.1);
+  EXPECT_EQ(sim.state().substeps, 6u);
+  try {
+    ToolSimulation tools(sim);
+    FAIL() << "expected InvalidInput";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("linear_static"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
