@@ -2,10 +2,13 @@
 // stability. step() releases the GIL.
 #include <pybind11/eigen.h>
 
+#include <cmath>
+
 #include "bind_common.hpp"
 #include "bind_params.hpp"
 #include "medspring/physics/forces.hpp"
 #include "medspring/physics/integrators.hpp"
+#include "medspring/physics/linear_response.hpp"
 #include "medspring/physics/loads.hpp"
 #include "medspring/physics/model.hpp"
 #include "medspring/physics/spring_law.hpp"
@@ -486,6 +489,68 @@ void bind_physics(py::module_& m) {
       "Solves f_ext + f_int(x) = 0 for the free nodes by Newton-Raphson with line search (§2.4), starting "
       "from x_start (x0 if None); GIL released. f_ext: (N, 3) N. Raises SolverError if no equilibrium is "
       "found (e.g. a soft spring loaded above its peak force).");
+
+  // ---- The quasi-static linear response (docs/linear-response.md) ----
+  py::class_<LinearResponse, std::shared_ptr<LinearResponse>> linear(
+      m, "LinearResponse",
+      "The linear static response of a model at rest, x = x0 + K0^-1 f (docs/linear-response.md): K0 "
+      "factored "
+      "once, each loaded node's three columns of K0^-1 solved on first use and cached. The engine of "
+      "Integrator.LinearStatic.");
+  linear
+      .def(py::init([](const Model& model, double cache_mb, const std::string& precision) {
+             require(cache_mb >= 0 && std::isfinite(cache_mb), "LinearResponse: cache_mb must be >= 0 (got ",
+                     cache_mb, ")");
+             require(precision == "float" || precision == "double",
+                     "LinearResponse: precision must be float or double (got '", precision, "')");
+             py::gil_scoped_release release;
+             return std::make_shared<LinearResponse>(
+                 model, static_cast<std::size_t>(cache_mb * 1024 * 1024),
+                 precision == "float" ? LinearResponse::Precision::Float : LinearResponse::Precision::Double);
+           }),
+           "model"_a, "cache_mb"_a = 256.0, "precision"_a = "float",
+           "Factors the model's tangent stiffness at rest over its free nodes; GIL released. Raises "
+           "InvalidInput "
+           "when it is not positive definite (rigid motion left free). precision: of the cached columns.")
+      .def(
+          "positions",
+          [](LinearResponse& R, py::handle f) {
+            const MatX3 F = points_arg(f, "f", R.num_nodes());
+            MatX3 x(R.num_nodes(), 3);
+            VecX b, u;
+            Index k = 0;
+            {
+              py::gil_scoped_release release;
+              k = R.positions(F, x, b, u);
+            }
+            require(k >= 0, "LinearResponse.positions: f has a row that is not finite");
+            return copy_of(x);
+          },
+          "f"_a,
+          "x0 + K0^-1 f (N, 3) mm for the forces f (N, 3) N; rows of fixed nodes are ignored. Caches the "
+          "columns of the loaded nodes (up to direct_threshold of them).")
+      .def("block", &LinearResponse::block, "i"_a, "j"_a,
+           "The 3x3 compliance du_i/df_j (mm/N) of free nodes i and j; solves and caches j's columns.")
+      .def(
+          "precompute", [](LinearResponse& R, const std::vector<Index>& nodes) { R.precompute(nodes); },
+          "nodes"_a, "Solves and caches these nodes' columns now.")
+      .def(
+          "count_inverted",
+          [](const LinearResponse& R, py::handle f, py::handle x) {
+            return R.count_inverted(points_arg(f, "f", R.num_nodes()), points_arg(x, "x", R.num_nodes()));
+          },
+          "f"_a, "x"_a, "Inverted tetrahedra at x = positions(f) (count_inverted's count).")
+      .def("cached", &LinearResponse::cached, "node"_a)
+      .def_property_readonly("cached_nodes", &LinearResponse::cached_nodes)
+      .def_property_readonly("cached_bytes", &LinearResponse::cached_bytes)
+      .def_property_readonly("num_nodes", &LinearResponse::num_nodes)
+      .def_property_readonly("free_dofs", &LinearResponse::free_dofs)
+      .def_property_readonly("factor_nonzeros", &LinearResponse::factor_nonzeros)
+      .def_property_readonly("factor_ms", &LinearResponse::factor_ms)
+      .def_property_readonly("direct_threshold", &LinearResponse::direct_threshold)
+      .def("__repr__", [](const LinearResponse& R) {
+        return cat("<medspring.LinearResponse ", R.num_nodes(), " nodes, ", R.cached_nodes(), " cached>");
+      });
 
   // ---- Stability ----
   m.def(

@@ -171,3 +171,4 @@ def test_volumetric_scene_linear_static_is_the_settled_response():
     doc["tools"] = [{"shape": "sphere", "radius": 8, "path": [{"t": 0, "position": [0, 0, 40]}]}]
     with pytest.raises(ms.InvalidInput, match=r"integrator\.method"):
         ms.run_scene(doc)
+
