@@ -392,8 +392,8 @@ bool tangent_refresh_on(const Model& m, const StepSettings& s) {
 }  // namespace
 
 void prepare_step(const Model& m, State& st, const StepSettings& s) {
-  // the quasi-static linear response's factor (the rest below sizes what the other integrators' steps use too,
-  // so that a state can switch integrators)
+  // the quasi-static linear response's factor (the rest below sizes what the other integrators' steps use
+  // too, so that a state can switch integrators)
   if (s.integrator == Integrator::LinearStatic) detail::prepare_linear_static(m, st);
   if (s.integrator == Integrator::ImplicitEuler && !implicit_scratch_ready(m, st)) {
     const Index n = m.num_nodes(), ns = m.num_springs();
